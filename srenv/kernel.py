@@ -1,0 +1,360 @@
+"""Compiled time-stepping kernel: Newmark + the step problem solved by certified active-set reuse.
+
+Each step's problem (design §3) is the strictly convex QP
+    min_v  1/2 v'K*v - b'v + sum_i j_i(v_i),   j_i(v) = sup{lam v : lam in [lo_i, hi_i]}
+over the free nodes (the top node's velocity is prescribed). Its KKT conditions are
+    K*v = b - lam,  lam_i = hi_i if v_i > 0,  lam_i = lo_i if v_i < 0,  lam_i in [lo_i, hi_i] if v_i = 0.
+Given a pattern (each nonsmooth node sliding down, sliding up or stuck) the KKT system is one tridiagonal
+solve (stuck rows replaced by v_i = 0). If the solution satisfies the sign and interval conditions it *is*
+the unique QP minimiser: no solver call is needed ("certified"). Otherwise the violating nodes are flipped
+(primal-dual active set; K* is a Stieltjes matrix, for which this converges) and the solve is repeated up
+to ``max_corrections`` times ("corrected"). If that does not certify, the kernel returns to Python with
+the step's data in the work arrays; Python solves the QP with ProxSuite through qpsolvers and resumes.
+
+Nonmonotone laws (j = j1 - j2, j2 smooth convex) are handled by DC iterations: each sub-problem is the same
+convex QP with b shifted by j2'(v_k). Everything here is O(n) per step with no allocation.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numba import njit
+
+# return codes of advance()
+DONE = 0
+NEED_QP = 1
+EVENT = 2
+
+# path codes recorded per step
+PATH_CERTIFIED = 0
+PATH_CORRECTED = 1
+PATH_QP = 2
+
+# indices into the float parameter vector `par`
+P_DT, P_BETA, P_GAMMA, P_TOLV, P_TOLL, P_DCTOL = 0, 1, 2, 3, 4, 5
+P_PUMP_LO, P_PUMP_HI, P_PUMP_DROP, P_PUMP_V0 = 6, 7, 8, 9
+P_FRIC_RATIO, P_FRIC_V0 = 10, 11
+P_MA, P_MOA, P_CA, P_FA, P_KA, P_KC, P_MC = 12, 13, 14, 15, 16, 17, 18
+P_PB, P_PA, P_VOID_UNTIL = 19, 20, 21
+P_EA0, P_FRIC_ITERS = 22, 23
+N_PAR = 24
+
+# indices into the integer state vector `ist`
+I_STEP, I_DCIT, I_HAVEQP, I_MAXCORR, I_DCMAX, I_ALWAYSQP, I_NONSMOOTH = 0, 1, 2, 3, 4, 5, 6
+I_PLDIR, I_EVENT, I_VOID, I_NCERT, I_NCORR, I_NQP, I_NDC, I_RECORD, I_NREC = 7, 8, 9, 10, 11, 12, 13, 14, 15
+I_PUMP_NONMONO, I_FRIC_NONMONO = 16, 17
+N_IST = 18
+
+# columns of the per-step record
+R_T, R_UA, R_PRL, R_UB, R_VB, R_PUMP, R_PATH, R_VA = 0, 1, 2, 3, 4, 5, 6, 7
+N_REC = 8
+
+# energy accumulators
+E_TOP, E_GRAV, E_REACT, E_VISC = 0, 1, 2, 3
+N_ENERGY = 4
+
+
+@njit(cache=True)
+def thomas_pattern(kd, ko, rhs, stuck, v, cp, dp):
+    """Solve K* v = rhs with rows of stuck nodes replaced by v_i = 0 (Thomas algorithm)."""
+    n = kd.shape[0]
+    # forward sweep
+    if stuck[0]:
+        cp[0] = 0.0
+        dp[0] = 0.0
+    else:
+        cp[0] = ko[0] / kd[0] if n > 1 else 0.0
+        dp[0] = rhs[0] / kd[0]
+    for i in range(1, n):
+        if stuck[i]:
+            cp[i] = 0.0
+            dp[i] = 0.0
+            continue
+        a = ko[i - 1]
+        den = kd[i] - a * cp[i - 1]
+        cp[i] = (ko[i] / den) if i < n - 1 else 0.0
+        dp[i] = (rhs[i] - a * dp[i - 1]) / den
+    v[n - 1] = dp[n - 1]
+    for i in range(n - 2, -1, -1):
+        v[i] = dp[i] - cp[i] * v[i + 1]
+
+
+@njit(cache=True)
+def solve_pattern(ksd, kso, b, lo, hi, ns, status, v, lam, rhs, stuck, cp, dp, maxcorr, tolv, toll):
+    """Certified active-set solve with up to `maxcorr` corrections.
+
+    Returns the number of corrections used (0 = certified as is) or -1 when not certified.
+    `status`: +1 sliding down (lam = hi), -1 sliding up (lam = lo), 0 stuck (v = 0).
+    """
+    n = ksd.shape[0]
+    for it in range(maxcorr + 1):
+        for i in range(n):
+            if ns[i] and status[i] == 0:
+                stuck[i] = True
+                rhs[i] = 0.0
+            else:
+                stuck[i] = False
+                if ns[i]:
+                    lam[i] = hi[i] if status[i] > 0 else lo[i]
+                else:
+                    lam[i] = lo[i]
+                rhs[i] = b[i] - lam[i]
+        thomas_pattern(ksd, kso, rhs, stuck, v, cp, dp)
+        ok = True
+        for i in range(n):
+            if not ns[i]:
+                continue
+            if status[i] == 0:
+                kv = ksd[i] * v[i]
+                if i > 0:
+                    kv += kso[i - 1] * v[i - 1]
+                if i < n - 1:
+                    kv += kso[i] * v[i + 1]
+                lam[i] = b[i] - kv
+                scale = toll * (abs(lo[i]) + abs(hi[i]) + 1.0)
+                if lam[i] > hi[i] + scale:
+                    status[i] = 1
+                    ok = False
+                elif lam[i] < lo[i] - scale:
+                    status[i] = -1
+                    ok = False
+            elif status[i] > 0:
+                if v[i] < -tolv:
+                    status[i] = 0
+                    ok = False
+            else:
+                if v[i] > tolv:
+                    status[i] = 0
+                    ok = False
+        if ok:
+            for i in range(n):
+                if ns[i] and status[i] == 0:
+                    v[i] = 0.0  # exact rest
+            return it
+    return -1
+
+
+@njit(cache=True)
+def node_axial_force(u, ua, ea_len, nforce):
+    """Equivalent axial force at each free node: mean of the adjacent element forces."""
+    n = u.shape[0]
+    prev = ea_len[0] * (u[0] - ua)
+    for i in range(n):
+        if i < n - 1:
+            nxt = ea_len[i + 1] * (u[i + 1] - u[i])
+            nforce[i] = 0.5 * (prev + nxt)
+            prev = nxt
+        else:
+            nforce[i] = prev
+
+
+@njit(cache=True)
+def set_bounds(par, ist, u, ua, ea_len, fa, fw, fc, lo, hi, ns, nforce, fric_s):
+    """Friction bounds from the side force with the previous step's axial force (quasi-variational);
+    the plunger interval on the last node (collapsed to P-_eq during a fluid-pound void stroke)."""
+    n = u.shape[0]
+    node_axial_force(u, ua, ea_len, nforce)
+    for i in range(n - 1):
+        nn = nforce[i]
+        q1 = fw[i] - fa[i] * nn
+        q2 = fc[i] * nn
+        f = np.sqrt(q1 * q1 + q2 * q2)
+        fric_s[i] = f
+        lo[i] = -f
+        hi[i] = f
+        ns[i] = f > 0.0
+    fric_s[n - 1] = 0.0
+    plo = par[P_PUMP_LO]
+    phi = par[P_PUMP_HI]
+    if ist[I_VOID] != 0:
+        if u[n - 1] >= par[P_VOID_UNTIL]:
+            ist[I_VOID] = 0
+        else:
+            phi = plo
+    lo[n - 1] = plo
+    hi[n - 1] = phi
+    ns[n - 1] = phi > plo
+
+
+@njit(cache=True)
+def concave_shift(par, ist, v, fric_s, shift):
+    """j2'(v): the smooth concave part of the nonmonotone laws, added to b in a DC iteration."""
+    n = v.shape[0]
+    for i in range(n):
+        shift[i] = 0.0
+    if ist[I_FRIC_NONMONO] != 0:
+        d = 1.0 - par[P_FRIC_RATIO]
+        v0 = par[P_FRIC_V0]
+        for i in range(n - 1):
+            vi = v[i]
+            if vi > 0:
+                shift[i] = d * fric_s[i] * (1.0 - np.exp(-vi / v0))
+            elif vi < 0:
+                shift[i] = -d * fric_s[i] * (1.0 - np.exp(vi / v0))
+    if ist[I_PUMP_NONMONO] != 0 and ist[I_VOID] == 0:
+        vb = v[n - 1]
+        if vb < 0:
+            shift[n - 1] = -par[P_PUMP_DROP] * (1.0 - np.exp(vb / par[P_PUMP_V0]))
+
+
+@njit(cache=True)
+def advance(par, ist, u, v, a, uav, va_t, t0,
+            ksd, kso, kd, ko, md, mo, cd, f, ea_len, fa, fw, fc,
+            status, lo, hi, ns, lam, b, b0, shift, vk, rhs, stuck, cp, dp, nforce, fric_s,
+            wv, wb, wlo, whi, prev_lam, prev_v, prev_stuck, stick_count, rec, energy, k_end):
+    """Advance from step ist[I_STEP] to k_end; va_t[k] is the prescribed top velocity at the end of step k.
+    uav = (u_A, v_A, a_A, PRL_eq) of the current state. Returns DONE, NEED_QP (wb/wlo/whi hold the
+    sub-problem; the caller puts the solution in wv, sets ist[I_HAVEQP] and calls again) or EVENT."""
+    n = u.shape[0]
+    dt = par[P_DT]
+    beta = par[P_BETA]
+    gamma = par[P_GAMMA]
+    c1 = 1.0 / (gamma * dt)
+    c2 = beta * dt / gamma
+    maxcorr = ist[I_MAXCORR]
+    tolv = par[P_TOLV]
+    toll = par[P_TOLL]
+    while ist[I_STEP] < k_end:
+        k = ist[I_STEP]
+        # prescribed top velocity; its displacement and acceleration follow the same Newmark relations
+        ua_old = uav[0]
+        va_old = uav[1]
+        aa_old = uav[2]
+        va_new = va_t[k]
+        vpa = va_old + dt * (1.0 - gamma) * aa_old
+        ua_new = ua_old + dt * va_old + dt * dt * (0.5 - beta) * aa_old - c2 * vpa + c2 * va_new
+        aa_new = (va_new - vpa) * c1
+        # predictor and right-hand side (b0 = b* with the prescribed top column moved over)
+        for i in range(n):
+            vp = v[i] + dt * (1.0 - gamma) * a[i]
+            ut = u[i] + dt * v[i] + dt * dt * (0.5 - beta) * a[i] - c2 * vp
+            rhs[i] = ut  # temporarily hold u-tilde
+            b0[i] = f[i] + c1 * md[i] * vp
+        for i in range(n):
+            vp = v[i] + dt * (1.0 - gamma) * a[i]
+            ku = kd[i] * rhs[i]
+            if i > 0:
+                ku += ko[i - 1] * rhs[i - 1]
+                b0[i] += c1 * mo[i - 1] * (v[i - 1] + dt * (1.0 - gamma) * a[i - 1])
+            if i < n - 1:
+                ku += ko[i] * rhs[i + 1]
+                b0[i] += c1 * mo[i] * (v[i + 1] + dt * (1.0 - gamma) * a[i + 1])
+            b0[i] -= ku
+        b0[0] -= par[P_KC] * ua_new + par[P_MC] * aa_new
+        if ist[I_HAVEQP] == 0:
+            if ist[I_NONSMOOTH] != 0:
+                set_bounds(par, ist, u, ua_old, ea_len, fa, fw, fc, lo, hi, ns, nforce, fric_s)
+            ist[I_DCIT] = 0
+            for i in range(n):
+                vk[i] = v[i]
+        used_qp = ist[I_HAVEQP] != 0
+        corrected = False
+        # DC iterations (a single pass when both laws are monotone)
+        nonmono = ist[I_PUMP_NONMONO] != 0 or ist[I_FRIC_NONMONO] != 0
+        while True:
+            if nonmono:
+                concave_shift(par, ist, vk, fric_s, shift)
+                for i in range(n):
+                    b[i] = b0[i] + shift[i]
+            else:
+                for i in range(n):
+                    b[i] = b0[i]
+            if ist[I_HAVEQP] != 0:
+                for i in range(n):
+                    v[i] = wv[i]
+                ist[I_HAVEQP] = 0
+            else:
+                nc = -1
+                if ist[I_ALWAYSQP] == 0:
+                    nc = solve_pattern(ksd, kso, b, lo, hi, ns, status, v, lam, rhs, stuck, cp, dp,
+                                       maxcorr, tolv, toll)
+                if nc < 0:
+                    for i in range(n):
+                        wb[i] = b[i]
+                        wlo[i] = lo[i]
+                        whi[i] = hi[i]
+                    return NEED_QP
+                if nc > 0:
+                    corrected = True
+            ist[I_DCIT] += 1
+            if not nonmono:
+                break
+            dv = 0.0
+            for i in range(n):
+                dv = max(dv, abs(v[i] - vk[i]))
+                vk[i] = v[i]
+            if dv <= par[P_DCTOL] or ist[I_DCIT] >= ist[I_DCMAX]:
+                break
+        ist[I_NDC] += ist[I_DCIT]
+        # reactions lam = b - K*v (exact for every node, whatever path produced v)
+        for i in range(n):
+            kv = ksd[i] * v[i]
+            if i > 0:
+                kv += kso[i - 1] * v[i - 1]
+            if i < n - 1:
+                kv += kso[i] * v[i + 1]
+            lam[i] = b[i] - kv - shift[i] if nonmono else b[i] - kv
+        # energy: trapezoidal work of each force over du (closes exactly for the trapezoidal rule)
+        du_a = ua_new - ua_old
+        for i in range(n):
+            vo = prev_v[i]  # v_n: `v` already holds v_{n+1}
+            vp = vo + dt * (1.0 - gamma) * a[i]
+            a_new = (v[i] - vp) * c1
+            u_new = u[i] + dt * vo + dt * dt * (0.5 - beta) * a[i] - c2 * vp + c2 * v[i]
+            du = u_new - u[i]
+            energy[E_GRAV] += f[i] * du
+            energy[E_REACT] -= 0.5 * (lam[i] + prev_lam[i]) * du
+            energy[E_VISC] += 0.5 * cd[i] * (v[i] + prev_v[i]) * du
+            prev_lam[i] = lam[i]
+            prev_v[i] = v[i]
+            u[i] = u_new
+            a[i] = a_new
+        energy[E_GRAV] += par[P_FA] * du_a
+        # polished-rod load from the top node's equation (includes its half element's weight/inertia)
+        n0 = par[P_EA0] * (u[0] - ua_new)
+        prl_eq = n0 + par[P_FA] - par[P_MA] * aa_new - par[P_MOA] * a[0] - par[P_CA] * va_new
+        energy[E_TOP] += -0.5 * (prl_eq + uav[3]) * du_a
+        energy[E_VISC] += 0.5 * par[P_CA] * (va_new + va_old) * du_a
+        uav[3] = prl_eq
+        uav[0] = ua_new
+        uav[1] = va_new
+        uav[2] = aa_new
+        # bookkeeping: paths, stick episodes, plunger direction events
+        if used_qp:
+            ist[I_NQP] += 1
+            path = PATH_QP
+        elif corrected:
+            ist[I_NCORR] += 1
+            path = PATH_CORRECTED
+        else:
+            ist[I_NCERT] += 1
+            path = PATH_CERTIFIED
+        for i in range(n):
+            s = ns[i] and v[i] == 0.0
+            if s and not prev_stuck[i]:
+                stick_count[i] += 1
+            prev_stuck[i] = s
+            if not ns[i]:
+                status[i] = 1 if v[i] > 0 else (-1 if v[i] < 0 else 0)
+        if ist[I_RECORD] != 0:
+            r = ist[I_NREC]
+            if r < rec.shape[0]:
+                rec[r, R_T] = t0 + (k + 1) * dt
+                rec[r, R_UA] = ua_new
+                rec[r, R_PRL] = prl_eq - par[P_PA]
+                rec[r, R_UB] = u[n - 1]
+                rec[r, R_VB] = v[n - 1]
+                rec[r, R_PUMP] = -lam[n - 1] - par[P_PB]
+                rec[r, R_PATH] = path
+                rec[r, R_VA] = va_new
+                ist[I_NREC] = r + 1
+        ist[I_STEP] = k + 1
+        vb = v[n - 1]
+        d = 1 if vb > 0 else (-1 if vb < 0 else 0)
+        if d != 0 and d != ist[I_PLDIR]:
+            old = ist[I_PLDIR]
+            ist[I_PLDIR] = d
+            if old != 0:
+                ist[I_EVENT] = d  # +1: plunger turned down (top of stroke), -1: turned up (bottom)
+                return EVENT
+    return DONE
