@@ -201,7 +201,7 @@ def concave_shift(par, ist, v, fric_s, shift):
 def advance(par, ist, u, v, a, uav, va_t, t0,
             ksd, kso, kd, ko, md, mo, cd, f, ea_len, fa, fw, fc,
             status, lo, hi, ns, lam, b, b0, shift, vk, rhs, stuck, cp, dp, nforce, fric_s,
-            wv, wb, wlo, whi, prev_lam, prev_v, prev_stuck, stick_count, rec, energy, k_end):
+            wv, wb, wlo, whi, prev_lam, prev_v, prev_stuck, stick_count, rec, energy, emax, emin, k_end):
     """Advance from step ist[I_STEP] to k_end; va_t[k] is the prescribed top velocity at the end of step k.
     uav = (u_A, v_A, a_A, PRL_eq) of the current state. Returns DONE, NEED_QP (wb/wlo/whi hold the
     sub-problem; the caller puts the solution in wv, sets ist[I_HAVEQP] and calls again) or EVENT."""
@@ -319,6 +319,15 @@ def advance(par, ist, u, v, a, uav, va_t, t0,
         uav[0] = ua_new
         uav[1] = va_new
         uav[2] = aa_new
+        # element force envelope (equivalent force) for stress ranges per taper
+        ne = n0
+        for e in range(n):
+            if e > 0:
+                ne = ea_len[e] * (u[e] - u[e - 1])
+            if ne > emax[e]:
+                emax[e] = ne
+            if ne < emin[e]:
+                emin[e] = ne
         # bookkeeping: paths, stick episodes, plunger direction events
         if used_qp:
             ist[I_NQP] += 1

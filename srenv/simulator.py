@@ -45,6 +45,8 @@ class RunResult:
     fillage: float
     intake_pressure_pa: float
     rod_stick_episodes: np.ndarray
+    element_force_max_eq_n: np.ndarray
+    element_force_min_eq_n: np.ndarray
     energy_j: dict
     trace: dict | None = None
     events: list = field(default_factory=list)
@@ -275,6 +277,8 @@ class Simulator:
         ist[K.I_RECORD] = int(record)
         rec = np.empty((n_steps if record else 0, K.N_REC))
         stick = np.zeros(n, dtype=np.int64)
+        emax = np.full(n, -np.inf)
+        emin = np.full(n, np.inf)
         qp_calls0 = self.qp.stats.calls
         events = []
         t0 = self.time_s
@@ -284,7 +288,8 @@ class Simulator:
                              ksd, kso, kd_f, ko_f, md_f, mo_f, cd_f, f_f, self._ea_len, self._fa, self._fw,
                              self._fc, self.status, w.lo, w.hi, w.ns, w.lam, w.b, w.b0, w.shift, w.vk, w.rhs,
                              w.stuck, w.cp, w.dp, w.nforce, w.fric_s, w.wv, w.wb, w.wlo, w.whi,
-                             self.prev_lam, self.prev_v, self.prev_stuck, stick, rec, self.energy, n_steps)
+                             self.prev_lam, self.prev_v, self.prev_stuck, stick, rec, self.energy,
+                             emax, emin, n_steps)
             if code == K.DONE:
                 break
             step = int(ist[K.I_STEP])
@@ -304,7 +309,7 @@ class Simulator:
             dc_iterations=int(ist[K.I_NDC]), fillage=fillage,
             intake_pressure_pa=(self.annulus.intake_pressure_pa() if self.annulus else
                                 self.cfg.pump.intake_pressure_pa),
-            rod_stick_episodes=stick[:-1].copy(), energy_j=self.energy_balance(), trace=trace, events=events)
+            rod_stick_episodes=stick[:-1].copy(), element_force_max_eq_n=emax, element_force_min_eq_n=emin, energy_j=self.energy_balance(), trace=trace, events=events)
 
     def _solve_qp(self, ksd, kso, dt, par, ist, step, time_s) -> None:  # noqa: ANN001
         w = self._work

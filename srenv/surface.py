@@ -41,8 +41,7 @@ class SurfaceMotion:
         if self.kind == "harmonic":
             return -0.5 * stroke_m * omega * np.sin(omega * t)
         if self.kind == "conventional":
-            theta = self._unit.theta_bottom + self._unit.crank_sign * omega * t
-            return -self._unit.torque_factor_signed(theta) * omega
+            return -np.asarray(self._unit.torque_factor_m(self._unit.crank_angle_rad(t, spm))) * omega
         raise ValueError("pull-out motion has no strokes: use duration-based runs")
 
     def pull_velocity(self, t_s: np.ndarray, speed_m_s: float) -> np.ndarray:

@@ -1,0 +1,185 @@
+"""Command line: ``srenv simulate | bench | sweep | config-doc``.
+
+Bad input (config or flags) prints one line naming the field, the value and the expected unit, exits with
+status 2, and leaves no output file behind (outputs are written to a temporary file and renamed).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import os
+import sys
+import tempfile
+from pathlib import Path
+
+import numpy as np
+
+from .errors import ConfigError, SolverFailure
+
+EXIT_BAD_INPUT = 2
+EXIT_SOLVER = 3
+
+
+def _positive(name: str, unit: str):  # noqa: ANN202
+    def parse(text: str) -> float:
+        try:
+            x = float(text)
+        except ValueError:
+            raise argparse.ArgumentTypeError(f"{name} = {text!r}: expected a positive number in {unit}") from None
+        if not math.isfinite(x) or x <= 0:
+            raise argparse.ArgumentTypeError(f"{name} = {text!r}: expected a positive number in {unit}")
+        return x
+    return parse
+
+
+def _positive_int(name: str):  # noqa: ANN202
+    def parse(text: str) -> int:
+        if not text.isdigit() or int(text) <= 0:
+            raise argparse.ArgumentTypeError(f"{name} = {text!r}: expected a positive integer")
+        return int(text)
+    return parse
+
+
+class _Parser(argparse.ArgumentParser):
+    def error(self, message: str) -> None:  # one line, status 2, no usage dump
+        print(f"srenv: error: {message}", file=sys.stderr)
+        sys.exit(EXIT_BAD_INPUT)
+
+
+def atomic_write(path: str | Path, write) -> None:  # noqa: ANN001
+    """Write through a temporary file in the target directory, then rename: never a partial file."""
+    path = Path(path)
+    fd, tmp = tempfile.mkstemp(dir=path.parent if str(path.parent) else ".", suffix=path.suffix)
+    os.close(fd)
+    try:
+        write(tmp)
+        os.replace(tmp, path)
+    except BaseException:
+        if os.path.exists(tmp):
+            os.remove(tmp)
+        raise
+
+
+def write_trace_csv(trace: dict, path: str) -> None:
+    from .simulator import TRACE_COLUMNS
+
+    cols = [c for c in TRACE_COLUMNS if c in trace]
+    data = np.column_stack([trace[c] for c in cols])
+
+    def write(tmp: str) -> None:
+        np.savetxt(tmp, data, delimiter=",", header=",".join(cols), comments="", fmt="%.12g")
+    atomic_write(path, write)
+
+
+def cmd_simulate(args: argparse.Namespace) -> int:
+    from .config import load_config
+    from .simulator import Simulator, concat_traces
+    from .stroke_summary import summarize
+
+    overrides = list(args.set or [])
+    if args.spm is not None:
+        overrides.append(f"surface.spm={args.spm}")
+    if args.stroke_length_m is not None:
+        overrides.append(f"surface.stroke_length_m={args.stroke_length_m}")
+    if args.pull_velocity_m_s is not None:
+        overrides.append(f"surface.pull_velocity_m_s={args.pull_velocity_m_s}")
+    if args.qp_solver is not None:
+        overrides.append(f"simulation.qp_solver={args.qp_solver}")
+    cfg = load_config(args.config, overrides)
+    for p in (args.out, args.plot):
+        if p and not Path(p).resolve().parent.is_dir():
+            raise ConfigError("--out" if p == args.out else "--plot", p, "a path in an existing directory")
+    sim = Simulator(cfg, always_qp=True if args.always_qp else None)
+    if cfg.surface.motion == "pullout" or args.duration_s is not None:
+        duration = args.duration_s if args.duration_s is not None else 60.0
+        if cfg.surface.motion == "pullout":
+            results = [sim.run_duration(duration)]
+        else:
+            n = max(1, round(duration * cfg.surface.spm / 60.0))
+            results = sim.run_strokes(n)
+    else:
+        results = sim.run_strokes(args.strokes)
+    trace = concat_traces(results)
+    if cfg.surface.motion == "pullout":
+        summary = pullout_summary(sim, results[0])
+    else:
+        summary = summarize(sim, results)
+    summary["natural_frequency_hz"] = sim.f1_hz
+    summary["energy_residual_j"] = sim.energy_balance()["residual_j"]
+    write_trace_csv(trace, args.out)
+    if args.plot:
+        from .render import save_cards
+
+        period = 60.0 / cfg.surface.spm if cfg.surface.motion != "pullout" else None
+        atomic_write(args.plot, lambda tmp: save_cards(trace, tmp, cfg.name, period))
+    print(json.dumps(summary, default=float))
+    return 0
+
+
+def pullout_summary(sim, result) -> dict:  # noqa: ANN001
+    from . import metrics
+
+    tr = result.trace
+    t = tr["t_s"]
+    late = t >= t[0] + 0.3 * (t[-1] - t[0])
+    du = tr["polished_rod_position_m"] - tr["pump_position_m"]
+    return {
+        "duration_s": result.duration_s,
+        "plunger_stick_episodes_after_start": len(metrics.rest_episodes(tr["pump_velocity_m_s"][late])),
+        "slip_amplitude_m": metrics.slip_amplitude_m(t[late], du[late], 1.0 / sim.f1_hz),
+        "pprl_n": float(tr["polished_rod_load_n"].max()),
+        "certified_steps": result.certified_steps, "corrected_steps": result.corrected_steps,
+        "qp_steps": result.qp_steps, "solver_calls": result.qp_calls,
+    }
+
+
+def build_parser() -> argparse.ArgumentParser:
+    p = _Parser(prog="srenv", description=__doc__.splitlines()[0])
+    sub = p.add_subparsers(dest="command", required=True, parser_class=_Parser)
+    s = sub.add_parser("simulate", help="simulate a well and write a per-time-step CSV")
+    s.add_argument("config", help="well YAML path or shipped name")
+    g = s.add_mutually_exclusive_group()
+    g.add_argument("--strokes", type=_positive_int("--strokes"), default=3)
+    g.add_argument("--duration-s", type=_positive("--duration-s", "s"))
+    s.add_argument("--spm", type=_positive("--spm", "strokes/min"))
+    s.add_argument("--stroke-length-m", type=_positive("--stroke-length-m", "m"))
+    s.add_argument("--pull-velocity-m-s", type=_positive("--pull-velocity-m-s", "m/s"))
+    s.add_argument("--set", action="append", metavar="KEY.PATH=VALUE", help="override a config field")
+    s.add_argument("--qp-solver", help="qpsolvers backend for the step QP (default proxqp)")
+    s.add_argument("--always-qp", action="store_true", help="solve every step's QP (reference mode)")
+    s.add_argument("--out", required=True, help="CSV file, one row per time step")
+    s.add_argument("--plot", help="PNG with the surface and pump cards")
+    s.set_defaults(func=cmd_simulate)
+    b = sub.add_parser("bench", help="performance figures as JSON")
+    b.add_argument("--repeats", type=_positive_int("--repeats"), default=5)
+    b.add_argument("--strokes", type=_positive_int("--strokes"), default=10)
+    b.add_argument("--quick", action="store_true", help="fewer repeats and strokes (smoke run)")
+    b.set_defaults(func=lambda a: __import__("srenv.bench", fromlist=["main"]).main(a))
+    d = sub.add_parser("config-doc", help="print the table of config fields")
+    d.set_defaults(func=lambda a: print(__import__("srenv.config", fromlist=["x"]).config_doc()) or 0)
+    try:
+        from .sweep import add_parser as add_sweep
+    except ImportError:
+        add_sweep = None
+    if add_sweep is not None:
+        add_sweep(sub)
+    return p
+
+
+def main(argv: list[str] | None = None) -> int:
+    args = build_parser().parse_args(argv)
+    try:
+        rc = args.func(args)
+    except ConfigError as exc:
+        print(f"srenv: error: {exc}", file=sys.stderr)
+        return EXIT_BAD_INPUT
+    except SolverFailure as exc:
+        print(f"srenv: solver failure: {exc}", file=sys.stderr)
+        return EXIT_SOLVER
+    return int(rc or 0)
+
+
+if __name__ == "__main__":
+    sys.exit(main())
