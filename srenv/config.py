@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
+import re
 import types
 import typing
 from dataclasses import dataclass, field
@@ -20,6 +21,27 @@ from typing import Any
 import yaml
 
 from .errors import ConfigError
+
+
+class _ConfigLoader(yaml.SafeLoader):
+    """``yaml.SafeLoader`` (no tags that construct Python objects) that also reads ``1e-3`` as a float.
+
+    PyYAML follows YAML 1.1, where a float needs a dot (``1.0e-3``), so ``time_step_s: 1e-3`` would arrive
+    as the *string* '1e-3' and be refused as "not a number" - a baffling error for a valid value. YAML 1.2
+    (and every other tool) reads it as a number; so do we. ``nan``/``inf`` spelt without the dot stay strings.
+    """
+
+
+_ConfigLoader.add_implicit_resolver(
+    "tag:yaml.org,2002:float",
+    re.compile(r"^[-+]?[0-9][0-9_]*(?:\.[0-9_]*)?[eE][-+]?[0-9]+$"),
+    list("-+0123456789"),
+)
+
+
+def _yaml_load(stream: Any) -> Any:
+    return yaml.load(stream, Loader=_ConfigLoader)  # a SafeLoader subclass: still no Python tags
+
 
 # check name -> (predicate, phrase used in the error message)
 _CHECKS: dict[str, tuple[typing.Callable[[float], bool], str]] = {
@@ -126,7 +148,12 @@ class SurfaceConfig:
     pull_ramp_s: float = num(0.5, unit="s", check="nonneg", doc="pull-out: half-cosine ramp up to speed")
     unit: str = opt("C-228D-213-86", doc="conventional: API designation from configs/units/catalogue.yaml")
     crank_hole: int = num(0, unit="-", check="nonneg", doc="conventional: 0 = longest stroke")
-    counterbalance_moment_nm: float = num(0.0, unit="N*m", check="nonneg")
+    counterbalance_moment_nm: float = num(0.0, unit="N*m", check="nonneg",
+                                          doc="conventional: max moment M of the crank counterweights")
+    counterbalance_offset_deg: float = num(0.0, unit="deg", check="azimuth",
+                                           doc="conventional: lead of the counterweight arm over the pin")
+    motor_efficiency: float = num(0.85, unit="-",
+                                  doc="conventional: crank-shaft power / electric input, in (0, 1]")
 
 
 @dataclass(frozen=True)
@@ -299,6 +326,8 @@ def _check_consistency(cfg: WellConfig) -> None:
                           f"a depth in m reaching the pump at {cfg.rod_length_m} m (sum of taper lengths)")
     if st and st[0].md_m != 0:
         raise ConfigError("survey.stations[0].md_m", st[0].md_m, "0 m (the survey starts at the surface)")
+    if cfg.surface.motion == "conventional":
+        _check_conventional_unit(cfg.surface)
     c = cfg.control
     if c.spm_min >= c.spm_max:
         raise ConfigError("control.spm_max", c.spm_max, f"strokes/min above control.spm_min = {c.spm_min}")
@@ -333,6 +362,24 @@ def _check_consistency(cfg: WellConfig) -> None:
                               f"{cfg.damping.tubing_inner_diameter_mm}")
 
 
+def _check_conventional_unit(surface: SurfaceConfig) -> None:
+    """A conventional unit's stroke comes from its crank hole: the unit must exist and have that hole, or
+    the stroke would be beyond what the unit can make. Checked here so the error names the config field
+    (the beam-unit module only knows its own argument names)."""
+    from .unit_catalogue import get_unit, list_units  # lazy: the catalogue is read only when needed
+
+    try:
+        unit = get_unit(surface.unit)
+    except KeyError:
+        raise ConfigError("surface.unit", surface.unit,
+                          "an API designation from the unit catalogue: " + ", ".join(list_units())) from None
+    holes = len(unit.crank_radii_m)
+    if surface.crank_hole >= holes:
+        raise ConfigError("surface.crank_hole", surface.crank_hole,
+                          f"a crank-hole index in [0, {holes - 1}] for unit {unit.designation} "
+                          f"(0 = longest stroke, {unit.max_stroke_m:.4g} m)")
+
+
 def _known_solvers() -> list[str]:
     import qpsolvers
 
@@ -361,7 +408,7 @@ def _resolve(path_or_name: str | Path) -> Path:
 def _parse_override_value(text: str) -> Any:
     # YAML scalar syntax (numbers, true/false, strings) - parsed, never evaluated.
     try:
-        return yaml.safe_load(text)
+        return _yaml_load(text)
     except yaml.YAMLError:
         return text
 
@@ -404,13 +451,22 @@ def apply_overrides(data: dict, overrides: dict[str, Any] | list[str] | None) ->
     return data
 
 
+def _yaml_problem(exc: yaml.YAMLError) -> str:
+    """One line locating a YAML error: 'line L column C: problem' (the full text spans several lines)."""
+    mark = getattr(exc, "problem_mark", None)
+    problem = getattr(exc, "problem", None) or str(exc).splitlines()[0]
+    if mark is None:
+        return problem
+    return f"line {mark.line + 1} column {mark.column + 1}: {problem}"
+
+
 def read_raw(path_or_name: str | Path) -> dict:
     path = _resolve(path_or_name)
     try:
         with open(path) as fh:
-            data = yaml.safe_load(fh)
+            data = _yaml_load(fh)
     except yaml.YAMLError as exc:
-        raise ConfigError("config", str(path), f"valid YAML ({str(exc).splitlines()[0]})") from None
+        raise ConfigError("config", str(path), f"valid YAML ({_yaml_problem(exc)})") from None
     if data is None:
         data = {}
     if not isinstance(data, dict):

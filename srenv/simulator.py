@@ -65,6 +65,7 @@ class Simulator:
         sim = cfg.simulation
         self.always_qp = sim.always_qp if always_qp is None else always_qp
         self.qp = StepQP(qp_solver or sim.qp_solver, sim.qp_eps_abs, persistent=persistent_qp)
+        self.polish = True  # exact active-set polish of QP answers (off: keep the solver's raw velocity)
         self.mesh = build_mesh(cfg.rod, sim.element_length_m)
         self.survey = Survey.from_config(cfg.survey, cfg.rod_length_m)
         self.surface = SurfaceMotion(cfg.surface)
@@ -265,6 +266,10 @@ class Simulator:
         va = self.surface.pull_velocity(t, speed)
         return self._run(va, dt, record, 0.0, 0.0)
 
+    def run_velocity(self, top_velocity_m_s: np.ndarray, dt: float, record: bool = True) -> RunResult:
+        """Advance with an arbitrary prescribed top velocity series (positive down), one value per step."""
+        return self._run(np.ascontiguousarray(top_velocity_m_s, dtype=float), float(dt), record, 0.0, 0.0)
+
     def _run(self, va: np.ndarray, dt: float, record: bool, spm: float, stroke: float) -> RunResult:
         w = self._work
         n = self.n_free
@@ -317,8 +322,10 @@ class Simulator:
         v_raw, status = self.qp.solve(inv, w.wb, w.wlo, w.whi, w.ns.copy(), step, time_s)
         # polish: exact active-set solve from the QP's pattern, kept only if it is KKT-certified
         v = np.empty(self.n_free)
-        ok = K.solve_pattern(ksd, kso, w.wb, w.wlo, w.whi, w.ns, status, v, w.lam, w.rhs, w.stuck, w.cp,
-                             w.dp, int(ist[K.I_MAXCORR]), par[K.P_TOLV], par[K.P_TOLL])
+        ok = -1
+        if self.polish:
+            ok = K.solve_pattern(ksd, kso, w.wb, w.wlo, w.whi, w.ns, status, v, w.lam, w.rhs, w.stuck,
+                                 w.cp, w.dp, int(ist[K.I_MAXCORR]), par[K.P_TOLV], par[K.P_TOLL])
         if ok >= 0:
             self.qp.stats.polished += 1
             w.wv[:] = v

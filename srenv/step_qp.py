@@ -20,10 +20,12 @@ from dataclasses import dataclass, field
 import numpy as np
 import qpsolvers
 from scipy.linalg import solve_banded
+from scipy.sparse import csc_matrix
 
 from .errors import SolverFailure
 
 FALLBACK_ORDER = ("proxqp", "clarabel", "osqp", "piqp", "daqp", "highs")
+SPARSE_BACKENDS = ("osqp", "clarabel", "piqp", "highs", "scs", "ecos")
 
 
 def _solver_options(name: str, eps_abs: float, tight: bool) -> dict:
@@ -31,7 +33,8 @@ def _solver_options(name: str, eps_abs: float, tight: bool) -> dict:
     if name == "proxqp":
         return {"eps_abs": eps, "eps_rel": 0.0, "max_iter": 10000 if tight else 1000}
     if name == "osqp":
-        return {"eps_abs": max(eps, 1e-12), "eps_rel": 0.0, "max_iter": 200000, "polishing": True}
+        return {"eps_abs": max(eps, 1e-12), "eps_rel": 0.0, "max_iter": 200000, "polishing": True,
+                "raise_error": False}
     if name == "clarabel":
         return {"tol_gap_abs": max(eps, 1e-12), "tol_gap_rel": 1e-12, "tol_feas": 1e-12}
     return {}
@@ -114,6 +117,8 @@ class StepQP:
             return None
         if self.persistent and name == "proxqp" and not tight:
             return self._solve_persistent(prob)
+        if name in SPARSE_BACKENDS:  # these take CSC matrices; converting here keeps qpsolvers quiet
+            prob = qpsolvers.Problem(P=csc_matrix(prob.P), q=prob.q, lb=prob.lb, ub=prob.ub)
         try:
             sol = qpsolvers.solve_problem(prob, solver=name, **_solver_options(name, self.eps_abs, tight))
         except Exception:  # a backend raising is a failure like any other; the chain moves on
