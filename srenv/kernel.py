@@ -224,21 +224,22 @@ def advance(par, ist, u, v, a, uav, va_t, t0,
         vpa = va_old + dt * (1.0 - gamma) * aa_old
         ua_new = ua_old + dt * va_old + dt * dt * (0.5 - beta) * aa_old - c2 * vpa + c2 * va_new
         aa_new = (va_new - vpa) * c1
-        # predictor and right-hand side (b0 = b* with the prescribed top column moved over)
+        # predictor and right-hand side (b0 = b* with the prescribed top column moved over).
+        # v_n is read from prev_v, not v: within a step `v` holds the latest DC iterate or a failed
+        # pattern solve, and b0 is rebuilt from scratch when the kernel resumes after a NEED_QP return.
         for i in range(n):
-            vp = v[i] + dt * (1.0 - gamma) * a[i]
-            ut = u[i] + dt * v[i] + dt * dt * (0.5 - beta) * a[i] - c2 * vp
+            vp = prev_v[i] + dt * (1.0 - gamma) * a[i]
+            ut = u[i] + dt * prev_v[i] + dt * dt * (0.5 - beta) * a[i] - c2 * vp
             rhs[i] = ut  # temporarily hold u-tilde
             b0[i] = f[i] + c1 * md[i] * vp
         for i in range(n):
-            vp = v[i] + dt * (1.0 - gamma) * a[i]
             ku = kd[i] * rhs[i]
             if i > 0:
                 ku += ko[i - 1] * rhs[i - 1]
-                b0[i] += c1 * mo[i - 1] * (v[i - 1] + dt * (1.0 - gamma) * a[i - 1])
+                b0[i] += c1 * mo[i - 1] * (prev_v[i - 1] + dt * (1.0 - gamma) * a[i - 1])
             if i < n - 1:
                 ku += ko[i] * rhs[i + 1]
-                b0[i] += c1 * mo[i] * (v[i + 1] + dt * (1.0 - gamma) * a[i + 1])
+                b0[i] += c1 * mo[i] * (prev_v[i + 1] + dt * (1.0 - gamma) * a[i + 1])
             b0[i] -= ku
         b0[0] -= par[P_KC] * ua_new + par[P_MC] * aa_new
         if ist[I_HAVEQP] == 0:
@@ -246,7 +247,7 @@ def advance(par, ist, u, v, a, uav, va_t, t0,
                 set_bounds(par, ist, u, ua_old, ea_len, fa, fw, fc, lo, hi, ns, nforce, fric_s)
             ist[I_DCIT] = 0
             for i in range(n):
-                vk[i] = v[i]
+                vk[i] = prev_v[i]  # linearise j2 at v_n first
         used_qp = ist[I_HAVEQP] != 0
         corrected = False
         # DC iterations (a single pass when both laws are monotone)

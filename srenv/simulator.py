@@ -66,6 +66,7 @@ class Simulator:
         self.always_qp = sim.always_qp if always_qp is None else always_qp
         self.qp = StepQP(qp_solver or sim.qp_solver, sim.qp_eps_abs, persistent=persistent_qp)
         self.polish = True  # exact active-set polish of QP answers (off: keep the solver's raw velocity)
+        self.linear_reference = False  # bench only: skip friction and valve law (a plain linear Newmark step)
         self.mesh = build_mesh(cfg.rod, sim.element_length_m)
         self.survey = Survey.from_config(cfg.survey, cfg.rod_length_m)
         self.surface = SurfaceMotion(cfg.surface)
@@ -238,7 +239,7 @@ class Simulator:
         ist = np.zeros(K.N_IST, dtype=np.int64)
         ist[K.I_MAXCORR], ist[K.I_DCMAX] = s.max_corrections, s.dc_max_iterations
         ist[K.I_ALWAYSQP] = int(self.always_qp)
-        ist[K.I_NONSMOOTH] = 1
+        ist[K.I_NONSMOOTH] = 0 if self.linear_reference else 1
         ist[K.I_PLDIR], ist[K.I_VOID] = self.pl_dir, self.void
         ist[K.I_PUMP_NONMONO] = int(law.drop_n > 0)
         ist[K.I_FRIC_NONMONO] = int(fr.law == "nonmonotone" and fr.coefficient > fr.kinetic_coefficient)

@@ -113,19 +113,27 @@ class StepQP:
         return np.array(qp.results.x)
 
     def _solve_once(self, prob: qpsolvers.Problem, name: str, tight: bool) -> np.ndarray | None:
-        if self.fail_injector is not None and self.fail_injector(name):
+        """One attempt of the chain: the solution, or None for any kind of failure (not solved, non-finite,
+        the backend raising, or a test's fail_injector)."""
+        x = None
+        if self.fail_injector is None or not self.fail_injector(name):
+            try:
+                if self.persistent and name == "proxqp" and not tight:
+                    x = self._solve_persistent(prob)
+                else:
+                    if name in SPARSE_BACKENDS:  # these take CSC matrices; converting keeps qpsolvers quiet
+                        prob = qpsolvers.Problem(P=csc_matrix(prob.P), q=prob.q, lb=prob.lb, ub=prob.ub)
+                    sol = qpsolvers.solve_problem(prob, solver=name,
+                                                  **_solver_options(name, self.eps_abs, tight))
+                    x = sol.x if sol.found else None
+            except Exception:  # noqa: BLE001 - a backend raising is a failure like any other: move on
+                x = None
+        if x is None or not np.all(np.isfinite(x)):
+            if name == "proxqp":
+                # the persistent QP would warm-start the next step from this failed iterate: start it cold
+                self._pqp = None
             return None
-        if self.persistent and name == "proxqp" and not tight:
-            return self._solve_persistent(prob)
-        if name in SPARSE_BACKENDS:  # these take CSC matrices; converting here keeps qpsolvers quiet
-            prob = qpsolvers.Problem(P=csc_matrix(prob.P), q=prob.q, lb=prob.lb, ub=prob.ub)
-        try:
-            sol = qpsolvers.solve_problem(prob, solver=name, **_solver_options(name, self.eps_abs, tight))
-        except Exception:  # a backend raising is a failure like any other; the chain moves on
-            return None
-        if not sol.found or sol.x is None or not np.all(np.isfinite(sol.x)):
-            return None
-        return sol.x
+        return x
 
     def solve(self, inv: np.ndarray, b: np.ndarray, lo: np.ndarray, hi: np.ndarray, ns: np.ndarray,
               step: int, time_s: float) -> tuple[np.ndarray, np.ndarray]:
@@ -135,7 +143,7 @@ class StepQP:
         chain = [(self.solver, False), (self.solver, True)] + [
             (s, True) for s in FALLBACK_ORDER if s != self.solver and s in qpsolvers.available_solvers]
         x = None
-        for attempt, (name, tight) in enumerate(chain):
+        for name, tight in chain:
             x = self._solve_once(prob, name, tight)
             self.stats.calls += 1
             if x is not None:
@@ -144,7 +152,8 @@ class StepQP:
             self.stats.retries += 1
         self.stats.seconds += time.perf_counter() - t0
         if x is None:
-            raise SolverFailure(step, time_s, f"no backend solved the step QP (tried {[c[0] for c in chain]})")
+            tried = ", ".join(f"{n} ({'tight' if t else 'default'})" for n, t in chain)
+            raise SolverFailure(step, time_s, f"no backend solved the step QP (tried {tried})")
         lam_s = x * force
         v = w - inv[:, s_idx] @ lam_s
         status = np.zeros(len(b), dtype=np.int64)

@@ -1,7 +1,9 @@
 """Per-stroke summary: composes ``metrics`` (pure functions on traces) with a simulator run.
 
 This is where a run's raw records become the numbers users read: PPRL/MPRL, pump stroke, fillage,
-production, Goodman loading per taper, card work, stick-slip index and the solver path counts.
+production, Goodman loading per taper, card work, stick-slip index and the solver path counts; with a
+conventional beam unit also the gearbox torque, its loading against the reducer rating and the
+polished-rod and motor power (``gearbox.py``).
 """
 
 from __future__ import annotations
@@ -57,7 +59,7 @@ def summarize(sim: Simulator, results: list[RunResult]) -> dict:
     fmin = np.min([r.element_force_min_eq_n for r in results], axis=0)
     goodman = goodman_per_taper(sim, fmax, fmin)
     n_steps = sum(r.n_steps for r in results)
-    return {
+    summary = {
         "strokes": n_strokes,
         "spm": spm,
         "pprl_n": card["pprl_n"],
@@ -79,3 +81,8 @@ def summarize(sim: Simulator, results: list[RunResult]) -> dict:
         "solver_calls": sum(r.qp_calls for r in results),
         "solver_calls_per_stroke": sum(r.qp_calls for r in results) / n_strokes,
     }
+    # a conventional unit has a gearbox: its torque loading is the env's peak-load signal at the surface
+    gearbox = sim.surface.gearbox_report(results)
+    if gearbox is not None:
+        summary.update(gearbox.summary())
+    return summary

@@ -1,7 +1,9 @@
 """Prescribed motion of the polished rod (top boundary, point A), positive downward.
 
 ``harmonic`` (paper): u_A = -(S/2)(1 - cos wt), each stroke starting at the bottom (u_A = 0).
-``conventional``: API 11E beam-unit four-bar linkage (``beam_unit.py``) at constant crank speed.
+``conventional``: API 11E beam-unit four-bar linkage (``beam_unit.py``) at constant crank speed; the stroke
+is the crank hole's, and the unit's gearbox torque and power follow from the simulated loads
+(``gearbox.py``, :meth:`SurfaceMotion.gearbox_report`).
 ``pullout``: constant upward speed V reached through a half-cosine ramp of ``pull_ramp_s``.
 The simulator prescribes the *velocity*; displacement follows by Newmark integration, which for the
 trapezoidal rule reproduces a periodic motion without drift.
@@ -11,22 +13,37 @@ from __future__ import annotations
 
 import math
 from functools import lru_cache
+from typing import TYPE_CHECKING
 
 import numpy as np
 
+from .beam_unit import ConventionalUnit
 from .config import SurfaceConfig
+from .errors import ConfigError
+
+if TYPE_CHECKING:
+    from .gearbox import GearboxReport
+    from .simulator import RunResult
 
 
 class SurfaceMotion:
-    def __init__(self, cfg: SurfaceConfig) -> None:
+    """The top boundary of one well. ``unit`` overrides the catalogue unit named in the config (a custom or
+    modified linkage, e.g. :meth:`~srenv.beam_unit.BeamUnitGeometry.scaled_linkage`); conventional only."""
+
+    def __init__(self, cfg: SurfaceConfig, unit: ConventionalUnit | None = None) -> None:
         self.cfg = cfg
         self.kind = cfg.motion
-        self._unit = None
+        # SurfaceConfig(...) built in code skips load_config's range checks on this field
+        if not 0.0 < cfg.motor_efficiency <= 1.0:
+            raise ConfigError("surface.motor_efficiency", cfg.motor_efficiency, "a number in (0, 1]")
+        if unit is not None and self.kind != "conventional":
+            raise ConfigError("surface.motion", self.kind, "'conventional' when a beam unit is given")
+        self._unit: ConventionalUnit | None = None
         if self.kind == "conventional":
-            self._unit = _conventional_unit(cfg.unit, cfg.crank_hole)
+            self._unit = unit if unit is not None else _conventional_unit(cfg.unit, cfg.crank_hole)
 
     @property
-    def unit(self):  # noqa: ANN201 - ConventionalUnit, imported lazily
+    def unit(self) -> ConventionalUnit | None:
         return self._unit
 
     def stroke_length_m(self, requested_m: float) -> float:
@@ -49,10 +66,35 @@ class SurfaceMotion:
         s = np.where(t_s >= ramp, 1.0, 0.5 * (1 - np.cos(np.pi * np.clip(t_s, 0, ramp) / ramp)))
         return -speed_m_s * s
 
+    def gearbox_report(
+        self, results: list[RunResult], counterbalance_moment_nm: float | None = None
+    ) -> GearboxReport | None:
+        """Gearbox torque and power of recorded strokes with the configured counterbalance (or the given
+        moment); None unless the motion is conventional (no linkage, no gearbox)."""
+        if self._unit is None:
+            return None
+        from .gearbox import analyse_runs
+
+        moment = self.cfg.counterbalance_moment_nm if counterbalance_moment_nm is None else counterbalance_moment_nm
+        return analyse_runs(
+            self._unit, results,
+            counterbalance_moment_nm=moment,
+            counterbalance_offset_rad=math.radians(self.cfg.counterbalance_offset_deg),
+            motor_efficiency=self.cfg.motor_efficiency,
+        )
+
 
 @lru_cache(maxsize=16)
-def _conventional_unit(designation: str, crank_hole: int):  # noqa: ANN202
-    from .beam_unit import ConventionalUnit
-    from .unit_catalogue import get_unit
+def _conventional_unit(designation: str, crank_hole: int) -> ConventionalUnit:
+    """Catalogue unit with its crank hole, cached: the env rebuilds simulators on every reset."""
+    from .unit_catalogue import get_unit, list_units
 
-    return ConventionalUnit(get_unit(designation), crank_hole)
+    try:
+        geometry = get_unit(designation)
+    except KeyError:
+        raise ConfigError("surface.unit", designation,
+                          "an API designation from the unit catalogue: " + ", ".join(list_units())) from None
+    holes = len(geometry.crank_radii_m)
+    if not 0 <= crank_hole < holes:
+        raise ConfigError("surface.crank_hole", crank_hole, f"an index in 0..{holes - 1} (0 = longest stroke)")
+    return ConventionalUnit(geometry, crank_hole)
