@@ -364,20 +364,11 @@ def _check_consistency(cfg: WellConfig) -> None:
 
 def _check_conventional_unit(surface: SurfaceConfig) -> None:
     """A conventional unit's stroke comes from its crank hole: the unit must exist and have that hole, or
-    the stroke would be beyond what the unit can make. Checked here so the error names the config field
-    (the beam-unit module only knows its own argument names)."""
-    from .unit_catalogue import get_unit, list_units  # lazy: the catalogue is read only when needed
+    the stroke would be beyond what the unit can make. Checked at load time (not only when a simulator is
+    built) so that every loader of a config - CLI, env, sweeps - refuses it before doing any work."""
+    from .surface import _conventional_unit  # the one place that resolves a unit; lazy: it imports us
 
-    try:
-        unit = get_unit(surface.unit)
-    except KeyError:
-        raise ConfigError("surface.unit", surface.unit,
-                          "an API designation from the unit catalogue: " + ", ".join(list_units())) from None
-    holes = len(unit.crank_radii_m)
-    if surface.crank_hole >= holes:
-        raise ConfigError("surface.crank_hole", surface.crank_hole,
-                          f"a crank-hole index in [0, {holes - 1}] for unit {unit.designation} "
-                          f"(0 = longest stroke, {unit.max_stroke_m:.4g} m)")
+    _conventional_unit(surface.unit, surface.crank_hole)
 
 
 def _known_solvers() -> list[str]:
