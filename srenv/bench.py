@@ -28,7 +28,7 @@ def _time_strokes(sim: Simulator, n: int, record: bool = False) -> float:
     return time.perf_counter() - t
 
 
-def _linear_reference(cfg) -> Simulator:  # noqa: ANN001
+def _linear_reference(cfg) -> Simulator:
     """Same mesh and time step, no friction and no valve law: a plain linear Newmark step."""
     sim = Simulator(cfg)
     sim.linear_reference = True

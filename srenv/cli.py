@@ -22,7 +22,7 @@ EXIT_BAD_INPUT = 2
 EXIT_SOLVER = 3
 
 
-def _positive(name: str, unit: str):  # noqa: ANN202
+def _positive(name: str, unit: str):
     def parse(text: str) -> float:
         try:
             x = float(text)
@@ -34,7 +34,7 @@ def _positive(name: str, unit: str):  # noqa: ANN202
     return parse
 
 
-def _positive_int(name: str):  # noqa: ANN202
+def _positive_int(name: str):
     def parse(text: str) -> int:
         if not text.isdigit() or int(text) <= 0:
             raise argparse.ArgumentTypeError(f"{name} = {text!r}: expected a positive integer")
@@ -48,7 +48,7 @@ class _Parser(argparse.ArgumentParser):
         sys.exit(EXIT_BAD_INPUT)
 
 
-def atomic_write(path: str | Path, write) -> None:  # noqa: ANN001
+def atomic_write(path: str | Path, write) -> None:
     """Write through a temporary file in the target directory, then rename: never a partial file."""
     path = Path(path)
     fd, tmp = tempfile.mkstemp(dir=path.parent if str(path.parent) else ".", suffix=path.suffix)
@@ -118,7 +118,7 @@ def cmd_simulate(args: argparse.Namespace) -> int:
     return 0
 
 
-def pullout_summary(sim, result) -> dict:  # noqa: ANN001
+def pullout_summary(sim, result) -> dict:
     from . import metrics
 
     tr = result.trace

@@ -209,17 +209,17 @@ class RewardConfig:
 class WellConfig:
     name: str = opt("well")
     description: str = opt("")
-    rod: RodConfig = opt(RodConfig())
-    damping: DampingConfig = opt(DampingConfig())
-    survey: SurveyConfig = opt(SurveyConfig())
-    friction: FrictionConfig = opt(FrictionConfig())
-    fluid: FluidConfig = opt(FluidConfig())
-    pump: PumpConfig = opt(PumpConfig())
-    surface: SurfaceConfig = opt(SurfaceConfig())
-    inflow: InflowConfig = opt(InflowConfig())
-    simulation: SimulationConfig = opt(SimulationConfig())
-    control: ControlConfig = opt(ControlConfig())
-    reward: RewardConfig = opt(RewardConfig())
+    rod: RodConfig = field(default_factory=RodConfig)
+    damping: DampingConfig = field(default_factory=DampingConfig)
+    survey: SurveyConfig = field(default_factory=SurveyConfig)
+    friction: FrictionConfig = field(default_factory=FrictionConfig)
+    fluid: FluidConfig = field(default_factory=FluidConfig)
+    pump: PumpConfig = field(default_factory=PumpConfig)
+    surface: SurfaceConfig = field(default_factory=SurfaceConfig)
+    inflow: InflowConfig = field(default_factory=InflowConfig)
+    simulation: SimulationConfig = field(default_factory=SimulationConfig)
+    control: ControlConfig = field(default_factory=ControlConfig)
+    reward: RewardConfig = field(default_factory=RewardConfig)
 
     @property
     def rod_length_m(self) -> float:

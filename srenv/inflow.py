@@ -18,7 +18,7 @@ SECONDS_PER_DAY = 86400.0
 
 
 class Annulus:
-    def __init__(self, cfg: InflowConfig, fluid: FluidConfig, pump_md_m: float, tvd) -> None:  # noqa: ANN001
+    def __init__(self, cfg: InflowConfig, fluid: FluidConfig, pump_md_m: float, tvd) -> None:
         self.cfg = cfg
         self.fluid = fluid
         self.pump_md_m = pump_md_m

@@ -325,10 +325,8 @@ def advance(par, ist, u, v, a, uav, va_t, t0,
         for e in range(n):
             if e > 0:
                 ne = ea_len[e] * (u[e] - u[e - 1])
-            if ne > emax[e]:
-                emax[e] = ne
-            if ne < emin[e]:
-                emin[e] = ne
+            emax[e] = max(emax[e], ne)
+            emin[e] = min(emin[e], ne)
         # bookkeeping: paths, stick episodes, plunger direction events
         if used_qp:
             ist[I_NQP] += 1

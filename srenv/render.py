@@ -8,7 +8,7 @@ from __future__ import annotations
 import numpy as np
 
 
-def card_figure(trace: dict, title: str = "", last_stroke_s: float | None = None):  # noqa: ANN201
+def card_figure(trace: dict, title: str = "", last_stroke_s: float | None = None):
     """A matplotlib Figure with the surface card and the pump card (last stroke if given)."""
     import matplotlib
 

@@ -317,7 +317,7 @@ class Simulator:
                                 self.cfg.pump.intake_pressure_pa),
             rod_stick_episodes=stick[:-1].copy(), element_force_max_eq_n=emax, element_force_min_eq_n=emin, energy_j=self.energy_balance(), trace=trace, events=events)
 
-    def _solve_qp(self, ksd, kso, dt, par, ist, step, time_s) -> None:  # noqa: ANN001
+    def _solve_qp(self, ksd, kso, dt, par, ist, step, time_s) -> None:
         w = self._work
         inv = self.qp.inverse(ksd, kso, dt)
         v_raw, status = self.qp.solve(inv, w.wb, w.wlo, w.whi, w.ns.copy(), step, time_s)
@@ -335,7 +335,7 @@ class Simulator:
         self.status[:] = status
         ist[K.I_HAVEQP] = 1
 
-    def _on_event(self, direction: int, par, ist, time_s: float, events: list, fillage: float) -> float:  # noqa: ANN001
+    def _on_event(self, direction: int, par, ist, time_s: float, events: list, fillage: float) -> float:
         ub = float(self.u[-1])
         if direction > 0:  # top of the plunger stroke: the barrel has filled as far as the annulus allows
             upstroke = max(self._last_bottom_ub - ub, 0.0)
@@ -366,7 +366,7 @@ class Simulator:
             "step_path": rec[:, K.R_PATH],
         }
 
-    def run_strokes(self, n: int, record: bool = True, **kw) -> list[RunResult]:  # noqa: ANN003
+    def run_strokes(self, n: int, record: bool = True, **kw) -> list[RunResult]:
         return [self.run_stroke(record=record, **kw) for _ in range(n)]
 
 

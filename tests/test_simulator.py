@@ -33,7 +33,7 @@ def _flat(d: dict, prefix: str = "") -> dict:
     return out
 
 
-def _config(base: str, extra: dict):  # noqa: ANN202
+def _config(base: str, extra: dict):
     return load_config(base, _flat(extra))
 
 
