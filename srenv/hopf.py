@@ -33,11 +33,15 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
 from scipy.linalg import eigvals
 
 from . import kernel as K
+
+if TYPE_CHECKING:
+    from .simulator import Simulator
 
 # Kernel tolerances as the simulator sets them: exact rest below 1e-13 m/s, multiplier slack 1e-12 relative.
 _TOL_V_M_S = 1e-13
@@ -165,13 +169,14 @@ def find_hopf_velocity(block: SpringBlock, v_low_m_s: float, v_high_m_s: float, 
 
 
 # ---------------------------------------------------------------------------------------------- the rod
-def rod_impedance_n_s_m(sim) -> float:
+def rod_impedance_n_s_m(sim: Simulator) -> float:
     """Z = sqrt(EA rho A) of the bottom element: the damper a long rod presents to its end."""
     return float(math.sqrt(sim.mesh.ea_n[-1] * sim.mesh.rho_a_kg_m[-1]))
 
 
-def _max_growth_rate(sim, end_slope_n_s_m: float) -> float:
-    """Largest real part (1/s) of the linearised FE string with the plunger slope as a negative end damper."""
+def _max_growth_rate(sim: Simulator, end_slope_n_s_m: float, max_frequency_hz: float = math.inf) -> float:
+    """Largest real part (1/s) of the linearised FE string with the plunger slope as a negative end damper,
+    over the modes up to ``max_frequency_hz``."""
     (kd, ko), (md, mo), cd = sim._k, sim._m, sim._c
     n = sim.n_free
 
@@ -182,27 +187,34 @@ def _max_growth_rate(sim, end_slope_n_s_m: float) -> float:
     damp[-1, -1] -= end_slope_n_s_m
     inv_m = np.linalg.inv(mass)
     system = np.block([[np.zeros((n, n)), np.eye(n)], [-inv_m @ stiff, -inv_m @ damp]])
-    return float(eigvals(system).real.max())
+    lam = eigvals(system)
+    return float(lam.real[np.abs(lam.imag) <= 2 * math.pi * max_frequency_hz].max())
 
 
-def rod_critical_slope_n_s_m(sim, relative_tolerance: float = 1e-6) -> float:
+def rod_critical_slope_n_s_m(sim: Simulator, relative_tolerance: float = 1e-6,
+                             max_frequency_hz: float = math.inf) -> float:
     """Smallest plunger friction slope |dP/dv| (N*s/m) that destabilises steady sliding of the FE string.
 
     Rod friction is Coulomb (constant while sliding), so it adds no slope; the top is held by the prescribed
     velocity. Bisection on the sign of the largest real part; bracket [0, Z] since a slope beyond the
-    impedance is unstable even for a semi-infinite rod."""
+    impedance is unstable even for a semi-infinite rod. With every mode (default) this is the threshold of
+    the simulated model, which is set by its highest, plunger-localised mesh mode; ``max_frequency_hz``
+    keeps only the modes the mesh resolves (the continuum's threshold, docs/stick_slip.md)."""
     lo, hi = 0.0, rod_impedance_n_s_m(sim)
-    if _max_growth_rate(sim, hi) <= 0:
+    if _max_growth_rate(sim, hi, max_frequency_hz) <= 0:
         raise ValueError("the FE string is stable even with an end slope equal to its impedance")
     while hi - lo > relative_tolerance * hi:
         mid = 0.5 * (lo + hi)
-        lo, hi = (lo, mid) if _max_growth_rate(sim, mid) > 0 else (mid, hi)
+        lo, hi = (lo, mid) if _max_growth_rate(sim, mid, max_frequency_hz) > 0 else (mid, hi)
     return 0.5 * (lo + hi)
 
 
-def rod_hopf_velocity_m_s(sim, damping_n_s_m: float | None = None) -> float:
-    """Hopf velocity of the plunger law on the rod: b = the FE string's critical slope (default), or a given
-    damper (e.g. :func:`rod_impedance_n_s_m` for the lumped estimate)."""
+def rod_hopf_velocity_m_s(sim: Simulator, damping_n_s_m: float | None = None,
+                          max_frequency_hz: float = math.inf) -> float:
+    """Hopf velocity of the plunger law on the rod: b = the FE string's critical slope (default, over the
+    modes up to ``max_frequency_hz``), or a given damper (e.g. :func:`rod_impedance_n_s_m`: the lumped
+    estimate)."""
     law = sim.law
-    b = rod_critical_slope_n_s_m(sim) if damping_n_s_m is None else damping_n_s_m
+    b = rod_critical_slope_n_s_m(sim, max_frequency_hz=max_frequency_hz) if damping_n_s_m is None \
+        else damping_n_s_m
     return hopf_velocity_m_s(law.drop_n, law.v0_m_s, b)

@@ -169,7 +169,8 @@ class Simulator:
                 elem = plunger_eq_n + np.cumsum(weight[::-1])[::-1]
                 node = np.r_[0.5 * (elem[:-1] + elem[1:]), elem[-1]]
                 side = np.maximum(side, np.hypot(self._fw - self._fa * node, self._fc * node))
-            slope[:-1] += (1.0 - fr.kinetic_coefficient / fr.coefficient) * side[:-1] / fr.reference_velocity_m_s
+            weakening = 1.0 - fr.kinetic_coefficient / fr.coefficient
+            slope[:-1] += weakening * side[:-1] / fr.reference_velocity_m_s
         if not np.any(slope > 0):
             return
 
@@ -191,10 +192,10 @@ class Simulator:
         node_i = int(np.argmax(slope))
         where = "the pump" if node_i == self.n_free - 1 else f"rod node {node_i + 1}"
         warnings.warn(
-            f"simulation.time_step_s = {dt:g} s: the step problem is not convex (K* - diag(law slopes) is not "
-            f"positive definite; steepest slope {slope[node_i]:.4g} N*s/m at {where}). DC iterations still "
-            f"converge to a stationary point of each step, but it may not be unique. A time step below "
-            f"{lo_dt:.3g} s restores convexity.", UserWarning, stacklevel=4)
+            f"simulation.time_step_s = {dt:g} s: the step problem is not convex (K* - diag(law slopes) is "
+            f"not positive definite; steepest slope {slope[node_i]:.4g} N*s/m at {where}). DC iterations "
+            f"still converge to a stationary point of each step, but it may not be unique. A time step "
+            f"below {lo_dt:.3g} s restores convexity.", UserWarning, stacklevel=4)
 
     # ------------------------------------------------------------------------------------------ state
     def reset(self, fluid_level_m: float | None = None) -> None:

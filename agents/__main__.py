@@ -1,0 +1,162 @@
+"""``python -m agents train | evaluate | quickstart``.
+
+Each command prints a JSON summary as its last stdout line (progress and notes go to stderr; ``evaluate``
+with several policies prints a markdown comparison table before the JSON). Bad input prints one line
+``agents: error: ...`` on stderr and exits with status 2.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import sys
+from pathlib import Path
+from typing import Any
+
+import yaml
+
+EXIT_BAD_INPUT = 2
+QUICK_CONFIG = Path(__file__).resolve().parent.parent / "configs" / "train" / "ppo_quick.yaml"
+
+
+class _Parser(argparse.ArgumentParser):
+    def error(self, message: str) -> None:  # one line, status 2, no usage dump
+        print(f"agents: error: {message}", file=sys.stderr)
+        sys.exit(EXIT_BAD_INPUT)
+
+
+def _nonneg_int(text: str) -> int:
+    if not text.isdigit():
+        raise argparse.ArgumentTypeError(f"{text!r}: expected a non-negative integer")
+    return int(text)
+
+
+def _positive_int(text: str) -> int:
+    if not text.isdigit() or int(text) == 0:
+        raise argparse.ArgumentTypeError(f"{text!r}: expected a positive integer")
+    return int(text)
+
+
+def _key_value(text: str) -> tuple[str, Any]:
+    """``key=value`` with the value read as YAML (numbers, booleans, lists); never evaluated as code."""
+    key, sep, value = text.partition("=")
+    if not sep or not key:
+        raise argparse.ArgumentTypeError(f"{text!r}: expected KEY=VALUE")
+    return key, yaml.safe_load(value)
+
+
+def _json_default(x: Any) -> Any:
+    return float(x) if isinstance(x, (int, float)) else str(x)
+
+
+def _print_json(obj: dict) -> None:
+    # NaN/inf are not JSON: report them as null so every reader can parse the line
+    def clean(v: Any) -> Any:
+        if isinstance(v, float) and not math.isfinite(v):
+            return None
+        if isinstance(v, dict):
+            return {k: clean(w) for k, w in v.items()}
+        return v
+
+    print(json.dumps(clean(obj), default=_json_default), flush=True)
+
+
+def build_parser() -> argparse.ArgumentParser:
+    p = _Parser(prog="python -m agents", description="Baselines, SB3 training and evaluation for srenv.")
+    sub = p.add_subparsers(dest="command", required=True, parser_class=_Parser)
+
+    t = sub.add_parser("train", help="train PPO/SAC from an rl-zoo-style hyperparameter YAML")
+    t.add_argument("config", help="training YAML, e.g. configs/train/ppo_default.yaml")
+    t.add_argument("--total-timesteps", type=_positive_int, help="override n_timesteps (total, incl. resumed)")
+    t.add_argument("--out", help="output directory (default runs/<config name>)")
+    t.add_argument("--resume", action="store_true", help="continue from the newest checkpoint in --out")
+    t.add_argument("--n-envs", type=_positive_int, help="override n_envs (default: all cores)")
+    t.add_argument("--progress", action=argparse.BooleanOptionalAction, default=None,
+                   help="progress bar (default: when stdout is a terminal)")
+
+    e = sub.add_parser("evaluate", help="evaluate baselines and/or saved models on held-out seeds")
+    e.add_argument("--policy", action="append", required=True,
+                   help="rocking, fillage or a model .zip; repeat to compare")
+    e.add_argument("--episodes", type=_positive_int, default=20)
+    e.add_argument("--seed", type=_nonneg_int, default=1000, help="first held-out seed (episodes use S..S+N-1)")
+    e.add_argument("--config", default="default", help="well config name or YAML path")
+    e.add_argument("--env-kwarg", type=_key_value, action="append", default=[], metavar="KEY=VALUE",
+                   help="extra keyword for gymnasium.make (value read as YAML)")
+    e.add_argument("--plot", help="PNG of a sample episode's cards and controls per policy")
+
+    q = sub.add_parser("quickstart", help="train briefly, evaluate against both baselines, plot")
+    q.add_argument("--config", default=str(QUICK_CONFIG), help="training YAML (default ppo_quick.yaml)")
+    q.add_argument("--out", default="runs/quickstart")
+    q.add_argument("--total-timesteps", type=_positive_int)
+    q.add_argument("--episodes", type=_positive_int, default=5)
+    q.add_argument("--seed", type=_nonneg_int, default=1000)
+    return p
+
+
+def cmd_train(args: argparse.Namespace) -> dict:
+    from .train import load_train_config, train
+
+    cfg = load_train_config(args.config, {"n_envs": args.n_envs} if args.n_envs else None)
+    out = args.out or str(Path("runs") / Path(args.config).stem)
+    progress = sys.stdout.isatty() if args.progress is None else args.progress
+    return train(cfg, out, total_timesteps=args.total_timesteps, resume=args.resume, progress_bar=progress)
+
+
+def report_evaluation(results: dict[str, dict], episodes: int, seed: int, config: str) -> dict:
+    """Print the comparison table (several policies) and return the JSON summary."""
+    from .evaluate import markdown_table
+
+    head = {"episodes": episodes, "seeds": [seed, seed + episodes - 1], "config": config}
+    if len(results) == 1:
+        return {**head, **next(iter(results.values()))}
+    print(markdown_table(results), flush=True)
+    best = max(results, key=lambda k: results[k]["mean_reward"])
+    return {**head, "best_by_mean_reward": best, "policies": results}
+
+
+def cmd_evaluate(args: argparse.Namespace) -> dict:
+    from .evaluate import evaluate
+
+    results = evaluate(args.policy, args.episodes, args.seed, args.config, dict(args.env_kwarg), args.plot)
+    return report_evaluation(results, args.episodes, args.seed, args.config)
+
+
+def cmd_quickstart(args: argparse.Namespace) -> dict:
+    from .evaluate import evaluate
+    from .train import load_train_config, train
+
+    cfg = load_train_config(args.config)
+    print(f"quickstart: training {cfg.algo.upper()} from {args.config} into {args.out} ...", file=sys.stderr)
+    summary = train(cfg, args.out, total_timesteps=args.total_timesteps, progress_bar=sys.stdout.isatty())
+    plot = str(Path(args.out) / "comparison.png")
+    print(f"quickstart: evaluating on seeds {args.seed}..{args.seed + args.episodes - 1} ...", file=sys.stderr)
+    results = evaluate([summary["model"], "rocking", "fillage"], args.episodes, args.seed,
+                       env_kwargs=_eval_env_kwargs(cfg.env_kwargs), plot=plot)
+    report = report_evaluation(results, args.episodes, args.seed, "default")
+    return {**report, "plot": plot, "training": summary}
+
+
+def _eval_env_kwargs(train_env_kwargs: dict) -> dict:
+    """Evaluate on the env the model was trained on, except the well config, which evaluate() sets."""
+    return {k: v for k, v in train_env_kwargs.items() if k != "config"}
+
+
+def main(argv: list[str] | None = None) -> int:
+    args = build_parser().parse_args(argv)
+    from srenv.errors import ConfigError
+
+    from .train import TrainConfigError
+
+    commands = {"train": cmd_train, "evaluate": cmd_evaluate, "quickstart": cmd_quickstart}
+    try:
+        result = commands[args.command](args)
+    except (ConfigError, TrainConfigError, ValueError, FileNotFoundError) as exc:
+        print(f"agents: error: {exc}", file=sys.stderr)
+        return EXIT_BAD_INPUT
+    _print_json(result)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
