@@ -180,6 +180,8 @@ class SimulationConfig:
     max_corrections: int = num(8, unit="-", check="nonneg", doc="active-set corrections before the QP")
     dc_tolerance_m_s: float = num(1e-10, unit="m/s", doc="DC iterations stop when max |dv| below this")
     dc_max_iterations: int = num(50, unit="-", doc="1 = the paper's single pass")
+    nonconvex_step: str = choice("error", ("error", "warn"),
+                                 "a nonmonotone law steeper than the condensed stiffness: refuse, or warn and run")
 
 
 @dataclass(frozen=True)

@@ -146,7 +146,8 @@ class Simulator:
         the axial force, estimated here from the static string with the plunger at P+ and at P0 (dynamic
         loads can raise it, so this is an estimate).
 
-        Violation is a warning, not an error: each DC sub-problem (K* plus the convex j1) stays strictly
+        Violation is an error by default (``simulation.nonconvex_step: error``) and a warning with
+        ``nonconvex_step: warn``, which runs anyway: each DC sub-problem (K* plus the convex j1) stays strictly
         convex, and the iterations lower the step objective monotonically to a stationary point, i.e. a
         solution of the step's hemivariational inequality. What is lost is uniqueness, so the result may
         depend on the iteration start (v_n) and on dt. The message names the time step that restores
@@ -191,9 +192,14 @@ class Simulator:
             lo_dt, hi_dt = (mid, hi_dt) if convex(mid) else (lo_dt, mid)
         node_i = int(np.argmax(slope))
         where = "the pump" if node_i == self.n_free - 1 else f"rod node {node_i + 1}"
+        why = (f"K* - diag(law slopes) is not positive definite; steepest slope {slope[node_i]:.4g} N*s/m at "
+               f"{where}")
+        if cfg.simulation.nonconvex_step == "error":
+            raise ConfigError("simulation.time_step_s", dt,
+                              f"a time step in s below {lo_dt:.3g} (the step problem is not convex: {why}; "
+                              "set simulation.nonconvex_step: warn to run the DC iterations anyway)")
         warnings.warn(
-            f"simulation.time_step_s = {dt:g} s: the step problem is not convex (K* - diag(law slopes) is "
-            f"not positive definite; steepest slope {slope[node_i]:.4g} N*s/m at {where}). DC iterations "
+            f"simulation.time_step_s = {dt:g} s: the step problem is not convex ({why}). DC iterations "
             f"still converge to a stationary point of each step, but it may not be unique. A time step "
             f"below {lo_dt:.3g} s restores convexity.", UserWarning, stacklevel=4)
 

@@ -13,6 +13,7 @@ import pytest
 
 from srenv import metrics
 from srenv.config import load_config
+from srenv.errors import ConfigError
 from srenv.hopf import (
     SpringBlock,
     find_hopf_velocity,
@@ -88,8 +89,14 @@ def test_dc_iterations_equal_with_and_without_solver_calls() -> None:
         assert abs(sim.energy_balance()["residual_j"]) < 1e-6
 
 
-def test_nonconvex_step_warns_and_names_a_convex_time_step() -> None:
+def test_nonconvex_step_is_refused_by_default() -> None:
     steep = ["pump.reference_velocity_m_s=0.1"]  # slope (P0 - P_inf)/v0 = 4e4 N*s/m > condensed K*
+    with pytest.raises(ConfigError, match="simulation.time_step_s.*not convex"):
+        Simulator(load_config(FIG6, steep))
+
+
+def test_nonconvex_step_warns_when_allowed_and_names_a_convex_time_step() -> None:
+    steep = ["pump.reference_velocity_m_s=0.1", "simulation.nonconvex_step=warn"]
     with pytest.warns(UserWarning, match="not convex") as rec:
         sim = Simulator(load_config(FIG6, steep))
     dt_ok = float(str(rec[0].message).split("time step below ")[1].split(" s")[0])
