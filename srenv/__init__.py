@@ -6,6 +6,19 @@ from .errors import ConfigError, SolverFailure
 __all__ = ["ConfigError", "SolverFailure", "WellConfig", "load_config", "Simulator"]
 __version__ = "0.1.0"
 
+ENV_ID = "srenv/SuckerRod-v0"
+
+
+def _register() -> None:
+    import gymnasium
+
+    if ENV_ID not in gymnasium.registry:
+        # entry point by string: importing srenv stays light (the kernel compiles only when an env is made)
+        gymnasium.register(id=ENV_ID, entry_point="srenv.envs.sucker_rod_v0:SuckerRodEnv")
+
+
+_register()
+
 
 def __getattr__(name: str):  # noqa: ANN202 - lazy: importing srenv must not compile the kernel
     if name == "Simulator":

@@ -199,12 +199,15 @@ class ControlConfig:
 
 @dataclass(frozen=True)
 class RewardConfig:
-    production_weight: float = num(1.0, unit="1/(m^3/day)", check="nonneg")
+    production_weight: float = num(1.0, unit="-", check="nonneg")
     stick_slip_weight: float = num(1.0, unit="-", check="nonneg")
     peak_load_weight: float = num(5.0, unit="-", check="nonneg")
     goodman_limit_pct: float = num(100.0, unit="%")
     pprl_rating_n: float = num(60000.0, unit="N")
     failure_penalty: float = num(50.0, unit="-", check="nonneg")
+    failure_goodman_pct: float = num(130.0, unit="%", doc="rod failure (episode ends) above this Goodman loading")
+    production_scale_m3_day: float = num(10.0, unit="m^3/day", doc="production that earns one unit of reward "
+                                         "times production_weight")
 
 
 @dataclass(frozen=True)

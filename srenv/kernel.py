@@ -37,7 +37,8 @@ P_FRIC_RATIO, P_FRIC_V0 = 10, 11
 P_MA, P_MOA, P_CA, P_FA, P_KA, P_KC, P_MC = 12, 13, 14, 15, 16, 17, 18
 P_PB, P_PA, P_VOID_UNTIL = 19, 20, 21
 P_EA0, P_FRIC_ITERS = 22, 23
-N_PAR = 24
+P_UBMAX, P_UBMIN = 24, 25  # plunger position extremes since the caller last reset them (stroke bookkeeping)
+N_PAR = 26
 
 # indices into the integer state vector `ist`
 I_STEP, I_DCIT, I_HAVEQP, I_MAXCORR, I_DCMAX, I_ALWAYSQP, I_NONSMOOTH = 0, 1, 2, 3, 4, 5, 6
@@ -357,6 +358,8 @@ def advance(par, ist, u, v, a, uav, va_t, t0,
                 rec[r, R_VA] = va_new
                 ist[I_NREC] = r + 1
         ist[I_STEP] = k + 1
+        par[P_UBMAX] = max(par[P_UBMAX], u[n - 1])
+        par[P_UBMIN] = min(par[P_UBMIN], u[n - 1])
         vb = v[n - 1]
         d = 1 if vb > 0 else (-1 if vb < 0 else 0)
         if d != 0 and d != ist[I_PLDIR]:

@@ -232,8 +232,9 @@ class Simulator:
         self.pl_dir = 0
         self.void = 0
         self.void_until = 0.0
-        self._last_bottom_ub = float(self.u[-1])
-        self._ub_min = float(self.u[-1])
+        # plunger stroke bookkeeping: extremes since the last accepted reversal (see _on_event)
+        self._ub_max = self._ub_min = self._top_ub = float(self.u[-1])
+        self._pump_phase = "up"  # the initial state is the bottom of the stroke
         self.fillage = 1.0
         self.energy = np.zeros(K.N_ENERGY)
         self.e0 = self.mechanical_energy_j()
@@ -280,6 +281,7 @@ class Simulator:
         par[K.P_PA] = self.p_top_pa * self.area_top_m2
         par[K.P_VOID_UNTIL] = self.void_until
         par[K.P_EA0] = self._ea_len[0]
+        par[K.P_UBMAX], par[K.P_UBMIN] = self._ub_max, self._ub_min
         ist = np.zeros(K.N_IST, dtype=np.int64)
         ist[K.I_MAXCORR], ist[K.I_DCMAX] = s.max_corrections, s.dc_max_iterations
         ist[K.I_ALWAYSQP] = int(self.always_qp)
@@ -346,8 +348,9 @@ class Simulator:
             if code == K.NEED_QP:
                 self._solve_qp(ksd, kso, dt, par, ist, step, t0 + (step + 1) * dt)
             else:
-                fillage = self._on_event(int(ist[K.I_EVENT]), par, ist, t0 + step * dt, events, fillage)
+                fillage = self._on_event(int(ist[K.I_EVENT]), par, ist, t0 + step * dt, events, fillage, stroke)
         self.pl_dir, self.void = int(ist[K.I_PLDIR]), int(ist[K.I_VOID])
+        self._ub_max, self._ub_min = float(par[K.P_UBMAX]), float(par[K.P_UBMIN])
         self.void_until = float(par[K.P_VOID_UNTIL])
         self.time_s = t0 + n_steps * dt
         trace = self._trace(rec[: ist[K.I_NREC]]) if record else None
@@ -379,22 +382,35 @@ class Simulator:
         self.status[:] = status
         ist[K.I_HAVEQP] = 1
 
-    def _on_event(self, direction: int, par, ist, time_s: float, events: list, fillage: float) -> float:
+    def _on_event(self, direction: int, par, ist, time_s: float, events: list, fillage: float,  # noqa: ANN001
+                  stroke_m: float) -> float:
+        """A plunger reversal. Short reversals inside a stroke (stick-slip chatter, the bounce when a pounding
+        plunger meets liquid) are not valve cycles: a reversal counts only after a travel of a quarter of the
+        surface stroke, and the stroke is measured between position extremes, not reversal points."""
         ub = float(self.u[-1])
-        if direction > 0:  # top of the plunger stroke: the barrel has filled as far as the annulus allows
-            upstroke = max(self._last_bottom_ub - ub, 0.0)
+        min_travel = 0.25 * stroke_m
+        if direction > 0 and self._pump_phase == "up":  # top: the barrel has filled as far as it could
+            upstroke = float(par[K.P_UBMAX]) - float(par[K.P_UBMIN])  # since the last accepted top
+            if upstroke <= min_travel:
+                return fillage
+            self._top_ub = float(par[K.P_UBMIN])
             if self.annulus is not None:
                 fillage = self.annulus.take(plunger_area_m2(self.cfg.pump) * upstroke, time_s)
                 if fillage < 1.0:
                     ist[K.I_VOID] = 1
-                    par[K.P_VOID_UNTIL] = ub + (1.0 - fillage) * upstroke
+                    par[K.P_VOID_UNTIL] = self._top_ub + (1.0 - fillage) * upstroke
+            self._pump_phase = "down"
+            par[K.P_UBMAX] = ub
             events.append(("top", time_s, ub, fillage))
-        else:  # bottom: the intake pressure of the coming upstroke sets P-
-            self._last_bottom_ub = ub
+        elif direction < 0 and self._pump_phase == "down":  # bottom: intake pressure sets the next P-
+            if float(par[K.P_UBMAX]) - self._top_ub <= min_travel:
+                return fillage
             if self.annulus is not None:
                 self.annulus.accumulate(time_s)
                 self.law = self._valve()
                 par[K.P_PUMP_LO] = -self.law.up_eq_n
+            self._pump_phase = "up"
+            par[K.P_UBMIN] = ub
             events.append(("bottom", time_s, ub, fillage))
         return fillage
 

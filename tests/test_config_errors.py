@@ -148,6 +148,8 @@ CASES = [
           expect="0..2 (0 = longest stroke)", id="crank-hole-beyond-unit"),
     _case(FIG3, "surface.motion=conventional", "surface.unit=C-999D-999-999", field="surface.unit",
           value="'C-999D-999-999'", expect="designation from the unit catalogue", id="unknown-unit"),
+    _case(FIG6, *STEEP_FIG6, "simulation.time_step_s=0.02", field="simulation.time_step_s", value="0.02",
+          expect="a time step in s below", id="time-step-breaks-convexity"),
     _case(FIG3, "simulation.qp_solver=gurobi", field="simulation.qp_solver", value="'gurobi'",
           expect="installed qpsolvers backend", id="unknown-qp-solver"),
     _case(FIG3, "simulation.element_length_m=2000", field="simulation.element_length_m", value="2000",
@@ -310,23 +312,34 @@ def test_exponent_floats_without_a_dot_are_numbers() -> None:
 
 
 # ------------------------------------------------------------------------------------------ convexity
-def test_time_step_breaking_convexity_is_reported_with_the_time_step_that_restores_it() -> None:
-    """A nonconvex step problem is a warning, not an error (DC iterations still reach a stationary point,
-    only uniqueness is lost): it names the field, the value in s and the largest convex time step."""
+def _restoring_time_step_s(message: str) -> float:
+    match = re.search(r"below ([0-9.e-]+)", message)
+    assert match, message
+    return float(match.group(1))
+
+
+def test_time_step_breaking_convexity_names_the_time_step_that_restores_it() -> None:
+    """Default (DC iterations to a tolerance, nonconvex_step: error): refused, naming the largest convex
+    time step; that time step is then accepted silently, so the refusal is about dt, not the law."""
     from srenv.simulator import Simulator
 
-    with pytest.warns(UserWarning, match=r"simulation\.time_step_s = 0\.02 s: the step problem is not convex"
-                      ) as rec:
+    with pytest.raises(ConfigError) as err:
         Simulator(load_config(FIG6, [*STEEP_FIG6, "simulation.time_step_s=0.02"]))
-    assert len(rec) == 1
-    match = re.search(r"A time step below ([0-9.e-]+) s restores convexity", str(rec[0].message))
-    assert match, rec[0].message
-    restoring_dt_s = float(match.group(1))
-    assert 0.005 < restoring_dt_s < 0.02  # the condensed stiffness crosses the slope between the two
+    assert err.value.field == "simulation.time_step_s" and err.value.value == 0.02
+    restoring_dt_s = _restoring_time_step_s(err.value.expected)
+    assert 0.005 < restoring_dt_s < 0.02  # the condensed pump stiffness crosses the slope between the two
     with warnings.catch_warnings():
-        warnings.simplefilter("error")  # the same law at the restoring time step is silent
+        warnings.simplefilter("error")
         Simulator(load_config(FIG6, [*STEEP_FIG6, f"simulation.time_step_s={0.9 * restoring_dt_s}"]))
-        Simulator(load_config(FIG6))  # and the paper's Fig. 6 case at its default 5 ms
+        Simulator(load_config(FIG6))  # the paper's Fig. 6 case at its default 5 ms
+
+
+def test_nonconvex_step_can_be_run_with_a_warning() -> None:
+    from srenv.simulator import Simulator
+
+    with pytest.warns(UserWarning, match=r"simulation\.time_step_s = 0\.02 s: the step problem is not convex"):
+        Simulator(load_config(FIG6, [*STEEP_FIG6, "simulation.time_step_s=0.02",
+                                     "simulation.nonconvex_step=warn"]))
 
 
 def test_crank_hole_within_the_unit_is_accepted() -> None:

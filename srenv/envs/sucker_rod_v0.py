@@ -1,0 +1,263 @@
+"""``srenv/SuckerRod-v0``: choose the stroke rate and length of a beam-pumped well, stroke by stroke.
+
+The physical system is :class:`srenv.simulator.Simulator` (exact nonsmooth FE rod string, valve law,
+friction, inflow and fillage); the reward and the rod-failure monitor live in :mod:`srenv.reward`; the
+cards are drawn by :mod:`srenv.render`. This module only composes them.
+
+Constructor
+-----------
+| kwarg | default | meaning |
+|---|---|---|
+| ``config`` | ``"default"`` | well YAML path, shipped name (``configs/wells``) or a ``WellConfig`` |
+| ``overrides`` | ``None`` | ``{"key.path": value}`` applied to the config |
+| ``render_mode`` | ``None`` | ``"rgb_array"`` (card image) or ``"human"`` (matplotlib window) |
+| ``card_points`` | ``32`` | points per card branch in the observation |
+| ``**kwargs`` | | further overrides, ``section__field=value`` (e.g. ``control__spm_max=8``) |
+
+Action space
+------------
+``Box(-1, 1, (2,), float32)``: ``a[0]`` → SPM linearly in [``control.spm_min``, ``control.spm_max``],
+``a[1]`` → stroke length in [``control.stroke_min_m``, ``control.stroke_max_m``]. Out-of-range actions are
+clipped to [-1, 1]; a NaN or infinite action raises ``ValueError``. With ``control.spm_rate_limit`` > 0 the
+SPM moves at most that much per step. A conventional beam unit fixes the stroke by its crank hole
+(``a[1]`` then has no effect).
+
+Observation space
+-----------------
+``Box(-10, 10, (2 * card_points + 8,), float32)`` (values clipped into the box):
+
+| index | value |
+|---|---|
+| ``0 : P`` | last stroke's surface card, up branch: load / ``reward.pprl_rating_n`` on a normalised position grid |
+| ``P : 2P`` | the down branch, same grid |
+| ``2P`` | SPM, mapped to [-1, 1] over the control range |
+| ``2P+1`` | stroke length, mapped to [-1, 1] |
+| ``2P+2`` | annulus liquid level above the pump / 100 m |
+| ``2P+3`` | pump intake pressure / 10 MPa |
+| ``2P+4`` | pump fillage of the last stroke (0..1) |
+| ``2P+5`` | PPRL / ``pprl_rating_n`` |
+| ``2P+6`` | max Goodman loading / 100 % |
+| ``2P+7`` | stick-slip index / 10 |
+
+``FILLAGE_INDEX`` (module constant function :func:`obs_index`) gives positions by name.
+
+Reward
+------
+See :mod:`srenv.reward`: ``reward_production - stick-slip - peak-load (- failure)``; each term is in
+``info`` as ``reward_production``, ``reward_stick_slip``, ``reward_peak_load``, ``reward_failure`` and
+they sum to the reward.
+
+Info
+----
+The stroke metrics of :func:`srenv.stroke_summary.summarize` (``pprl_n``, ``mprl_n``, ``fillage``,
+``production_m3_day``, ``goodman_pct``, ``goodman_max_pct``, ``stick_slip_index``,
+``plunger_extra_stick_episodes``, ``certified_steps``, ``corrected_steps``, ``qp_steps``,
+``solver_calls``, ...), ``spm``, ``stroke_length_m``, ``fluid_level_m``, the reward terms, and
+``failure`` (text) when the episode ended on a failure.
+
+Episode end
+-----------
+terminated: rod failure (Goodman loading above ``reward.failure_goodman_pct``) or an unrecoverable step-QP
+failure (``info["failure"]``); truncated: ``control.max_episode_steps`` steps.
+
+Randomisation
+-------------
+With ``control.randomize``, each ``reset`` draws from ``self.np_random`` (never the global RNG), within
+± ``control.randomize_fraction``: the initial liquid level, the reservoir pressure and maximum rate, the
+fluid density and the rod–tubing friction coefficient. ``reset(options={"randomize": False})`` uses the
+config as is.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import gymnasium as gym
+import numpy as np
+from gymnasium import spaces
+
+from ..config import WellConfig, load_config
+from ..errors import SolverFailure
+from ..metrics import resample_card
+from ..reward import RodFailureMonitor, SuckerRodReward
+from ..simulator import Simulator
+from ..stroke_summary import summarize
+
+OBS_TAIL = ("spm", "stroke", "fluid_level", "intake_pressure", "fillage", "pprl", "goodman", "stick_slip")
+OBS_BOUND = 10.0
+
+
+def obs_index(name: str, card_points: int = 32) -> int:
+    """Index of a named scalar in the observation vector."""
+    return 2 * card_points + OBS_TAIL.index(name)
+
+
+def _overrides_from_kwargs(kwargs: dict) -> dict:
+    return {k.replace("__", "."): v for k, v in kwargs.items()}
+
+
+class SuckerRodEnv(gym.Env):
+    metadata = {"render_modes": ["rgb_array", "human"], "render_fps": 2}
+
+    def __init__(self, config: str | WellConfig = "default", overrides: dict | None = None,
+                 render_mode: str | None = None, card_points: int = 32, **kwargs: Any) -> None:
+        merged = dict(overrides or {})
+        merged.update(_overrides_from_kwargs(kwargs))
+        self.base_cfg = load_config(config, merged or None)
+        if render_mode is not None and render_mode not in self.metadata["render_modes"]:
+            raise ValueError(f"render_mode = {render_mode!r}: expected one of {self.metadata['render_modes']}")
+        self.render_mode = render_mode
+        self.card_points = int(card_points)
+        self.action_space = spaces.Box(-1.0, 1.0, (2,), np.float32)
+        n_obs = 2 * self.card_points + len(OBS_TAIL)
+        self.observation_space = spaces.Box(-OBS_BOUND, OBS_BOUND, (n_obs,), np.float32)
+        self.reward_fn = SuckerRodReward(self.base_cfg.reward)
+        self.monitor = RodFailureMonitor(self.base_cfg.reward)
+        self.cfg = self.base_cfg
+        self.sim: Simulator | None = None
+        self._trace: dict | None = None
+        self._fig = None
+
+    # -------------------------------------------------------------------------------- helpers
+    def _randomized_config(self) -> WellConfig:
+        c = self.base_cfg
+        f = c.control.randomize_fraction
+        rng = self.np_random
+
+        def jitter(x: float) -> float:
+            return float(x * (1.0 + f * rng.uniform(-1.0, 1.0)))
+
+        o = {"fluid.density_kg_m3": jitter(c.fluid.density_kg_m3),
+             "friction.coefficient": jitter(c.friction.coefficient)}
+        if c.friction.law == "nonmonotone":
+            o["friction.kinetic_coefficient"] = min(jitter(c.friction.kinetic_coefficient), o["friction.coefficient"])
+        if c.inflow.model != "none":
+            o["inflow.initial_fluid_level_m"] = float(c.inflow.initial_fluid_level_m * rng.uniform(0.5, 1.5))
+            o["inflow.reservoir_pressure_pa"] = jitter(c.inflow.reservoir_pressure_pa)
+            o["inflow.max_rate_m3_day"] = jitter(c.inflow.max_rate_m3_day)
+            o["inflow.productivity_index_m3_day_pa"] = jitter(c.inflow.productivity_index_m3_day_pa)
+        return load_config(c, o)
+
+    def _to_operating_point(self, action: np.ndarray) -> tuple[float, float]:
+        c = self.cfg.control
+        a = np.clip(action, -1.0, 1.0)
+        spm = c.spm_min + 0.5 * (a[0] + 1.0) * (c.spm_max - c.spm_min)
+        stroke = c.stroke_min_m + 0.5 * (a[1] + 1.0) * (c.stroke_max_m - c.stroke_min_m)
+        if c.spm_rate_limit > 0 and self._spm is not None:
+            spm = float(np.clip(spm, self._spm - c.spm_rate_limit, self._spm + c.spm_rate_limit))
+        return float(spm), float(stroke)
+
+    def _observe(self, m: dict) -> np.ndarray:
+        c, tr = self.cfg, self._trace
+        rating = c.reward.pprl_rating_n
+        card = resample_card(tr["polished_rod_position_m"], tr["polished_rod_load_n"], self.card_points) / rating
+        ctl = c.control
+
+        def unit(x: float, lo: float, hi: float) -> float:
+            return 2.0 * (x - lo) / (hi - lo) - 1.0 if hi > lo else 0.0
+
+        level = self.sim.annulus.level_m if self.sim.annulus is not None else 0.0
+        tail = [unit(self._spm, ctl.spm_min, ctl.spm_max), unit(self._stroke, ctl.stroke_min_m, ctl.stroke_max_m),
+                level / 100.0, m["intake_pressure_pa"] / 1e7, m["fillage"], m["pprl_n"] / rating,
+                m["goodman_max_pct"] / 100.0, m["stick_slip_index"] / 10.0]
+        obs = np.concatenate([card, tail])
+        return np.clip(np.nan_to_num(obs, nan=0.0), -OBS_BOUND, OBS_BOUND).astype(np.float32)
+
+    def _run_strokes(self) -> tuple[dict, str | None]:
+        results = []
+        try:
+            for _ in range(self.cfg.control.strokes_per_step):
+                results.append(self.sim.run_stroke(self._spm, self._stroke, record=True))
+        except SolverFailure as exc:
+            if not results:
+                return {}, str(exc)
+            m = summarize(self.sim, results)
+            return m, str(exc)
+        self._trace = results[-1].trace
+        m = summarize(self.sim, results)
+        return m, self.monitor.failure(m)
+
+    def _info(self, m: dict, failure: str | None) -> dict:
+        info = dict(m)
+        info.update(spm=self._spm, stroke_length_m=self._stroke,
+                    fluid_level_m=self.sim.annulus.level_m if self.sim.annulus is not None else float("nan"))
+        if failure:
+            info["failure"] = failure
+        return info
+
+    # -------------------------------------------------------------------------------- gym API
+    def reset(self, *, seed: int | None = None, options: dict | None = None) -> tuple[np.ndarray, dict]:
+        super().reset(seed=seed)
+        randomize = self.base_cfg.control.randomize if not options or "randomize" not in options \
+            else bool(options["randomize"])
+        self.cfg = self._randomized_config() if randomize else self.base_cfg
+        self.sim = Simulator(self.cfg)
+        self._steps = 0
+        self._spm = None
+        s = self.cfg.surface
+        self._spm, self._stroke = float(s.spm), float(self.sim.surface.stroke_length_m(s.stroke_length_m))
+        m, failure = self._run_strokes()
+        if failure and not m:
+            raise SolverFailure(0, 0.0, failure)  # the configured operating point itself cannot be run
+        self._last = m
+        return self._observe(m), self._info(m, failure)
+
+    def step(self, action: np.ndarray) -> tuple[np.ndarray, float, bool, bool, dict]:
+        if self.sim is None:
+            raise RuntimeError("call reset() before step()")
+        action = np.asarray(action, dtype=np.float64).reshape(-1)
+        if action.shape != (2,) or not np.all(np.isfinite(action)):
+            raise ValueError(f"action = {action.tolist()}: expected 2 finite numbers in [-1, 1] (SPM, stroke)")
+        self._spm, stroke = self._to_operating_point(action)
+        self._stroke = self.sim.surface.stroke_length_m(stroke)
+        m, failure = self._run_strokes()
+        if not m:  # solver failure on the first stroke of the step: keep the last metrics for the obs
+            m = dict(self._last)
+        self._last = m
+        terms = self.reward_fn.terms(m, failed=failure is not None)
+        reward = float(sum(terms.values()))
+        self._steps += 1
+        terminated = failure is not None
+        truncated = not terminated and self._steps >= self.cfg.control.max_episode_steps
+        info = self._info(m, failure)
+        info.update(terms)
+        if self.render_mode == "human":
+            self.render()
+        return self._observe(m), reward, terminated, truncated, info
+
+    def render(self) -> np.ndarray | None:
+        if self._trace is None:
+            return None
+        from ..render import card_figure, card_rgb
+
+        title = f"{self.cfg.name}: {self._spm:.2f} SPM, {self._stroke:.2f} m"
+        if self.render_mode == "rgb_array":
+            return card_rgb(self._trace, title)
+        if self.render_mode == "human":
+            import matplotlib.pyplot as plt
+
+            if self._fig is None:
+                plt.ion()
+                self._fig = plt.figure(figsize=(9, 3.8))
+            self._fig.clf()
+            src = card_figure(self._trace, title)
+            for ax_src, pos in zip(src.axes, (121, 122)):
+                ax = self._fig.add_subplot(pos)
+                for line in ax_src.get_lines():
+                    ax.plot(*line.get_data(), color=line.get_color(), lw=1.0)
+                ax.set(xlabel=ax_src.get_xlabel(), ylabel=ax_src.get_ylabel(), title=ax_src.get_title())
+            self._fig.suptitle(title)
+            plt.pause(0.001)
+        return None
+
+    def close(self) -> None:
+        if self._fig is not None:
+            import matplotlib.pyplot as plt
+
+            plt.close(self._fig)
+            self._fig = None
+
+    def __getstate__(self) -> dict:
+        state = self.__dict__.copy()
+        state["_fig"] = None  # a window does not travel
+        return state
