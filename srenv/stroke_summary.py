@@ -26,23 +26,30 @@ def taper_tops(sim: Simulator) -> list[int]:
     return [int(np.argmax(taper == k)) for k in range(int(taper.max()) + 1)]
 
 
+def _taper_top_data(sim: Simulator) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """(element index, area, p*A shift to true load, tensile strength) at each taper top; cached per sim."""
+    cached = getattr(sim, "_taper_top_data", None)
+    if cached is None:
+        mesh, cfg = sim.mesh, sim.cfg
+        e = np.array(taper_tops(sim))
+        p_top = tubing_pressure_pa(cfg.fluid, sim.survey.tvd(mesh.x_m[e]))
+        tensile = np.array([metrics.ROD_GRADE_TENSILE_PA[t.grade] for t in cfg.rod.tapers])
+        cached = (e, mesh.area_m2[e], p_top * mesh.area_m2[e], tensile)
+        sim._taper_top_data = cached
+    return cached
+
+
 def goodman_per_taper(sim: Simulator, fmax_eq: np.ndarray, fmin_eq: np.ndarray) -> np.ndarray:
-    """Goodman loading % (RP 11BR range form, SF = 1) at the top of each taper, from true loads."""
-    mesh, cfg = sim.mesh, sim.cfg
-    out = []
-    for k, e in enumerate(taper_tops(sim)):
-        p_top = float(tubing_pressure_pa(cfg.fluid, sim.survey.tvd(mesh.x_m[e])))
-        shift = p_top * mesh.area_m2[e]  # N = N_eq - p A
-        s = metrics.taper_stress_range(fmax_eq[e] - shift, fmin_eq[e] - shift, mesh.area_m2[e])
-        grade = cfg.rod.tapers[k].grade
-        out.append(metrics.goodman_loading_pct(s["max_stress_pa"], s["min_stress_pa"],
-                                               metrics.ROD_GRADE_TENSILE_PA[grade]))
-    return np.array(out, dtype=float)
+    """Goodman loading % (RP 11BR range form, SF = 1) at the top of each taper, from true loads
+    (N = N_eq - p A)."""
+    e, area, shift, tensile = _taper_top_data(sim)
+    s = metrics.taper_stress_range(fmax_eq[e] - shift, fmin_eq[e] - shift, area)
+    return np.atleast_1d(metrics.goodman_loading_pct(s["max_stress_pa"], s["min_stress_pa"], tensile))
 
 
 def summarize(sim: Simulator, results: list[RunResult]) -> dict:
     """Metrics of the strokes in `results` (recorded runs), as a flat JSON-ready dict."""
-    tr = concat_traces(results)
+    tr = results[0].trace if len(results) == 1 else concat_traces(results)
     n_strokes = len(results)
     pos, load = tr["polished_rod_position_m"], tr["polished_rod_load_n"]
     card = metrics.card_metrics(pos, load)

@@ -52,9 +52,14 @@ class Survey:
         """dphi/ds in rad/m."""
         return self._rate(self.azimuth_rad, s_m)
 
-    def tvd(self, s_m: np.ndarray) -> np.ndarray:
-        """True vertical depth by integrating cos(inclination) on a fine grid."""
+    def __post_init__(self) -> None:
+        # TVD table, integrated once: cos(inclination) by the trapezoid rule on a fine grid
         grid = np.unique(np.r_[np.linspace(0.0, self.md_m[-1], 2001), self.md_m])
         cos = np.cos(self.inclination(grid))
         z = np.r_[0.0, np.cumsum(0.5 * (cos[1:] + cos[:-1]) * np.diff(grid))]
+        object.__setattr__(self, "_tvd_table", (grid, z))
+
+    def tvd(self, s_m: np.ndarray | float) -> np.ndarray:
+        """True vertical depth at measured depth s_m."""
+        grid, z = self._tvd_table
         return np.interp(s_m, grid, z)

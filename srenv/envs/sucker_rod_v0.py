@@ -78,7 +78,7 @@ from gymnasium import spaces
 
 from ..config import WellConfig, load_config
 from ..errors import SolverFailure
-from ..metrics import resample_card
+from ..metrics import resample_prescribed_card
 from ..reward import RodFailureMonitor, SuckerRodReward
 from ..simulator import Simulator
 from ..stroke_summary import summarize
@@ -150,7 +150,7 @@ class SuckerRodEnv(gym.Env):
     def _observe(self, m: dict) -> np.ndarray:
         c, tr = self.cfg, self._trace
         rating = c.reward.pprl_rating_n
-        card = resample_card(tr["polished_rod_position_m"], tr["polished_rod_load_n"], self.card_points) / rating
+        card = resample_prescribed_card(tr["polished_rod_position_m"], tr["polished_rod_load_n"], self.card_points) / rating
         ctl = c.control
 
         def unit(x: float, lo: float, hi: float) -> float:
