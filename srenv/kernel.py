@@ -167,10 +167,11 @@ def set_bounds(par, ist, u, ua, ea_len, fa, fw, fc, lo, hi, ns, nforce, fric_s):
     fric_s[n - 1] = 0.0
     plo = par[P_PUMP_LO]
     phi = par[P_PUMP_HI]
+    # fluid pound: above the liquid level in the barrel (u_B < P_VOID_UNTIL, positions positive down) the
+    # travelling valve cannot open, so the plunger carries P- whether it moves up, rests or moves down
     if ist[I_VOID] != 0:
-        if u[n - 1] >= par[P_VOID_UNTIL]:
-            ist[I_VOID] = 0
-        else:
+        ist[I_VOID] = 2 if u[n - 1] < par[P_VOID_UNTIL] else 1
+        if ist[I_VOID] == 2:
             phi = plo
     lo[n - 1] = plo
     hi[n - 1] = phi
@@ -192,7 +193,7 @@ def concave_shift(par, ist, v, fric_s, shift):
                 shift[i] = d * fric_s[i] * (1.0 - np.exp(-vi / v0))
             elif vi < 0:
                 shift[i] = -d * fric_s[i] * (1.0 - np.exp(vi / v0))
-    if ist[I_PUMP_NONMONO] != 0 and ist[I_VOID] == 0:
+    if ist[I_PUMP_NONMONO] != 0 and ist[I_VOID] != 2:
         vb = v[n - 1]
         if vb < 0:
             shift[n - 1] = -par[P_PUMP_DROP] * (1.0 - np.exp(vb / par[P_PUMP_V0]))

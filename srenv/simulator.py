@@ -235,6 +235,12 @@ class Simulator:
         # plunger stroke bookkeeping: extremes since the last accepted reversal (see _on_event)
         self._ub_max = self._ub_min = self._top_ub = float(self.u[-1])
         self._pump_phase = "up"  # the initial state is the bottom of the stroke
+        self._liquid_stroke_m = np.inf
+        if self.annulus is not None:
+            plan_par = np.zeros(K.N_PAR)
+            plan_ist = np.zeros(K.N_IST, dtype=np.int64)
+            self._plan_upstroke(float(self.u[-1]), 0.0, 60.0 / self.cfg.surface.spm, plan_ist, plan_par)
+            self.void, self.void_until = int(plan_ist[K.I_VOID]), float(plan_par[K.P_VOID_UNTIL])
         self.fillage = 1.0
         self.energy = np.zeros(K.N_ENERGY)
         self.e0 = self.mechanical_energy_j()
@@ -348,7 +354,8 @@ class Simulator:
             if code == K.NEED_QP:
                 self._solve_qp(ksd, kso, dt, par, ist, step, t0 + (step + 1) * dt)
             else:
-                fillage = self._on_event(int(ist[K.I_EVENT]), par, ist, t0 + step * dt, events, fillage, stroke)
+                fillage = self._on_event(int(ist[K.I_EVENT]), par, ist, t0 + step * dt, events, fillage, stroke,
+                                         60.0 / spm if spm > 0 else 0.0)
         self.pl_dir, self.void = int(ist[K.I_PLDIR]), int(ist[K.I_VOID])
         self._ub_max, self._ub_min = float(par[K.P_UBMAX]), float(par[K.P_UBMIN])
         self.void_until = float(par[K.P_VOID_UNTIL])
@@ -382,23 +389,33 @@ class Simulator:
         self.status[:] = status
         ist[K.I_HAVEQP] = 1
 
+    def _plan_upstroke(self, u_bottom_m: float, time_s: float, period_s: float, ist, par) -> None:  # noqa: ANN001
+        """At the bottom: the liquid the coming upstroke can draw (annulus + inflow during the upstroke)
+        fixes the liquid level in the barrel; above it the plunger meets no liquid (fluid pound)."""
+        if self.annulus is None:
+            return
+        self.annulus.accumulate(time_s)
+        available_m3 = self.annulus.volume_m3 + self.annulus.inflow_m3_s() * 0.5 * period_s
+        self._liquid_stroke_m = available_m3 / plunger_area_m2(self.cfg.pump)
+        par[K.P_VOID_UNTIL] = u_bottom_m - self._liquid_stroke_m
+        ist[K.I_VOID] = 1
+
     def _on_event(self, direction: int, par, ist, time_s: float, events: list, fillage: float,  # noqa: ANN001
-                  stroke_m: float) -> float:
+                  stroke_m: float, period_s: float) -> float:
         """A plunger reversal. Short reversals inside a stroke (stick-slip chatter, the bounce when a pounding
         plunger meets liquid) are not valve cycles: a reversal counts only after a travel of a quarter of the
         surface stroke, and the stroke is measured between position extremes, not reversal points."""
         ub = float(self.u[-1])
         min_travel = 0.25 * stroke_m
-        if direction > 0 and self._pump_phase == "up":  # top: the barrel has filled as far as it could
+        if direction > 0 and self._pump_phase == "up":  # top: the barrel holds what the upstroke drew
             upstroke = float(par[K.P_UBMAX]) - float(par[K.P_UBMIN])  # since the last accepted top
             if upstroke <= min_travel:
                 return fillage
             self._top_ub = float(par[K.P_UBMIN])
             if self.annulus is not None:
-                fillage = self.annulus.take(plunger_area_m2(self.cfg.pump) * upstroke, time_s)
-                if fillage < 1.0:
-                    ist[K.I_VOID] = 1
-                    par[K.P_VOID_UNTIL] = self._top_ub + (1.0 - fillage) * upstroke
+                liquid_m = min(self._liquid_stroke_m, upstroke)
+                self.annulus.take(plunger_area_m2(self.cfg.pump) * liquid_m, time_s)
+                fillage = liquid_m / upstroke
             self._pump_phase = "down"
             par[K.P_UBMAX] = ub
             events.append(("top", time_s, ub, fillage))
@@ -406,9 +423,9 @@ class Simulator:
             if float(par[K.P_UBMAX]) - self._top_ub <= min_travel:
                 return fillage
             if self.annulus is not None:
-                self.annulus.accumulate(time_s)
                 self.law = self._valve()
                 par[K.P_PUMP_LO] = -self.law.up_eq_n
+                self._plan_upstroke(float(par[K.P_UBMAX]), time_s, period_s, ist, par)
             self._pump_phase = "up"
             par[K.P_UBMIN] = ub
             events.append(("bottom", time_s, ub, fillage))
