@@ -82,9 +82,11 @@ Card resampling
 from __future__ import annotations
 
 import math
+from functools import lru_cache
 
 import numpy as np
 import numpy.typing as npt
+from numba import njit
 
 FloatArray = npt.NDArray[np.float64]
 IntArray = npt.NDArray[np.int64]
@@ -122,6 +124,16 @@ def _scalar_or_array(x: FloatArray) -> FloatArray | float:
     return float(x) if x.ndim == 0 else x
 
 
+# The trace metrics run on every env step, so their loops are compiled (numba): one implementation,
+# called by the CLI summary, the env and the tests alike.
+@njit(cache=True)
+def _max_step_jitter(t: FloatArray, dt: float) -> float:
+    worst = 0.0
+    for i in range(1, t.size):
+        worst = max(worst, abs(t[i] - t[i - 1] - dt))
+    return worst
+
+
 def _uniform_step_s(t_s: npt.ArrayLike, n_expected: int) -> float:
     t = _as_float_1d("t_s", t_s)
     if t.size != n_expected:
@@ -130,7 +142,7 @@ def _uniform_step_s(t_s: npt.ArrayLike, n_expected: int) -> float:
         raise ValueError("need at least two time samples")
     dt = (t[-1] - t[0]) / (t.size - 1)
     # Moving averages and FFT bins assume one fixed step; silently accepting a jittered grid would bias them.
-    if not dt > 0.0 or np.any(np.abs(np.diff(t) - dt) > 1e-6 * dt):
+    if not dt > 0.0 or _max_step_jitter(t, dt) > 1e-6 * dt:
         raise ValueError("t_s must be strictly increasing and uniformly sampled")
     return float(dt)
 
@@ -140,6 +152,55 @@ def _detrend_linear(t_s: FloatArray, x: FloatArray) -> FloatArray:
     tc = t_s - t_s.mean()
     xc = x - x.mean()
     return xc - (np.dot(tc, xc) / np.dot(tc, tc)) * tc
+
+
+@njit(cache=True)
+def _moving_average_residual(t: FloatArray, x: FloatArray, half: int) -> FloatArray:
+    """y[j + half] minus the mean of y[j : j + 2 half + 1] for every complete window (running sum), where
+    y = x minus its least-squares line in t. A moving average maps a line onto itself, so removing it first
+    changes nothing but keeps the running sum small (less round-off, which would show as oscillation)."""
+    tm = t.mean()
+    xm = x.mean()
+    num = 0.0
+    den = 0.0
+    for i in range(t.size):
+        num += (t[i] - tm) * (x[i] - xm)
+        den += (t[i] - tm) * (t[i] - tm)
+    slope = num / den
+    y = np.empty(x.size)
+    for i in range(x.size):
+        y[i] = (x[i] - xm) - slope * (t[i] - tm)
+    width = 2 * half + 1
+    out = np.empty(y.size - 2 * half)
+    acc = 0.0
+    for i in range(width):
+        acc += y[i]
+    for j in range(out.size):
+        out[j] = y[j + half] - acc / width
+        if j + width < y.size:
+            acc += y[j + width] - y[j]
+    return out
+
+
+@njit(cache=True)
+def _true_runs(mask: npt.NDArray[np.bool_]) -> tuple[IntArray, IntArray]:
+    """First and last index of every maximal run of True."""
+    first = np.empty(mask.size, dtype=np.int64)
+    last = np.empty(mask.size, dtype=np.int64)
+    k = 0
+    i = 0
+    while i < mask.size:
+        if mask[i]:
+            j = i
+            while j + 1 < mask.size and mask[j + 1]:
+                j += 1
+            first[k] = i
+            last[k] = j
+            k += 1
+            i = j + 1
+        else:
+            i += 1
+    return first[:k], last[:k]
 
 
 def _centered_residual(t_s: npt.ArrayLike, x: npt.ArrayLike, window_s: float) -> tuple[FloatArray, int]:
@@ -155,12 +216,7 @@ def _centered_residual(t_s: npt.ArrayLike, x: npt.ArrayLike, window_s: float) ->
     width = 2 * half + 1
     if xs.size < width:
         raise ValueError(f"trace of {xs.size} samples is shorter than the {width}-sample window")
-    # A moving average maps a line onto itself, so removing one first changes nothing but keeps the
-    # cumulative sums small (less round-off, which would otherwise show as spurious oscillation).
-    y = _detrend_linear(np.asarray(t_s, dtype=np.float64), xs)
-    csum = np.concatenate(([0.0], np.cumsum(y)))
-    moving_average = (csum[width:] - csum[:-width]) / width
-    return y[half : xs.size - half] - moving_average, half
+    return _moving_average_residual(np.asarray(t_s, dtype=np.float64), xs, half), half
 
 
 def _card_arrays(position_m: npt.ArrayLike, load_n: npt.ArrayLike) -> tuple[FloatArray, FloatArray]:
@@ -203,10 +259,7 @@ def rest_episodes(v: npt.ArrayLike, min_steps: int = 2, tol: float = 1e-12) -> l
     """Maximal runs of ``abs(v) <= tol`` at least ``min_steps`` samples long, as inclusive index pairs."""
     _check_min_steps(min_steps)
     vel = _as_float_1d("v", v)
-    # 1-D edges directly (this runs in every env step; the 2-D path costs twice as much)
-    edges = np.diff((np.abs(vel) <= tol).view(np.int8), prepend=np.int8(0), append=np.int8(0))
-    first = np.flatnonzero(edges == 1)
-    last = np.flatnonzero(edges == -1) - 1
+    first, last = _true_runs(np.abs(vel) <= tol)
     keep = last - first + 1 >= min_steps
     return [(int(a), int(b)) for a, b in zip(first[keep], last[keep], strict=True)]
 
@@ -273,13 +326,15 @@ def stick_slip_index(
     """Stick-slip components and their scalar combination (definition in the module docstring)."""
     if slip_reference_m <= 0:
         raise ValueError(f"slip_reference_m must be > 0, got {slip_reference_m}")
-    plunger_extra = plunger_extra_stick_episodes(pump_velocity_m_s, n_strokes, min_steps, tol_m_s)
+    episodes = len(rest_episodes(pump_velocity_m_s, min_steps=min_steps, tol=tol_m_s))
+    plunger_extra = max(0, episodes - _reversal_allowance(n_strokes))
     counts = np.asarray(rod_stick_episodes, dtype=np.int64)
     rod_extra = rod_extra_stick_episodes(counts, n_strokes)
     amplitude_m = slip_amplitude_m(t_s, du_m, window_s)
     rod_term = rod_extra / counts.size if counts.size else 0.0
     index = plunger_extra + rod_term + max(0.0, amplitude_m - slip_floor_m) / slip_reference_m
     return {
+        "plunger_stick_episodes": episodes,
         "plunger_extra_stick_episodes": plunger_extra,
         "rod_extra_stick_episodes": rod_extra,
         "slip_amplitude_m": amplitude_m,
@@ -425,6 +480,11 @@ def resample_card(position_m: npt.ArrayLike, load_n: npt.ArrayLike, n_points: in
     return np.concatenate((branch(dp > 0), branch(dp < 0)))
 
 
+@lru_cache(maxsize=8)
+def _unit_grid(n_points: int) -> FloatArray:
+    return np.linspace(0.0, 1.0, n_points)
+
+
 def resample_prescribed_card(position_m: npt.ArrayLike, load_n: npt.ArrayLike, n_points: int) -> FloatArray:
     """:func:`resample_card` for one stroke of a *prescribed* surface motion starting at the bottom.
 
@@ -438,7 +498,7 @@ def resample_prescribed_card(position_m: npt.ArrayLike, load_n: npt.ArrayLike, n
         return np.full(2 * n_points, float(f.mean()))
     p = (x - x.min()) / span_m
     top = int(np.argmax(p))
-    grid = np.linspace(0.0, 1.0, n_points)
+    grid = _unit_grid(n_points)
     up = np.interp(grid, p[: top + 1], f[: top + 1])
     down = np.interp(grid, p[top:][::-1], f[top:][::-1])
     return np.concatenate((up, down))

@@ -59,11 +59,12 @@ def summarize(sim: Simulator, results: list[RunResult]) -> dict:
     spm = results[-1].spm
     production = metrics.production_m3_day(pump_stroke, plunger_area_m2(sim.cfg.pump), spm, fill)
     du = tr["polished_rod_position_m"] - tr["pump_position_m"]  # u_B - u_A (both positive down)
-    rod_eps = np.sum([r.rod_stick_episodes for r in results], axis=0)
+    one = results[0] if n_strokes == 1 else None  # the env's case: skip the list reductions
+    rod_eps = one.rod_stick_episodes if one else np.sum([r.rod_stick_episodes for r in results], axis=0)
     ss = metrics.stick_slip_index(tr["t_s"], tr["pump_velocity_m_s"], du, rod_eps, n_strokes,
                                   1.0 / sim.f1_hz, slip_floor_m=SLIP_FLOOR_M)
-    fmax = np.max([r.element_force_max_eq_n for r in results], axis=0)
-    fmin = np.min([r.element_force_min_eq_n for r in results], axis=0)
+    fmax = one.element_force_max_eq_n if one else np.max([r.element_force_max_eq_n for r in results], axis=0)
+    fmin = one.element_force_min_eq_n if one else np.min([r.element_force_min_eq_n for r in results], axis=0)
     goodman = goodman_per_taper(sim, fmax, fmin)
     n_steps = sum(r.n_steps for r in results)
     summary = {
@@ -78,7 +79,6 @@ def summarize(sim: Simulator, results: list[RunResult]) -> dict:
         "card_work_j_per_stroke": card["card_area_j"] / n_strokes,
         "goodman_pct": goodman.tolist(),
         "goodman_max_pct": float(goodman.max()),
-        "plunger_stick_episodes": len(metrics.rest_episodes(tr["pump_velocity_m_s"])),
         **{k: (float(v) if isinstance(v, float) else int(v)) for k, v in ss.items()},
         "intake_pressure_pa": results[-1].intake_pressure_pa,
         "steps": n_steps,

@@ -93,6 +93,7 @@ def test_stick_slip_index_exactly_zero_for_clean_trace() -> None:
     rod_counts = np.full(12, 6)  # every rod node rests at the 6 reversals only
     result = stick_slip_index(t, v, du, rod_counts, n_strokes=3, window_s=0.7)
     assert result == {
+        "plunger_stick_episodes": 6,
         "plunger_extra_stick_episodes": 0,
         "rod_extra_stick_episodes": 0,
         "slip_amplitude_m": 0.0,

@@ -9,31 +9,29 @@ import numpy as np
 
 
 def env_overhead(repeats: int = 5, n_strokes: int = 50) -> dict:
-    """Median over `repeats` of the time for `n_strokes` env steps and for the same strokes run bare
-    (``Simulator.run_stroke(record=False)`` at the same SPM and stroke), interleaved."""
+    """Two identical envs, reset alike: one steps through the env API, the other's simulator runs the very
+    same strokes bare (``run_stroke(record=False)``), interleaved stroke by stroke so that machine noise
+    hits both sides alike. Medians over `repeats` of the summed times."""
     import gymnasium as gym
 
-    from ..simulator import Simulator
-
-    env = gym.make("srenv/SuckerRod-v0").unwrapped
     action = np.zeros(2, dtype=np.float32)
-    env.reset(seed=0, options={"randomize": False})
-    env.step(action)
-    spm, stroke = env._spm, env._stroke
-    sim = Simulator(env.cfg)
-    sim.run_stroke(spm, stroke, record=False)
+    env = gym.make("srenv/SuckerRod-v0").unwrapped
+    bare = gym.make("srenv/SuckerRod-v0").unwrapped
     t_env, t_sim = [], []
-    for _ in range(repeats):
+    for rep in range(repeats + 1):  # the first repeat warms up (kernel compilation, caches)
         env.reset(seed=0, options={"randomize": False})
-        t = time.perf_counter()
+        bare.reset(seed=0, options={"randomize": False})
+        te = ts = 0.0
         for _ in range(n_strokes):
+            t = time.perf_counter()
             env.step(action)
-        t_env.append(time.perf_counter() - t)
-        sim.reset()
-        t = time.perf_counter()
-        for _ in range(n_strokes):
-            sim.run_stroke(spm, stroke, record=False)
-        t_sim.append(time.perf_counter() - t)
+            te += time.perf_counter() - t
+            t = time.perf_counter()
+            bare.sim.run_stroke(env._spm, env._stroke, record=False)
+            ts += time.perf_counter() - t
+        if rep:
+            t_env.append(te)
+            t_sim.append(ts)
     te, ts = statistics.median(t_env), statistics.median(t_sim)
     return {"env_steps_per_s": n_strokes / te, "bare_strokes_per_s": n_strokes / ts,
             "env_overhead_pct": 100.0 * (te - ts) / ts, "strokes_per_env_step": env.cfg.control.strokes_per_step}
