@@ -121,16 +121,16 @@ def load_model(path: str | Path, env: Any) -> SB3Policy:
 
 
 def well_config(env: Any) -> Any:
-    """The WellConfig the env was built from (its overrides included)."""
-    return env.unwrapped.cfg
+    """The WellConfig the env was built from, overrides included, before the per-episode randomisation
+    (the installed unit's SPM and stroke, the control range)."""
+    return env.unwrapped.base_cfg
 
 
-def fillage_index(env: Any) -> int | None:
+def fillage_index(env: Any) -> int:
     """Index of the last stroke's pump fillage in the env's flat observation (its documented layout)."""
-    names = getattr(env.unwrapped, "observation_names", None)
-    if names is not None and "fillage" in list(names):
-        return list(names).index("fillage")
-    return None
+    from srenv.envs import obs_index
+
+    return obs_index("fillage", env.unwrapped.card_points)
 
 
 def make_policy(spec: str, env: Any) -> Policy:
@@ -182,16 +182,21 @@ def run_episode(env: Any, policy: Policy, seed: int, record_cards: bool = False)
             if k in info:
                 ep.steps[k].append(float(info[k]))
         if record_cards:
-            ep.cards.append(last_card(env))
+            ep.cards.append(card_from_observation(env, obs, info["stroke_length_m"]))
         if terminated or truncated:
             ep.failure = info.get("failure") if terminated else None
             return ep
 
 
-def last_card(env: Any) -> dict:
-    """Surface card of the stroke just run (position from the bottom, load in N)."""
-    tr = env.unwrapped.last_trace
-    return {"position_m": np.asarray(tr["polished_rod_position_m"]), "load_n": np.asarray(tr["polished_rod_load_n"])}
+def card_from_observation(env: Any, obs: np.ndarray, stroke_length_m: float) -> dict:
+    """Surface card of the stroke just run, from the observation's documented layout: the up and down
+    branches' load / ``reward.pprl_rating_n`` on a uniform grid of the stroke (``card_points`` each)."""
+    n = env.unwrapped.card_points
+    grid_m = np.linspace(0.0, 1.0, n) * stroke_length_m
+    load_n = np.asarray(obs[: 2 * n], dtype=np.float64) * well_config(env).reward.pprl_rating_n
+    # up branch bottom -> top, then the down branch top -> bottom: one closed loop
+    return {"position_m": np.r_[grid_m, grid_m[::-1], grid_m[:1]],
+            "load_n": np.r_[load_n[:n], load_n[n:][::-1], load_n[:1]]}
 
 
 def summarize(episodes: list[Episode]) -> dict[str, float]:

@@ -3,7 +3,7 @@
 from .config import WellConfig, load_config
 from .errors import ConfigError, SolverFailure
 
-__all__ = ["ConfigError", "SolverFailure", "WellConfig", "load_config", "Simulator"]
+__all__ = ["ConfigError", "Simulator", "SolverFailure", "WellConfig", "load_config"]
 __version__ = "0.1.0"
 
 ENV_ID = "srenv/SuckerRod-v0"
@@ -20,7 +20,8 @@ def _register() -> None:
 _register()
 
 
-def __getattr__(name: str):  # noqa: ANN202 - lazy: importing srenv must not compile the kernel
+def __getattr__(name: str) -> type:
+    # lazy: importing srenv must not compile the kernel
     if name == "Simulator":
         from .simulator import Simulator
 

@@ -10,7 +10,7 @@ import gymnasium as gym
 import numpy as np
 import pytest
 
-import srenv  # noqa: F401 - registers the env
+import srenv  # registers the env
 from srenv.config import load_config
 from srenv.envs import SuckerRodEnv
 from srenv.metrics import ROD_GRADE_TENSILE_PA
@@ -19,6 +19,9 @@ from srenv.stroke_summary import summarize
 
 ENV_ID = "srenv/SuckerRod-v0"
 SHORT = {"control__max_episode_steps": 5}
+INFO_KEYS = {"pprl_n", "mprl_n", "goodman_pct", "goodman_max_pct", "stick_slip_index", "fillage",
+             "production_m3_day", "spm", "stroke_length_m", "fluid_level_m", "intake_pressure_pa",
+             "certified_steps", "corrected_steps", "qp_steps", "solver_calls"}
 
 
 def test_checkers_pass_without_warnings() -> None:
@@ -73,6 +76,7 @@ def test_reward_is_the_sum_of_its_info_terms() -> None:
         assert {"reward_production", "reward_stick_slip", "reward_peak_load"} <= set(terms)
         assert r == pytest.approx(sum(terms.values()), abs=1e-12)
         assert terms["reward_production"] > 0 and terms["reward_peak_load"] < 0
+        assert INFO_KEYS <= set(info), INFO_KEYS - set(info)
 
 
 def test_nan_action_is_refused_and_out_of_range_is_clipped() -> None:
@@ -104,7 +108,7 @@ def test_pickles_and_runs_in_subproc_vec_env() -> None:
     try:
         venv.seed(3)
         obs = venv.reset()
-        obs2, rew, done, infos = venv.step(np.array([[1, 1], [-1, -1]], dtype=np.float32))
+        obs2, rew, _, infos = venv.step(np.array([[1, 1], [-1, -1]], dtype=np.float32))
         assert obs.shape == obs2.shape == (2, env.observation_space.shape[0])
         assert np.all(np.isfinite(rew)) and infos[0]["spm"] > infos[1]["spm"]
     finally:
@@ -186,6 +190,58 @@ def test_truncation_and_render() -> None:
 def test_rod_failure_terminates_with_info() -> None:
     env = SuckerRodEnv(overrides={"reward.failure_goodman_pct": 5.0})
     env.reset(seed=0)
-    _, r, term, trunc, info = env.step(np.zeros(2, dtype=np.float32))
+    _, _, term, trunc, info = env.step(np.zeros(2, dtype=np.float32))
     assert term and not trunc and "Goodman" in info["failure"]
     assert info["reward_failure"] == -env.cfg.reward.failure_penalty
+
+
+def test_goodman_in_info_matches_a_hand_computation_from_the_card() -> None:
+    """Top of taper 1 = the polished rod; its true load is the trace's polished-rod load (the simulator
+    already subtracts wellhead pressure x area). The env reports the element envelope just below it, so the
+    two agree to the top half-element's weight and inertia (~1 %)."""
+    env = SuckerRodEnv(control__randomize=False)
+    env.reset(seed=0)
+    for action in ([1.0, 1.0], [-1.0, -1.0]):
+        _, _, _, _, info = env.step(np.array(action, dtype=np.float32))
+        load = env._trace["polished_rod_load_n"]
+        d_m = env.cfg.rod.tapers[0].diameter_mm * 1e-3
+        area_m2 = math.pi / 4 * d_m * d_m
+        s_max, s_min = load.max() / area_m2, load.min() / area_m2
+        s_a = ROD_GRADE_TENSILE_PA[env.cfg.rod.tapers[0].grade] / 4 + 0.5625 * s_min
+        assert info["goodman_pct"][0] == pytest.approx(100 * (s_max - s_min) / (s_a - s_min), rel=0.02)
+        assert info["pprl_n"] == load.max() and info["mprl_n"] == load.min()
+
+
+def test_default_well_pumps_off_at_the_top_of_the_range_within_an_episode() -> None:
+    """The tuning of configs/wells/default.yaml that makes speed control matter: flat out, the pump outruns
+    the inflow before the time limit; at the bottom of the range the barrel stays full but production is
+    low."""
+    env = SuckerRodEnv(control__randomize=False)
+    fills, prods = {}, {}
+    for name, action in (("fast", [1.0, 1.0]), ("slow", [-1.0, -1.0])):
+        env.reset(seed=0)
+        fills[name], prods[name] = [], []
+        truncated = False
+        while not truncated:
+            _, _, terminated, truncated, info = env.step(np.array(action, dtype=np.float32))
+            assert not terminated
+            fills[name].append(info["fillage"])
+            prods[name].append(info["production_m3_day"])
+    assert min(fills["fast"]) < 0.8 and fills["fast"][0] > 0.98  # pumped off during, not before, the episode
+    assert min(fills["slow"]) > 0.98
+    assert max(prods["slow"]) < 0.5 * np.mean(prods["fast"])
+
+
+def test_solver_failure_mid_episode_ends_it_with_only_the_failure_term(monkeypatch: pytest.MonkeyPatch) -> None:
+    env = SuckerRodEnv(**SHORT)
+    env.reset(seed=0)
+
+    def fail(*_args: object, **_kw: object) -> None:
+        raise srenv.SolverFailure(0, 0.0, "injected")
+
+    monkeypatch.setattr(env.sim, "run_stroke", fail)
+    obs, r, term, trunc, info = env.step(np.zeros(2, dtype=np.float32))
+    assert term and not trunc and "injected" in info["failure"]
+    assert r == info["reward_failure"] == -env.cfg.reward.failure_penalty
+    assert info["reward_production"] == info["reward_stick_slip"] == info["reward_peak_load"] == 0.0
+    assert env.observation_space.contains(obs)

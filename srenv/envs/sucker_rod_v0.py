@@ -58,19 +58,23 @@ The stroke metrics of :func:`srenv.stroke_summary.summarize` (``pprl_n``, ``mprl
 Episode end
 -----------
 terminated: rod failure (Goodman loading above ``reward.failure_goodman_pct``) or an unrecoverable step-QP
-failure (``info["failure"]``); truncated: ``control.max_episode_steps`` steps.
+failure (``info["failure"]``, never raised from ``step``); truncated: ``control.max_episode_steps`` steps.
+If the solver fails before any stroke of the step completed, the metrics in ``info`` are the previous
+step's and only ``reward_failure`` is non-zero (nothing was produced or loaded in that step).
 
 Randomisation
 -------------
-With ``control.randomize``, each ``reset`` draws from ``self.np_random`` (never the global RNG), within
-± ``control.randomize_fraction``: the initial liquid level, the reservoir pressure and maximum rate, the
-fluid density and the rod–tubing friction coefficient. ``reset(options={"randomize": False})`` uses the
-config as is.
+With ``control.randomize``, each ``reset`` draws from ``self.np_random`` (never the global RNG): within
+± ``control.randomize_fraction`` the reservoir pressure, maximum rate and productivity index, the fluid
+density and the rod–tubing friction coefficient; the initial liquid level within ×[0.5, 1.5] (wider, so the
+time to pump-off varies from episode to episode). ``reset(options={"randomize": False})`` uses the config
+as is. A solver failure in the warm-up stroke of ``reset`` (the configured operating point itself cannot be
+run) raises :class:`~srenv.errors.SolverFailure`: that is a config error, not an episode outcome.
 """
 
 from __future__ import annotations
 
-from typing import Any
+from typing import Any, ClassVar
 
 import gymnasium as gym
 import numpy as np
@@ -97,7 +101,7 @@ def _overrides_from_kwargs(kwargs: dict) -> dict:
 
 
 class SuckerRodEnv(gym.Env):
-    metadata = {"render_modes": ["rgb_array", "human"], "render_fps": 2}
+    metadata: ClassVar[dict[str, Any]] = {"render_modes": ["rgb_array", "human"], "render_fps": 2}
 
     def __init__(self, config: str | WellConfig = "default", overrides: dict | None = None,
                  render_mode: str | None = None, card_points: int = 32, **kwargs: Any) -> None:
@@ -211,10 +215,15 @@ class SuckerRodEnv(gym.Env):
         self._spm, stroke = self._to_operating_point(action)
         self._stroke = self.sim.surface.stroke_length_m(stroke)
         m, failure = self._run_strokes()
-        if not m:  # solver failure on the first stroke of the step: keep the last metrics for the obs
+        if m:
+            terms = self.reward_fn.terms(m, failed=failure is not None)
+        else:
+            # solver failure on the first stroke of the step: the last metrics keep the observation valid,
+            # but they must not earn production (or cost load) a second time
             m = dict(self._last)
+            terms = {k: 0.0 for k in self.reward_fn.terms(m, failed=True)}
+            terms["reward_failure"] = -self.cfg.reward.failure_penalty
         self._last = m
-        terms = self.reward_fn.terms(m, failed=failure is not None)
         reward = float(sum(terms.values()))
         self._steps += 1
         terminated = failure is not None
