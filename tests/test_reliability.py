@@ -7,6 +7,7 @@ stroke goes through the chain.
 
 from __future__ import annotations
 
+import importlib.util
 import math
 from collections.abc import Callable
 from pathlib import Path
@@ -170,6 +171,17 @@ def test_env_ends_episode_on_solver_failure_and_reset_works(monkeypatch: pytest.
     assert not terminated and "failure" not in info
     assert math.isfinite(float(reward)) and np.all(np.isfinite(obs))
     env.close()
+
+
+def test_soak_script_smoke() -> None:
+    """scripts/soak.py on a few hundred strokes: every check passes and memory is sampled as asked."""
+    spec = importlib.util.spec_from_file_location("soak", Path(__file__).parents[1] / "scripts" / "soak.py")
+    soak = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(soak)
+    summary = soak.soak(strokes=250, seed=0, checkpoint=50, config=None)
+    assert summary["ok"], summary["problems"]
+    assert summary["strokes"] == 250 and len(summary["rss_mb"]) == 5
+    assert 0 < summary["max_energy_residual_rel"] <= ENERGY_RTOL
 
 
 # ------------------------------------------------------------------------------------------ energy
