@@ -68,8 +68,9 @@ With ``control.randomize``, each ``reset`` draws from ``self.np_random`` (never 
 ± ``control.randomize_fraction`` the reservoir pressure, maximum rate and productivity index, the fluid
 density and the rod–tubing friction coefficient; the initial liquid level within ×[0.5, 1.5] (wider, so the
 time to pump-off varies from episode to episode). ``reset(options={"randomize": False})`` uses the config
-as is. A solver failure in the warm-up stroke of ``reset`` (the configured operating point itself cannot be
-run) raises :class:`~srenv.errors.SolverFailure`: that is a config error, not an episode outcome.
+as is. If the warm-up stroke of ``reset`` cannot be solved, a randomised reset draws another well (up to 5
+times, from ``np_random``); only if every draw fails (or without randomisation) does ``reset`` raise
+:class:`~srenv.errors.SolverFailure`: the configured operating point itself cannot be run.
 """
 
 from __future__ import annotations
@@ -89,6 +90,7 @@ from ..stroke_summary import summarize
 
 OBS_TAIL = ("spm", "stroke", "fluid_level", "intake_pressure", "fillage", "pprl", "goodman", "stick_slip")
 OBS_BOUND = 10.0
+RESET_ATTEMPTS = 5
 
 
 def obs_index(name: str, card_points: int = 32) -> int:
@@ -194,13 +196,17 @@ class SuckerRodEnv(gym.Env):
         super().reset(seed=seed)
         randomize = self.base_cfg.control.randomize if not options or "randomize" not in options \
             else bool(options["randomize"])
-        self.cfg = self._randomized_config() if randomize else self.base_cfg
-        self.sim = Simulator(self.cfg)
-        self._steps = 0
-        self._spm = None
-        s = self.cfg.surface
-        self._spm, self._stroke = float(s.spm), float(self.sim.surface.stroke_length_m(s.stroke_length_m))
-        m, failure = self._run_strokes()
+        # A training loop resets automatically and must not crash: if the warm-up stroke of a randomised
+        # well cannot be solved, draw another well (from np_random, so still reproducible).
+        for _attempt in range(RESET_ATTEMPTS if randomize else 1):
+            self.cfg = self._randomized_config() if randomize else self.base_cfg
+            self.sim = Simulator(self.cfg)
+            self._steps = 0
+            s = self.cfg.surface
+            self._spm, self._stroke = float(s.spm), float(self.sim.surface.stroke_length_m(s.stroke_length_m))
+            m, failure = self._run_strokes()
+            if m:
+                break
         if failure and not m:
             raise SolverFailure(0, 0.0, failure)  # the configured operating point itself cannot be run
         self._last = m
