@@ -217,3 +217,27 @@ def test_energy_balance_does_not_close_for_dissipative_newmark() -> None:
 def test_energy_balance_closes_on_the_qp_path(reference: RunResult) -> None:
     e = reference.energy_j
     assert abs(e["residual_j"]) <= ENERGY_RTOL * e["polished_rod_work_j"]
+
+
+def test_randomised_reset_redraws_a_well_whose_warm_up_fails(monkeypatch: pytest.MonkeyPatch) -> None:
+    """Auto-reset inside a training loop must not raise: the first two wells drawn fail, the third runs."""
+    from srenv.envs import sucker_rod_v0 as mod
+
+    env = gym.make("srenv/SuckerRod-v0", overrides={"simulation.always_qp": True}).unwrapped
+    built = {"n": 0}
+    real = StepQP._solve_once
+
+    class CountingSim(mod.Simulator):
+        def __init__(self, *a, **k) -> None:  # noqa: ANN002, ANN003
+            super().__init__(*a, **k)
+            built["n"] += 1
+
+    monkeypatch.setattr(mod, "Simulator", CountingSim)
+    monkeypatch.setattr(StepQP, "_solve_once",
+                        lambda self, p, n, t: None if built["n"] <= 2 else real(self, p, n, t))
+    obs, info = env.reset(seed=0)
+    assert built["n"] == 3 and np.all(np.isfinite(obs)) and "failure" not in info
+    # without randomisation there is nothing to redraw: the failure is reported
+    built["n"] = 0
+    with pytest.raises(SolverFailure):
+        env.reset(seed=0, options={"randomize": False})
