@@ -389,7 +389,7 @@ class Simulator:
         self.status[:] = status
         ist[K.I_HAVEQP] = 1
 
-    def _plan_upstroke(self, u_bottom_m: float, time_s: float, period_s: float, ist, par) -> None:  # noqa: ANN001
+    def _plan_upstroke(self, u_bottom_m: float, time_s: float, period_s: float, ist, par) -> None:
         """At the bottom: the liquid the coming upstroke can draw (annulus + inflow during the upstroke)
         fixes the liquid level in the barrel; above it the plunger meets no liquid (fluid pound)."""
         if self.annulus is None:
@@ -400,7 +400,7 @@ class Simulator:
         par[K.P_VOID_UNTIL] = u_bottom_m - self._liquid_stroke_m
         ist[K.I_VOID] = 1
 
-    def _on_event(self, direction: int, par, ist, time_s: float, events: list, fillage: float,  # noqa: ANN001
+    def _on_event(self, direction: int, par, ist, time_s: float, events: list, fillage: float,
                   stroke_m: float, period_s: float) -> float:
         """A plunger reversal. Short reversals inside a stroke (stick-slip chatter, the bounce when a pounding
         plunger meets liquid) are not valve cycles: a reversal counts only after a travel of a quarter of the

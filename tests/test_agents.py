@@ -32,7 +32,7 @@ def smoke_config(**over: object) -> dict:
 
 
 @pytest.fixture(scope="module")
-def env():  # noqa: ANN201
+def env():
     e = make_env(ENV_ID, config="default", **SHORT)
     yield e
     e.close()
@@ -49,7 +49,7 @@ def test_action_map_round_trip() -> None:
     assert np.allclose(stroke, [control.stroke_min_m, 1.6, 2.0], atol=1e-6)
 
 
-def test_rocking_machine_is_the_configured_unit(env) -> None:  # noqa: ANN001
+def test_rocking_machine_is_the_configured_unit(env) -> None:
     cfg = load_config("default")
     policy = RockingMachinePolicy(cfg)
     obs, _ = env.reset(seed=0)
@@ -92,7 +92,7 @@ def test_fillage_pi_info_fed_route() -> None:
     assert setpoints_from_action(action, cfg.control)[0] < cfg.surface.spm
 
 
-def test_fillage_index_matches_info(env) -> None:  # noqa: ANN001
+def test_fillage_index_matches_info(env) -> None:
     idx = fillage_index(env)
     env.reset(seed=1)
     obs, *_, info = env.step(action_from_setpoints(10.0, 2.0, load_config("default").control))
@@ -100,7 +100,7 @@ def test_fillage_index_matches_info(env) -> None:  # noqa: ANN001
 
 
 @pytest.mark.parametrize("name", ["rocking", "fillage"])
-def test_baselines_give_finite_metrics(env, name: str) -> None:  # noqa: ANN001
+def test_baselines_give_finite_metrics(env, name: str) -> None:
     ep = run_episode(env, make_policy(name, env), seed=3)
     m = ep.metrics()
     assert m["steps"] == SHORT["control__max_episode_steps"]
@@ -134,7 +134,7 @@ def test_resume_continues_step_count(tmp_path: Path) -> None:
     assert checkpoints(tmp_path)[0][0] > at_checkpoint
 
 
-def test_mismatched_model_is_one_clear_error(tmp_path: Path, env) -> None:  # noqa: ANN001
+def test_mismatched_model_is_one_clear_error(tmp_path: Path, env) -> None:
     import gymnasium as gym
     from stable_baselines3 import PPO
 

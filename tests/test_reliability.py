@@ -228,7 +228,7 @@ def test_randomised_reset_redraws_a_well_whose_warm_up_fails(monkeypatch: pytest
     real = StepQP._solve_once
 
     class CountingSim(mod.Simulator):
-        def __init__(self, *a, **k) -> None:  # noqa: ANN002, ANN003
+        def __init__(self, *a, **k) -> None:
             super().__init__(*a, **k)
             built["n"] += 1
 
