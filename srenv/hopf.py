@@ -114,7 +114,7 @@ class SpringBlock:
         wv, wb, wlo, whi = (np.zeros(1) for _ in range(4))
         prev_lam, prev_v = np.array([-self.friction_n(v_up)]), v.copy()
         prev_stuck, stick = np.zeros(1, dtype=np.bool_), np.zeros(1, dtype=np.int64)
-        rec = np.empty((n_steps, K.N_REC))
+        rec = np.empty((K.N_REC, n_steps))
         energy, emax, emin = np.zeros(K.N_ENERGY), np.full(1, -np.inf), np.full(1, np.inf)
         zeros = np.zeros(1)
         while True:
@@ -132,7 +132,7 @@ class SpringBlock:
                 status[0] = 1 if wv[0] > 0 else (-1 if wv[0] < 0 else 0)
                 ist[K.I_HAVEQP] = 1
             # EVENT (the block reversed): nothing to update, keep stepping
-        return rec[:, K.R_T].copy(), -rec[:, K.R_VB]
+        return rec[K.R_T].copy(), rec[K.R_VB].copy()  # recorded upward positive
 
 
 def oscillation_growth(velocity_m_s: np.ndarray, pull_velocity_m_s: float, window_steps: int) -> float:

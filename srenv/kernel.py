@@ -46,7 +46,7 @@ I_PLDIR, I_EVENT, I_VOID, I_NCERT, I_NCORR, I_NQP, I_NDC, I_RECORD, I_NREC = 7, 
 I_PUMP_NONMONO, I_FRIC_NONMONO = 16, 17
 N_IST = 18
 
-# columns of the per-step record
+# rows of the per-step record (one column per step; upward positions and velocities)
 R_T, R_UA, R_PRL, R_UB, R_VB, R_PUMP, R_PATH, R_VA = 0, 1, 2, 3, 4, 5, 6, 7
 N_REC = 8
 
@@ -348,15 +348,16 @@ def advance(par, ist, u, v, a, uav, va_t, t0,
                 status[i] = 1 if v[i] > 0 else (-1 if v[i] < 0 else 0)
         if ist[I_RECORD] != 0:
             r = ist[I_NREC]
-            if r < rec.shape[0]:
-                rec[r, R_T] = t0 + (k + 1) * dt
-                rec[r, R_UA] = ua_new
-                rec[r, R_PRL] = prl_eq - par[P_PA]
-                rec[r, R_UB] = u[n - 1]
-                rec[r, R_VB] = v[n - 1]
-                rec[r, R_PUMP] = -lam[n - 1] - par[P_PB]
-                rec[r, R_PATH] = path
-                rec[r, R_VA] = va_new
+            if r < rec.shape[1]:
+                # recorded as users read them: positions and velocities upward, true loads
+                rec[R_T, r] = t0 + (k + 1) * dt
+                rec[R_UA, r] = -ua_new
+                rec[R_PRL, r] = prl_eq - par[P_PA]
+                rec[R_UB, r] = -u[n - 1]
+                rec[R_VB, r] = -v[n - 1] + 0.0  # + 0.0: an exact rest is 0.0, never -0.0
+                rec[R_PUMP, r] = -lam[n - 1] - par[P_PB]
+                rec[R_PATH, r] = path
+                rec[R_VA, r] = -va_new
                 ist[I_NREC] = r + 1
         ist[I_STEP] = k + 1
         par[P_UBMAX] = max(par[P_UBMAX], u[n - 1])

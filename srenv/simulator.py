@@ -333,7 +333,7 @@ class Simulator:
         f_f = self._f_all[1:]
         par, ist = self._params(dt)
         ist[K.I_RECORD] = int(record)
-        rec = np.empty((n_steps if record else 0, K.N_REC))
+        rec = np.empty((K.N_REC, n_steps if record else 0))
         stick = np.zeros(n, dtype=np.int64)
         emax = np.full(n, -np.inf)
         emin = np.full(n, np.inf)
@@ -360,7 +360,7 @@ class Simulator:
         self._ub_max, self._ub_min = float(par[K.P_UBMAX]), float(par[K.P_UBMIN])
         self.void_until = float(par[K.P_VOID_UNTIL])
         self.time_s = t0 + n_steps * dt
-        trace = self._trace(rec[: ist[K.I_NREC]]) if record else None
+        trace = self._trace(rec[:, : ist[K.I_NREC]]) if record else None
         self.fillage = fillage
         return RunResult(
             n_steps=n_steps, duration_s=n_steps * dt, spm=spm, stroke_length_m=stroke,
@@ -433,14 +433,14 @@ class Simulator:
 
     def _trace(self, rec: np.ndarray) -> dict:
         return {
-            "t_s": rec[:, K.R_T],
-            "polished_rod_position_m": -rec[:, K.R_UA],
-            "polished_rod_velocity_m_s": -rec[:, K.R_VA],
-            "polished_rod_load_n": rec[:, K.R_PRL],
-            "pump_position_m": -rec[:, K.R_UB],
-            "pump_velocity_m_s": -rec[:, K.R_VB] + 0.0,  # + 0.0 turns -0.0 into 0.0
-            "pump_load_n": rec[:, K.R_PUMP],
-            "step_path": rec[:, K.R_PATH],
+            "t_s": rec[K.R_T],  # views into the record: no copies per stroke
+            "polished_rod_position_m": rec[K.R_UA],
+            "polished_rod_velocity_m_s": rec[K.R_VA],
+            "polished_rod_load_n": rec[K.R_PRL],
+            "pump_position_m": rec[K.R_UB],
+            "pump_velocity_m_s": rec[K.R_VB],
+            "pump_load_n": rec[K.R_PUMP],
+            "step_path": rec[K.R_PATH],
         }
 
     def run_strokes(self, n: int, record: bool = True, **kw) -> list[RunResult]:
