@@ -114,7 +114,6 @@ class FrictionConfig:
     coefficient: float = num(0.0, unit="-", check="nonneg", doc="Coulomb rod-tubing mu (static for nonmonotone)")
     kinetic_coefficient: float = num(0.0, unit="-", check="nonneg", doc="mu_k of the nonmonotone law")
     reference_velocity_m_s: float = num(0.1, unit="m/s", doc="v0 of mu(v) = mu_k + (mu_s-mu_k) e^(-|v|/v0)")
-    side_force_iterations: int = num(1, unit="-", doc="fixed-point passes for q_n(u) per step (paper: 1)")
 
 
 @dataclass(frozen=True)

@@ -34,9 +34,9 @@ PATH_QP = 2
 P_DT, P_BETA, P_GAMMA, P_TOLV, P_TOLL, P_DCTOL = 0, 1, 2, 3, 4, 5
 P_PUMP_LO, P_PUMP_HI, P_PUMP_DROP, P_PUMP_V0 = 6, 7, 8, 9
 P_FRIC_RATIO, P_FRIC_V0 = 10, 11
-P_MA, P_MOA, P_CA, P_FA, P_KA, P_KC, P_MC = 12, 13, 14, 15, 16, 17, 18
+P_MA, P_MOA, P_CA, P_FA, P_KC, P_MC = 12, 13, 14, 15, 17, 18  # 16: free
 P_PB, P_PA, P_VOID_UNTIL = 19, 20, 21
-P_EA0, P_FRIC_ITERS = 22, 23
+P_EA0 = 22
 P_UBMAX, P_UBMIN = 24, 25  # plunger position extremes since the caller last reset them (stroke bookkeeping)
 N_PAR = 26
 

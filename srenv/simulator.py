@@ -109,7 +109,6 @@ class Simulator:
         self._ea_len = mesh.ea_n / mesh.length_m
         # pressures and the valve law
         tvd = self.survey.tvd(x)
-        self.tvd_pump_m = float(tvd[-1])
         self.p_pump_pa = float(tubing_pressure_pa(cfg.fluid, tvd[-1]))
         self.p_top_pa = float(cfg.fluid.wellhead_pressure_pa)
         self.area_bottom_m2 = float(mesh.area_m2[-1])
@@ -280,9 +279,9 @@ class Simulator:
         fr = cfg.friction
         par[K.P_FRIC_RATIO] = fr.kinetic_coefficient / fr.coefficient if fr.coefficient > 0 else 1.0
         par[K.P_FRIC_V0] = fr.reference_velocity_m_s
-        (kd, ko), (md, mo), cd = self._k, self._m, self._c
+        (_, ko), (md, mo), cd = self._k, self._m, self._c
         par[K.P_MA], par[K.P_MOA], par[K.P_CA], par[K.P_FA] = md[0], mo[0], cd[0], self._f_all[0]
-        par[K.P_KA], par[K.P_KC], par[K.P_MC] = kd[0], ko[0], mo[0]
+        par[K.P_KC], par[K.P_MC] = ko[0], mo[0]
         par[K.P_PB] = self.p_pump_pa * self.area_bottom_m2
         par[K.P_PA] = self.p_top_pa * self.area_top_m2
         par[K.P_VOID_UNTIL] = self.void_until
