@@ -5,7 +5,7 @@ Per episode the metrics are read from the env's ``info`` (one entry per control 
 
 =================================  ============================================================
 ``reward``                         sum of rewards over the episode
-``production_m3_day``              mean over the episode's strokes
+``production_m3_day``              time-weighted mean: volume pumped / pumping time, m3/day
 ``pprl_n`` / ``pprl_max_n``        mean / maximum peak polished-rod load, N
 ``goodman_max_pct``                maximum Goodman loading over the episode, %
 ``stick_slip_index``               mean per-stroke stick-slip index
@@ -142,7 +142,12 @@ def make_policy(spec: str, env: Any) -> Policy:
 
 
 def policy_label(spec: str) -> str:
-    return spec if spec in BASELINES else Path(spec).name.removesuffix(".zip")
+    if spec in BASELINES:
+        return spec
+    path = Path(spec)
+    stem = path.name.removesuffix(".zip")
+    # train() names its outputs model / best_model: the run directory tells runs apart
+    return f"{path.parent.name}/{stem}" if stem in ("model", "best_model") and path.parent.name else stem
 
 
 # -------------------------------------------------------------------------------------------- episodes
@@ -156,6 +161,10 @@ class Episode:
 
     def metrics(self) -> dict[str, float]:
         m = {k: float(np.mean(v)) if v else math.nan for k, v in self.steps.items()}
+        if self.steps["production_m3_day"] and self.steps["spm"]:
+            # a stroke lasts 60/SPM s: a per-stroke mean would overweight the fast strokes' rates
+            m["production_m3_day"] = float(np.average(self.steps["production_m3_day"],
+                                                      weights=1.0 / np.asarray(self.steps["spm"])))
         m["reward"] = float(np.sum(self.rewards))
         m["pprl_max_n"] = float(np.max(self.steps["pprl_n"])) if self.steps["pprl_n"] else math.nan
         m["goodman_max_pct"] = float(np.max(self.steps["goodman_max_pct"])) if self.steps["goodman_max_pct"] \
@@ -170,13 +179,14 @@ def run_episode(env: Any, policy: Policy, seed: int, record_cards: bool = False)
     ep = Episode(seed)
     obs, info = env.reset(seed=seed)
     state, start = None, True
-    observe = getattr(policy, "observe", None)
+    # the info-fed route of FillagePolicy, for an env whose observation layout gives no fillage index
+    feed_info = isinstance(policy, FillagePolicy) and policy.fillage_index is None
     while True:
         action, state = policy.predict(obs, state=state, episode_start=np.array([start]), deterministic=True)
         start = False
         obs, reward, terminated, truncated, info = env.step(action)
-        if observe is not None and getattr(policy, "fillage_index", 0) is None:
-            observe(info)  # the info-fed route of FillagePolicy, when the layout gives no index
+        if feed_info:
+            policy.observe(info)
         ep.rewards.append(float(reward))
         for k in _STEP_KEYS:
             if k in info:
@@ -223,6 +233,8 @@ def evaluate(specs: list[str], episodes: int, seed: int, config: str = "default"
             eps = [run_episode(env, policy, seed + k, record_cards=plot is not None and k == 0)
                    for k in range(episodes)]
             label = policy_label(spec)
+            if label in results:  # e.g. two runs' best_model from directories of the same name
+                label = f"{label} ({len(results) + 1})"
             results[label] = {"policy": spec, **summarize(eps)}
             samples[label] = eps[0]
     finally:

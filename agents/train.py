@@ -29,6 +29,7 @@ from __future__ import annotations
 
 import inspect
 import json
+import math
 import os
 import re
 import sys
@@ -233,7 +234,7 @@ def _save_vecnormalize_callback(path: Path) -> Any:
     return SaveVecNormalize()
 
 
-def _eval_reporter(stream: Any = sys.stderr) -> Any:
+def _eval_reporter() -> Any:
     """One line per evaluation on stderr: stdout stays for the JSON summary."""
     from stable_baselines3.common.callbacks import BaseCallback
 
@@ -241,7 +242,7 @@ def _eval_reporter(stream: Any = sys.stderr) -> Any:
         def _on_step(self) -> bool:
             parent = self.parent
             print(f"eval @ {self.num_timesteps} steps: mean reward {parent.last_mean_reward:.3f} "
-                  f"(best {parent.best_mean_reward:.3f})", file=stream, flush=True)
+                  f"(best {parent.best_mean_reward:.3f})", file=sys.stderr, flush=True)
             return True
 
     return Report()
@@ -376,6 +377,4 @@ def train(cfg: TrainConfig, out_dir: str | Path, total_timesteps: int | None = N
 
 
 def _finite_or_none(x: float) -> float | None:
-    import math
-
     return float(x) if math.isfinite(x) else None

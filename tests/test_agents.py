@@ -16,7 +16,7 @@ import numpy as np
 import pytest
 
 from agents.baselines import FillagePolicy, RockingMachinePolicy, action_from_setpoints, setpoints_from_action
-from agents.evaluate import evaluate, fillage_index, load_model, make_policy, run_episode
+from agents.evaluate import evaluate, fillage_index, load_model, make_policy, policy_label, run_episode
 from agents.train import ENV_ID, checkpoints, make_env, parse_train_config, train
 from srenv.config import load_config
 
@@ -118,7 +118,7 @@ def test_train_save_reload_evaluate(tmp_path: Path) -> None:
     assert list((tmp_path / "tb").iterdir()), "no TensorBoard run written"
     res = evaluate([summary["model"], "rocking"], episodes=2, seed=500, env_kwargs=SHORT,
                    plot=tmp_path / "cards.png")
-    model = res["model"]
+    model = res[policy_label(summary["model"])]
     assert math.isfinite(model["mean_reward"]) and math.isfinite(model["mean_production_m3_day"])
     assert (tmp_path / "cards.png").stat().st_size > 10_000
 
@@ -170,7 +170,7 @@ def test_shipped_train_configs_parse() -> None:
 def test_cli_evaluate_last_line_is_json_with_reward() -> None:
     cmd = [sys.executable, "-m", "agents", "evaluate", "--policy", "rocking", "--policy", "fillage",
            "--episodes", "1", "--seed", "0", "--env-kwarg", "control__max_episode_steps=4"]
-    p = subprocess.run(cmd, capture_output=True, text=True, timeout=300)
+    p = subprocess.run(cmd, check=False, capture_output=True, text=True, timeout=300)
     assert p.returncode == 0, p.stderr
     lines = p.stdout.strip().splitlines()
     assert lines[0].startswith("| policy |")  # the markdown comparison table comes first
@@ -181,5 +181,18 @@ def test_cli_evaluate_last_line_is_json_with_reward() -> None:
 
 def test_cli_bad_model_path_exits_2() -> None:
     cmd = [sys.executable, "-m", "agents", "evaluate", "--policy", "no/such/model.zip", "--episodes", "1"]
-    p = subprocess.run(cmd, capture_output=True, text=True, timeout=300)
+    p = subprocess.run(cmd, check=False, capture_output=True, text=True, timeout=300)
     assert p.returncode == 2 and "no such model file" in p.stderr
+
+
+def test_episode_production_is_time_weighted() -> None:
+    from agents.evaluate import Episode
+
+    ep = Episode(seed=0, rewards=[1.0, 1.0])
+    ep.steps.update(production_m3_day=[10.0, 0.0], spm=[10.0, 5.0], pprl_n=[40e3, 50e3],
+                    goodman_max_pct=[30.0, 40.0], stick_slip_index=[1.0, 3.0])
+    m = ep.metrics()
+    # 6 s at 10 m3/day then 12 s at 0: a third of the time producing
+    assert m["production_m3_day"] == pytest.approx(10.0 / 3.0)
+    assert m["pprl_max_n"] == 50e3 and m["goodman_max_pct"] == 40.0 and m["stick_slip_index"] == 2.0
+    assert m["production_per_peak_load"] == pytest.approx(10.0 / 3.0 / 50.0)
