@@ -191,7 +191,8 @@ class ControlConfig:
     stroke_max_m: float = num(2.0, unit="m")
     spm_rate_limit: float = num(0.0, unit="strokes/min per step", check="nonneg", doc="0 = unlimited")
     strokes_per_step: int = num(1, unit="strokes", doc="control interval")
-    max_episode_steps: int = num(200, unit="steps")
+    max_episode_steps: int = num(400, unit="steps", doc="truncation by step count (a cap)")
+    max_episode_s: float = num(1000.0, unit="s", doc="truncation by simulated time (the episode's horizon)")
     randomize: bool = opt(True, doc="domain randomisation of well parameters on reset")
     randomize_fraction: float = num(0.1, unit="-", check="unit_interval")
 
@@ -205,6 +206,8 @@ class RewardConfig:
     pprl_rating_n: float = num(60000.0, unit="N")
     failure_penalty: float = num(50.0, unit="-", check="nonneg")
     failure_goodman_pct: float = num(130.0, unit="%", doc="rod failure (episode ends) above this Goodman loading")
+    reference_duration_s: float = num(10.0, unit="s", doc="rate terms are weighted by step duration / this, "
+                                      "so an episode's return integrates over time, not over strokes")
     production_scale_m3_day: float = num(10.0, unit="m^3/day", doc="production that earns one unit of reward "
                                          "times production_weight")
 

@@ -100,7 +100,7 @@ class SpringBlock:
         par[K.P_PUMP_LO], par[K.P_PUMP_HI] = -self.static_force_n, self.static_force_n
         par[K.P_PUMP_DROP] = self.static_force_n - self.kinetic_force_n
         par[K.P_PUMP_V0] = self.reference_velocity_m_s
-        par[K.P_KA], par[K.P_KC], par[K.P_EA0] = k, -k, k  # one element of stiffness k between top and block
+        par[K.P_KC], par[K.P_EA0] = -k, k  # one element of stiffness k between top and block
         ist = np.zeros(K.N_IST, dtype=np.int64)
         ist[K.I_MAXCORR], ist[K.I_DCMAX] = 8, dc_max_iterations
         ist[K.I_NONSMOOTH], ist[K.I_PUMP_NONMONO], ist[K.I_RECORD] = 1, 1, 1

@@ -43,6 +43,7 @@ class RunResult:
     qp_calls: int
     dc_iterations: int
     fillage: float
+    pumped_m3: float  # liquid lifted by the plunger in this run (fillage x upstroke x plunger area, summed)
     intake_pressure_pa: float
     rod_stick_episodes: np.ndarray
     element_force_max_eq_n: np.ndarray
@@ -340,6 +341,7 @@ class Simulator:
         events = []
         t0 = self.time_s
         fillage = self.fillage
+        self._pumped_m3 = 0.0
         while True:
             code = K.advance(par, ist, self.u, self.v, self.a, self.uav, va, t0,
                              ksd, kso, kd_f, ko_f, md_f, mo_f, cd_f, f_f, self._ea_len, self._fa, self._fw,
@@ -365,7 +367,7 @@ class Simulator:
             n_steps=n_steps, duration_s=n_steps * dt, spm=spm, stroke_length_m=stroke,
             certified_steps=int(ist[K.I_NCERT]), corrected_steps=int(ist[K.I_NCORR]),
             qp_steps=int(ist[K.I_NQP]), qp_calls=self.qp.stats.calls - qp_calls0,
-            dc_iterations=int(ist[K.I_NDC]), fillage=fillage,
+            dc_iterations=int(ist[K.I_NDC]), fillage=fillage, pumped_m3=self._pumped_m3,
             intake_pressure_pa=(self.annulus.intake_pressure_pa() if self.annulus else
                                 self.cfg.pump.intake_pressure_pa),
             rod_stick_episodes=stick[:-1].copy(), element_force_max_eq_n=emax, element_force_min_eq_n=emin, energy_j=self.energy_balance(), trace=trace, events=events)
@@ -411,10 +413,12 @@ class Simulator:
             if upstroke <= min_travel:
                 return fillage
             self._top_ub = float(par[K.P_UBMIN])
+            liquid_m = upstroke
             if self.annulus is not None:
                 liquid_m = min(self._liquid_stroke_m, upstroke)
                 self.annulus.take(plunger_area_m2(self.cfg.pump) * liquid_m, time_s)
                 fillage = liquid_m / upstroke
+            self._pumped_m3 += plunger_area_m2(self.cfg.pump) * liquid_m
             self._pump_phase = "down"
             par[K.P_UBMAX] = ub
             events.append(("top", time_s, ub, fillage))

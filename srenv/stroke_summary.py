@@ -12,7 +12,7 @@ import numpy as np
 
 from . import metrics
 from .fluid import tubing_pressure_pa
-from .pump import plunger_area_m2
+from .inflow import SECONDS_PER_DAY
 from .simulator import RunResult, Simulator, concat_traces
 
 # Smooth stroke-frequency curvature of du leaks through the moving average (metrics docstring);
@@ -57,7 +57,10 @@ def summarize(sim: Simulator, results: list[RunResult]) -> dict:
         [metrics.pump_stroke_m(r.trace["pump_position_m"]) for r in results]))
     fill = float(np.mean([r.fillage for r in results]))
     spm = results[-1].spm
-    production = metrics.production_m3_day(pump_stroke, plunger_area_m2(sim.cfg.pump), spm, fill)
+    # production = liquid actually lifted over the time it took (a stroke whose barrel only partly filled
+    # counts its liquid, not its swept volume; slow and fast strokes are weighed by their duration)
+    duration_s = sum(r.duration_s for r in results)
+    production = SECONDS_PER_DAY * sum(r.pumped_m3 for r in results) / duration_s
     du = tr["polished_rod_position_m"] - tr["pump_position_m"]  # u_B - u_A (both positive down)
     one = results[0] if n_strokes == 1 else None  # the env's case: skip the list reductions
     rod_eps = one.rod_stick_episodes if one else np.sum([r.rod_stick_episodes for r in results], axis=0)
@@ -76,6 +79,7 @@ def summarize(sim: Simulator, results: list[RunResult]) -> dict:
         "pump_stroke_m": pump_stroke,
         "fillage": fill,
         "production_m3_day": production,
+        "duration_s": duration_s,
         "card_work_j_per_stroke": card["card_area_j"] / n_strokes,
         "goodman_pct": goodman.tolist(),
         "goodman_max_pct": float(goodman.max()),

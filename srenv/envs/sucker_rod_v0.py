@@ -58,7 +58,8 @@ The stroke metrics of :func:`srenv.stroke_summary.summarize` (``pprl_n``, ``mprl
 Episode end
 -----------
 terminated: rod failure (Goodman loading above ``reward.failure_goodman_pct``) or an unrecoverable step-QP
-failure (``info["failure"]``, never raised from ``step``); truncated: ``control.max_episode_steps`` steps.
+failure (``info["failure"]``, never raised from ``step``); truncated: ``control.max_episode_s`` of simulated
+time (the horizon: returns are time integrals, see :mod:`srenv.reward`) or ``control.max_episode_steps``.
 If the solver fails before any stroke of the step completed, the metrics in ``info`` are the previous
 step's and only ``reward_failure`` is non-zero (nothing was produced or loaded in that step).
 
@@ -207,6 +208,7 @@ class SuckerRodEnv(gym.Env):
             m, failure = self._run_strokes()
             if m:
                 break
+        self._t0 = self.sim.time_s  # the warm-up stroke is not part of the episode's horizon
         if failure and not m:
             raise SolverFailure(0, 0.0, failure)  # the configured operating point itself cannot be run
         self._last = m
@@ -233,7 +235,9 @@ class SuckerRodEnv(gym.Env):
         reward = float(sum(terms.values()))
         self._steps += 1
         terminated = failure is not None
-        truncated = not terminated and self._steps >= self.cfg.control.max_episode_steps
+        ctl = self.cfg.control
+        truncated = not terminated and (self._steps >= ctl.max_episode_steps
+                                        or self.sim.time_s - self._t0 >= ctl.max_episode_s - 1e-9)
         info = self._info(m, failure)
         info.update(terms)
         if self.render_mode == "human":
