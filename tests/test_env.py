@@ -245,3 +245,16 @@ def test_solver_failure_mid_episode_ends_it_with_only_the_failure_term(monkeypat
     assert r == info["reward_failure"] == -env.cfg.reward.failure_penalty
     assert info["reward_production"] == info["reward_stick_slip"] == info["reward_peak_load"] == 0.0
     assert env.observation_space.contains(obs)
+
+
+def test_gearbox_overload_of_a_conventional_unit_joins_the_peak_load_penalty() -> None:
+    """Without counterweights the reducer is overloaded; the penalty carries relu(loading - 100) / 100."""
+    env = SuckerRodEnv(config="conventional_fig4", overrides={"surface.counterbalance_moment_nm": 0.0})
+    env.reset(seed=0, options={"randomize": False})
+    _, _, _, _, info = env.step(np.zeros(2, dtype=np.float32))
+    c = env.cfg.reward
+    assert info["gearbox_loading_pct"] > 100.0
+    w = info["duration_s"] / c.reference_duration_s
+    overload = (max(0.0, info["goodman_max_pct"] - c.goodman_limit_pct) + info["gearbox_loading_pct"] - 100) / 100
+    expected = -w * c.peak_load_weight * ((info["pprl_n"] / c.pprl_rating_n) ** 2 + overload)
+    assert info["reward_peak_load"] == pytest.approx(expected, rel=1e-12)
