@@ -370,7 +370,8 @@ class Simulator:
             dc_iterations=int(ist[K.I_NDC]), fillage=fillage, pumped_m3=self._pumped_m3,
             intake_pressure_pa=(self.annulus.intake_pressure_pa() if self.annulus else
                                 self.cfg.pump.intake_pressure_pa),
-            rod_stick_episodes=stick[:-1].copy(), element_force_max_eq_n=emax, element_force_min_eq_n=emin, energy_j=self.energy_balance(), trace=trace, events=events)
+            rod_stick_episodes=stick[:-1].copy(), element_force_max_eq_n=emax, element_force_min_eq_n=emin,
+            energy_j=self.energy_balance(), trace=trace, events=events)
 
     def _solve_qp(self, ksd, kso, dt, par, ist, step, time_s) -> None:
         w = self._work
