@@ -229,19 +229,20 @@ def advance(par, ist, u, v, a, uav, va_t, t0,
         # predictor and right-hand side (b0 = b* with the prescribed top column moved over).
         # v_n is read from prev_v, not v: within a step `v` holds the latest DC iterate or a failed
         # pattern solve, and b0 is rebuilt from scratch when the kernel resumes after a NEED_QP return.
+        # scratch until the DC loop fills them: rhs = u-tilde, b = predicted velocity v_n + dt(1-gamma)a_n
         for i in range(n):
             vp = prev_v[i] + dt * (1.0 - gamma) * a[i]
-            ut = u[i] + dt * prev_v[i] + dt * dt * (0.5 - beta) * a[i] - c2 * vp
-            rhs[i] = ut  # temporarily hold u-tilde
+            b[i] = vp
+            rhs[i] = u[i] + dt * prev_v[i] + dt * dt * (0.5 - beta) * a[i] - c2 * vp
             b0[i] = f[i] + c1 * md[i] * vp
         for i in range(n):
             ku = kd[i] * rhs[i]
             if i > 0:
                 ku += ko[i - 1] * rhs[i - 1]
-                b0[i] += c1 * mo[i - 1] * (prev_v[i - 1] + dt * (1.0 - gamma) * a[i - 1])
+                b0[i] += c1 * mo[i - 1] * b[i - 1]
             if i < n - 1:
                 ku += ko[i] * rhs[i + 1]
-                b0[i] += c1 * mo[i] * (prev_v[i + 1] + dt * (1.0 - gamma) * a[i + 1])
+                b0[i] += c1 * mo[i] * b[i + 1]
             b0[i] -= ku
         b0[0] -= par[P_KC] * ua_new + par[P_MC] * aa_new
         if ist[I_HAVEQP] == 0:

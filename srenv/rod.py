@@ -62,6 +62,15 @@ def tridiag_assemble(elem: np.ndarray, diag_w: float, off_w: float) -> tuple[np.
     return d, off_w * elem.copy()
 
 
+def solve_tridiagonal(diag: np.ndarray, off: np.ndarray, rhs: np.ndarray) -> np.ndarray:
+    """Solve the symmetric tridiagonal system (diag, off) x = rhs (rhs may have several columns)."""
+    from scipy.linalg import solve_banded
+
+    ab = np.zeros((3, len(diag)))
+    ab[0, 1:], ab[1], ab[2, :-1] = off, diag, off
+    return solve_banded((1, 1), ab, rhs)
+
+
 def stiffness(mesh: Mesh) -> tuple[np.ndarray, np.ndarray]:
     return tridiag_assemble(mesh.ea_n / mesh.length_m, 1.0, -1.0)
 

@@ -20,7 +20,15 @@ from .config import ConfigError, WellConfig
 from .fluid import tubing_pressure_pa
 from .inflow import Annulus
 from .pump import ValveLaw, plunger_area_m2, valve_law
-from .rod import GRAVITY_M_S2, build_mesh, damping, first_natural_frequency_hz, mass, stiffness
+from .rod import (
+    GRAVITY_M_S2,
+    build_mesh,
+    damping,
+    first_natural_frequency_hz,
+    mass,
+    solve_tridiagonal,
+    stiffness,
+)
 from .step_qp import StepQP
 from .surface import SurfaceMotion
 from .survey import Survey
@@ -213,11 +221,7 @@ class Simulator:
         kd, ko = self._k
         rhs = self._f_all[1:].copy()
         rhs[-1] += self.law.down_eq_n  # the plunger pulls down with P+_eq
-        from scipy.linalg import solve_banded
-
-        ab = np.zeros((3, n))
-        ab[0, 1:], ab[1], ab[2, :-1] = ko[1:], kd[1:], ko[1:]
-        self.u = solve_banded((1, 1), ab, rhs)
+        self.u = solve_tridiagonal(kd[1:], ko[1:], rhs)
         self.v = np.zeros(n)
         self.a = np.zeros(n)
         ea0 = self._ea_len[0]

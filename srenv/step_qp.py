@@ -19,10 +19,10 @@ from dataclasses import dataclass, field
 
 import numpy as np
 import qpsolvers
-from scipy.linalg import solve_banded
 from scipy.sparse import csc_matrix
 
 from .errors import SolverFailure
+from .rod import solve_tridiagonal
 
 FALLBACK_ORDER = ("proxqp", "clarabel", "osqp", "piqp", "daqp", "highs")
 SPARSE_BACKENDS = ("osqp", "clarabel", "piqp", "highs", "scs", "ecos")
@@ -65,12 +65,7 @@ class StepQP:
     def inverse(self, ksd: np.ndarray, kso: np.ndarray, dt: float) -> np.ndarray:
         inv = self._inv.get(dt)
         if inv is None:
-            n = len(ksd)
-            ab = np.zeros((3, n))
-            ab[0, 1:] = kso
-            ab[1] = ksd
-            ab[2, :-1] = kso
-            inv = solve_banded((1, 1), ab, np.eye(n))
+            inv = solve_tridiagonal(ksd, kso, np.eye(len(ksd)))
             if len(self._inv) > 8:  # the env varies dt slightly with SPM: keep a few
                 self._inv.pop(next(iter(self._inv)))
             self._inv[dt] = inv
