@@ -118,6 +118,8 @@ class IntervalRunner:
         self.spm_min = cfg.control.spm_min
         self.stiffness = string_stiffness_n_m(sim)
         self.running = True  # the unit is turning (False after an idle stretch: the next run restarts from rest)
+        self._setpoint: tuple[float, float] | None = None
+        self._restart = False
 
     def _figures(self, r: RunResult) -> StrokeFigures:
         return stroke_figures(self.sim, r, self.econ.fatigue_life_cycles, self.econ.fatigue_exponent,
@@ -128,10 +130,15 @@ class IntervalRunner:
         return self._figures(self.sim.run_stroke(spm, stroke_m, record=True))
 
     def run(self, avg_spm: float, stroke_m: float, duration_s: float,
-            exact_strokes_max: int | None = None) -> IntervalResult:
+            exact_strokes_max: int | None = None, fast_forward: bool = True) -> IntervalResult:
+        """One interval; ``fast_forward=False`` simulates every stroke exactly (the reference the quasi-steady
+        fast-forward is measured against)."""
         sim = self.sim
         ann = sim.annulus
         exact_max = self.task.exact_strokes_max if exact_strokes_max is None else exact_strokes_max
+        self._fast_forward = fast_forward
+        if not fast_forward:
+            exact_max = 10**9
         res = IntervalResult(duration_s=duration_s)
         t0 = sim.time_s
         res.annulus_start_m3 = ann.volume_m3 if ann is not None else 0.0
@@ -143,7 +150,8 @@ class IntervalRunner:
             res.pumping_s = duration_s * min(1.0, avg_spm / self.spm_min)
             period = 60.0 / spm
             n_total = res.pumping_s / period
-            if not self.running:
+            self._restart = not self.running
+            if self._restart:
                 sim.replan_upstroke(period)
             self.running = True
             self._pump(res, spm, stroke_m, period, n_total, exact_max)
@@ -152,15 +160,22 @@ class IntervalRunner:
                 sim.stop_at_bottom()
                 self.running = False
             sim.idle(t0 + duration_s - sim.time_s)
+        if ann is not None:
+            ann.accumulate(sim.time_s)  # the annulus is otherwise booked at valve events only
         res.annulus_end_m3 = ann.volume_m3 if ann is not None else 0.0
         res.inflow_m3 = res.annulus_end_m3 - res.annulus_start_m3 + res.lifted_m3
         return res
 
-    def _add(self, res: IntervalResult, f: StrokeFigures, w: float, lifted_m3: float, displaced_m3: float) -> None:
+    def _add(self, res: IntervalResult, f: StrokeFigures, w: float, lifted_m3: float, displaced_m3: float,
+             costs: bool = True) -> None:
         res.strokes += w
         res.lifted_m3 += lifted_m3
         res.displaced_m3 += displaced_m3
         res.work_j += w * f.work_j
+        if costs:
+            self._add_costs(res, f, w)
+
+    def _add_costs(self, res: IntervalResult, f: StrokeFigures, w: float) -> None:
         res.damage += w * f.damage
         res.stick_slip_j += w * f.stick_slip_j
         res.impact_sq_sum += w * f.impact_m_s ** 2
@@ -178,8 +193,16 @@ class IntervalRunner:
         done = 0.0
         exact: list[StrokeFigures] = []
         need_exact = True
+        # The simulator switches the setpoint at a stroke boundary, a VSD ramps it over seconds: the first stroke
+        # after a change rings with the step change. Its liquid and work count as simulated; its costs (peaks,
+        # stick-slip, pound, fatigue) are those of the next, settled stroke when there is one.
+        setpoint = (spm, stroke_m)
+        transient_w = 0.0 if setpoint == self._setpoint and not self._restart else None
+        self._setpoint = setpoint
         while done < n_total - 1e-9:
             remaining = n_total - done
+            if not self._fast_forward and remaining >= 1.0 - 1e-9:
+                need_exact = True
             if need_exact and len(exact) < max(exact_max, 1) and (remaining >= 1.0 - 1e-9 or not exact):
                 r = sim.run_stroke(spm, stroke_m, record=True)
                 f = self._figures(r)
@@ -188,7 +211,14 @@ class IntervalRunner:
                 if w < 1.0 and ann is not None:  # only part of this stroke belongs to the interval
                     ann.volume_m3 += (1.0 - w) * lifted
                     lifted *= w
-                self._add(res, f, w, lifted, w * f.displacement_m3)
+                if transient_w is None:  # the first stroke after a change: its costs wait for the next one
+                    self._add(res, f, w, lifted, w * f.displacement_m3, costs=False)
+                    transient_w = w
+                else:
+                    self._add(res, f, w, lifted, w * f.displacement_m3)
+                    if transient_w > 0:
+                        self._add_costs(res, f, transient_w)
+                        transient_w = 0.0
                 for k in res.solver:
                     res.solver[k] += int(f.summary[k])
                 res.exact_strokes += 1
@@ -197,7 +227,7 @@ class IntervalRunner:
                 if len(exact) >= 2:
                     a, b = exact[-2].summary, exact[-1].summary
                     e1, e2 = exact[-2].stick_slip_j, exact[-1].stick_slip_j
-                    need_exact = not (abs(exact[-1].fillage - exact[-2].fillage) < 0.01
+                    need_exact = not self._fast_forward or not (abs(exact[-1].fillage - exact[-2].fillage) < 0.01
                                       and abs(b["pprl_n"] / a["pprl_n"] - 1.0) < 0.005
                                       and abs(e2 - e1) <= 0.1 * max(e1, e2) + 1.0)
                 continue
@@ -219,5 +249,7 @@ class IntervalRunner:
             if (abs(fill - f.fillage) > self.task.fast_forward_fillage_tol and len(exact) < exact_max):
                 sim.replan_upstroke(period)
                 need_exact = True
+        if transient_w and exact:  # no settled stroke followed: the transient stroke prices itself
+            self._add_costs(res, exact[0], transient_w)
         res.last = exact[-1] if exact else None
         sim.replan_upstroke(period)

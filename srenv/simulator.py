@@ -421,7 +421,9 @@ class Simulator:
             liquid_m = upstroke
             if self.annulus is not None:
                 liquid_m = min(self._liquid_stroke_m, upstroke)
-                self.annulus.take(plunger_area_m2(self.cfg.pump) * liquid_m, time_s)
+                # book what the annulus actually gave: the plan at the bottom predicted the inflow of the
+                # upstroke, and the pump cannot lift liquid the annulus does not hold (mass conservation)
+                liquid_m *= self.annulus.take(plunger_area_m2(self.cfg.pump) * liquid_m, time_s)
                 fillage = liquid_m / upstroke
             self._pumped_m3 += plunger_area_m2(self.cfg.pump) * liquid_m
             self._pump_phase = "down"
@@ -461,6 +463,8 @@ class Simulator:
         """The unit stops at the bottom of a stroke: the string settles to its static state (plunger at rest
         holding P+); the annulus contents and the clock are kept."""
         t = self.time_s
+        if self.annulus is not None:
+            self.annulus.accumulate(t)  # the inflow since the stroke's last valve event
         vol = self.annulus.volume_m3 if self.annulus is not None else 0.0
         self.reset(self.annulus.level_m if self.annulus is not None else None)
         self.time_s = t
