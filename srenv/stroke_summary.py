@@ -1,6 +1,8 @@
 """Per-stroke summary: composes ``metrics`` (pure functions on traces) with a simulator run.
 
-This is where a run's raw records become the numbers users read: PPRL/MPRL, pump stroke, fillage,
+This is where a run's raw records become the numbers users read: PPRL/MPRL (``pprl_n``/``mprl_n`` over
+every stroke of the run, start-up included; ``last_stroke_pprl_n``/``last_stroke_mprl_n`` of the last
+stroke only, the periodic state a measured card is compared with), pump stroke, fillage,
 production, Goodman loading per taper, card work, stick-slip index and the solver path counts; with a
 conventional beam unit also the gearbox torque, its loading against the reducer rating and the
 polished-rod and motor power (``gearbox.py``).
@@ -52,7 +54,9 @@ def summarize(sim: Simulator, results: list[RunResult]) -> dict:
     tr = results[0].trace if len(results) == 1 else concat_traces(results)
     n_strokes = len(results)
     pos, load = tr["polished_rod_position_m"], tr["polished_rod_load_n"]
-    card = metrics.card_metrics(pos, load)
+    card = metrics.card_metrics(pos, load)  # every stroke, start-up included
+    last = card if n_strokes == 1 else metrics.card_metrics(results[-1].trace["polished_rod_position_m"],
+                                                            results[-1].trace["polished_rod_load_n"])
     pump_stroke = metrics.pump_stroke_m(tr["pump_position_m"]) if n_strokes == 1 else float(np.mean(
         [metrics.pump_stroke_m(r.trace["pump_position_m"]) for r in results]))
     fill = float(np.mean([r.fillage for r in results]))
@@ -75,6 +79,8 @@ def summarize(sim: Simulator, results: list[RunResult]) -> dict:
         "spm": spm,
         "pprl_n": card["pprl_n"],
         "mprl_n": card["mprl_n"],
+        "last_stroke_pprl_n": last["pprl_n"],  # the periodic stroke a measured card compares with
+        "last_stroke_mprl_n": last["mprl_n"],
         "polished_rod_stroke_m": card["stroke_m"],
         "pump_stroke_m": pump_stroke,
         "fillage": fill,
