@@ -168,6 +168,9 @@ def build_parser() -> argparse.ArgumentParser:
     from .diagnose import add_parser as add_diagnose  # field engineering (docs/field.md)
 
     add_diagnose(sub)
+    from .fit import add_parser as add_fit
+
+    add_fit(sub)
     return p
 
 
