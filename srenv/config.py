@@ -140,7 +140,8 @@ class PumpConfig:
 
 @dataclass(frozen=True)
 class SurfaceConfig:
-    motion: str = choice("harmonic", ("harmonic", "conventional", "pullout"))
+    motion: str = choice("harmonic", ("harmonic", "conventional", "pullout", "measured"),
+                         "measured: the polished-rod position of surface.measured_card_csv (docs/field.md)")
     spm: float = num(6.0, unit="strokes/min")
     stroke_length_m: float = num(2.4, unit="m")
     pull_velocity_m_s: float = num(0.1, unit="m/s", doc="pull-out: constant upward speed of the top")
@@ -153,6 +154,10 @@ class SurfaceConfig:
                                            doc="conventional: lead of the counterweight arm over the pin")
     motor_efficiency: float = num(0.85, unit="-",
                                   doc="conventional: crank-shaft power / electric input, in (0, 1]")
+    measured_card_csv: str = opt("", doc="measured: CSV with t_s, polished_rod_position_m (one stroke or "
+                                 "more; the last full stroke is used); a relative path is from the working directory")
+    measured_spm: float = num(0.0, unit="strokes/min", check="nonneg",
+                              doc="measured: the card's stroke rate; 0 = from its t_s column (required without one)")
 
 
 @dataclass(frozen=True)
@@ -378,6 +383,10 @@ def _check_consistency(cfg: WellConfig) -> None:
         raise ConfigError("survey.stations[0].md_m", st[0].md_m, "0 m (the survey starts at the surface)")
     if cfg.surface.motion == "conventional":
         _check_conventional_unit(cfg.surface)
+    if cfg.surface.motion == "measured":  # a bad card file is refused at load time, before any work
+        from .measured_motion import load_measured_motion
+
+        load_measured_motion(cfg.surface.measured_card_csv, cfg.surface.measured_spm)
     c = cfg.control
     if c.spm_min >= c.spm_max:
         raise ConfigError("control.spm_max", c.spm_max, f"strokes/min above control.spm_min = {c.spm_min}")
