@@ -256,6 +256,11 @@ class TaskConfig:
     inflow_step_fraction: float = num(0.0, unit="-", check="any",
                                       doc="fixed-well scenario: step of the inflow multiplier at mid-episode")
     failure_goodman_pct: float = num(150.0, unit="%", doc="rod failure above this Goodman loading")
+    fillage_estimator: str = choice("pump_card", ("pump_card", "diagnose", "surface"),
+                                    "the controller's fillage: read off the downhole card (pump_card: the "
+                                    "simulated one, a perfect diagnostic; diagnose: Gibbs' method on the surface "
+                                    "card, ~10 ms per interval; surface: the surface card's load drop, which deep "
+                                    "wells' rod dynamics hide)")
 
 
 @dataclass(frozen=True)

@@ -88,6 +88,22 @@ def string_stiffness_n_m(sim: Simulator) -> float:
     return float(1.0 / np.sum(sim.mesh.length_m / sim.mesh.ea_n))
 
 
+def controller_fillage(sim: Simulator, summary: dict, tr: dict) -> float:
+    """The fillage a pump-off controller reads (``task.fillage_estimator``): off the downhole card as modern
+    controllers compute it, or off the surface card."""
+    how = sim.cfg.task.fillage_estimator
+    if how == "pump_card":
+        return float(summary["card_fillage"])
+    if how == "diagnose":
+        from .diagnose import diagnose_card
+        from .pump_card import analyse_pump_card
+
+        pc = diagnose_card(sim.cfg, tr["t_s"], tr["polished_rod_position_m"], tr["polished_rod_load_n"],
+                           period_s=float(tr["t_s"][-1] - tr["t_s"][0] + (tr["t_s"][1] - tr["t_s"][0])))
+        return float(analyse_pump_card(pc.pump_position_m, pc.pump_load_n)["fillage"])
+    return cf.fillage_estimate(tr["polished_rod_position_m"], tr["polished_rod_load_n"])
+
+
 def stroke_figures(sim: Simulator, r: RunResult, fatigue_life: float, fatigue_exponent: float,
                    stiffness_n_m: float) -> StrokeFigures:
     m = summarize(sim, [r])
@@ -99,7 +115,7 @@ def stroke_figures(sim: Simulator, r: RunResult, fatigue_life: float, fatigue_ex
                                              tr["polished_rod_load_n"], tr["t_s"])
     return StrokeFigures(
         summary=m, trace=tr, lifted_m3=r.pumped_m3, displacement_m3=disp, fillage=r.fillage,
-        fillage_est=cf.fillage_estimate(tr["polished_rod_position_m"], tr["polished_rod_load_n"]),
+        fillage_est=controller_fillage(sim, m, tr),
         work_j=m["card_work_j_per_stroke"], damage=(g / 100.0) ** fatigue_exponent / fatigue_life,
         stick_slip_j=cf.stick_slip_energy_j(tr["pump_position_m"], tr["pump_velocity_m_s"], tr["pump_load_n"],
                                             stiffness_n_m),

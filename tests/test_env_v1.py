@@ -248,3 +248,20 @@ def test_obs_index_names_the_layout() -> None:
     assert obs[obs_index("time_remaining", "privileged")] == pytest.approx(1.0)
     assert 0.0 <= obs[obs_index("fillage_est")] <= 1.0
     assert obs[obs_index("level", "privileged")] > 0
+
+
+def test_controller_fillage_sees_pump_off_and_the_gibbs_diagnostic_agrees() -> None:
+    """Pumped off at the top of the range: the controller's (downhole-card) fillage drops with the true fillage,
+    and Gibbs' diagnostic of the surface card reads the same card within 0.05."""
+    readings = {}
+    for how in ("pump_card", "diagnose"):
+        env = SuckerRodV1Env(scenario="train", task__fillage_estimator=how)
+        env.reset(seed=1)
+        full = env.step(np.array([1.0, 1.0], np.float32))[4]["fillage_est"]
+        env.sim.annulus.volume_m3 = 0.0  # pumped off
+        env.runner.running = True
+        info = [env.step(np.array([1.0, 1.0], np.float32))[4] for _ in range(3)][-1]
+        readings[how] = (full, info["fillage_est"], info["fillage"])
+    full, off, true = readings["pump_card"]
+    assert full > 0.9 and off < 0.5 and true < 0.5
+    assert abs(readings["diagnose"][1] - off) < 0.05
