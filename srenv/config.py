@@ -23,7 +23,6 @@ import yaml
 
 from .errors import ConfigError, short_repr
 
-
 # Bounds on what a YAML document may ask of the loader (a config is a few hundred nodes; see
 # docs/reliability.md): bytes read, nesting depth, and nodes after alias expansion - a 600-byte "billion
 # laughs" document expands to millions of nodes, and anything walking or printing it would do that work.
