@@ -667,9 +667,20 @@ def to_dict(cfg: Any) -> Any:
     return cfg
 
 
+def _range_doc(meta: Any) -> str:
+    """The accepted range of a numeric field, as in its error message ('' for non-numeric fields)."""
+    if "check" not in meta:
+        return ""
+    lo_by_check = {"positive": "(0", "nonneg": "[0", "unit_interval": "[0", "angle": "[0", "azimuth": "[-360"}
+    hi_by_check = {"unit_interval": "1]", "angle": "180]", "azimuth": "360]"}
+    lo = f"[{meta['lo']:g}" if "lo" in meta else lo_by_check.get(meta["check"], "(-inf")
+    hi = f"{meta['hi']:g}]" if "hi" in meta else hi_by_check.get(meta["check"], "inf)")
+    return f"{lo}, {hi}"
+
+
 def config_doc() -> str:
     """Markdown table of every config field with unit, default and meaning."""
-    lines = ["| field | unit | default | meaning |", "|---|---|---|---|"]
+    lines = ["| field | unit | default | range | meaning |", "|---|---|---|---|---|"]
 
     def walk(cls: type, prefix: str) -> None:
         hints = typing.get_type_hints(cls)
@@ -681,14 +692,14 @@ def config_doc() -> str:
                 continue
             if typing.get_origin(tp) is tuple:
                 item = typing.get_args(tp)[0]
-                lines.append(f"| `{key}` | list | [] | {f.metadata.get('doc', '')} |")
+                lines.append(f"| `{key}` | list | [] | | {f.metadata.get('doc', '')} |")
                 walk(item, key + "[i].")
                 continue
             default = "required" if f.default is dataclasses.MISSING else repr(f.default)
             doc = f.metadata.get("doc", "")
             if "options" in f.metadata:
                 doc = (doc + "; " if doc else "") + "one of " + ", ".join(f.metadata["options"])
-            lines.append(f"| `{key}` | {f.metadata.get('unit', '')} | {default} | {doc} |")
+            lines.append(f"| `{key}` | {f.metadata.get('unit', '')} | {default} | {_range_doc(f.metadata)} | {doc} |")
 
     walk(WellConfig, "")
     return "\n".join(lines)
