@@ -1,6 +1,7 @@
 """Stable-Baselines3 training from an rl-zoo3-style hyperparameter YAML.
 
-One YAML file describes one run (read with ``yaml.safe_load``; nothing in it is evaluated as code)::
+One YAML file describes one run (read with srenv's bounded safe loader, duplicate keys refused; nothing in
+it is evaluated as code, and ``env_id`` must be an id srenv registers)::
 
     algo: ppo                      # ppo | sac | a2c | td3
     env_kwargs: {config: default}  # passed to gymnasium.make("srenv/SuckerRod-v0", **env_kwargs)
@@ -17,9 +18,11 @@ One YAML file describes one run (read with ``yaml.safe_load``; nothing in it is 
     learning_rate: lin_3.0e-4      # every other key is an algorithm keyword argument
     ...
 
-Outputs in ``--out DIR``: ``model.zip`` + ``model_vecnormalize.pkl`` (the normalisation statistics are
-part of the policy: without them the network sees unscaled inputs), ``best/best_model.zip`` +
-``best/best_model_vecnormalize.pkl`` (EvalCallback), ``checkpoints/`` (model, VecNormalize and, for
+Outputs in ``--out DIR``: ``model.zip`` + ``model_vecnormalize.json`` (the normalisation statistics are
+part of the policy: without them the network sees unscaled inputs; JSON so that evaluation reads them
+without unpickling, the ``.pkl`` beside it is for resuming), ``best/best_model.zip`` +
+``best/best_model_vecnormalize.json`` / ``.pkl`` + ``best/best_model.json`` (EvalCallback; its best mean
+reward), ``checkpoints/`` (model, VecNormalize and, for
 off-policy algorithms, replay buffer every ``checkpoint_freq`` steps), ``tb/`` (TensorBoard) and
 ``train_config.json`` (the resolved configuration). ``--resume`` continues from the newest readable
 checkpoint with its statistics and the step count carried on (``reset_num_timesteps=False``).

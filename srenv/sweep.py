@@ -397,7 +397,7 @@ def plot(rows: list[dict[str, Any]], value_column: str, critical: list[dict[str,
 # ----------------------------------------------------------------------------------------------- CLI
 def cmd_sweep(args: argparse.Namespace) -> int:
     from .cli import check_output_path
-    from .config import MAX_RUN_SAMPLES, config_from_dict, load_config
+    from .config import MAX_RUN_SAMPLES, config_from_dict
     from .simulator import Simulator
 
     check_output_path("--out", args.out, (".csv",))
@@ -409,11 +409,11 @@ def cmd_sweep(args: argparse.Namespace) -> int:
     if len(sets) * len(values) > MAX_CASES:
         raise ConfigError("--values", args.values, f"at most {MAX_CASES} cases in all (--values times the "
                           f"parameter sets; this study has {len(sets) * len(values)})")
-    dt = load_config(args.config, args.set).simulation.time_step_s
+    cases = build_cases(args.config, args.param, values, args.set, sets)
+    dt = min(config_from_dict(c.raw).simulation.time_step_s for c in cases)
     if args.duration_s / dt > MAX_RUN_SAMPLES:
         raise ConfigError("--duration-s", args.duration_s, f"a duration in s of at most {MAX_RUN_SAMPLES} "
                           f"time steps per case (at most {MAX_RUN_SAMPLES * dt:g} s at {dt:g} s per step)")
-    cases = build_cases(args.config, args.param, values, args.set, sets)
     # one simulator per set, here in the driver: shows the convexity warning once and sizes the
     # moving-average window (one natural period) against the measured part of the run
     for si in range(len(sets)):

@@ -153,6 +153,32 @@ def test_bad_simulate_input_is_one_line_exit_2(args: list[str], needles: list[st
     _assert_refused(ex.value.code, capsys.readouterr().err, workdir, *needles)
 
 
+FIG7 = "paper_fig7_pullout"
+SWEEP = ["--param", "surface.pull_velocity_m_s", "--serial"]
+SWEEP_CASES = [  # (id, config, further arguments, substrings of the one line)
+    ("duration-too-many-steps", FIG7, ["--values", "0.5,3", "--duration-s", "1e5"],
+     ["--duration-s", "1000000 time steps"]),
+    ("duration-huge", FIG7, ["--values", "0.5,3", "--duration-s", "1e300"], ["--duration-s", "at most"]),
+    ("too-many-cases", FIG7, ["--values", ",".join(str(0.01 * (i + 1)) for i in range(101)), "--grid",
+                              "pump.reference_velocity_m_s=" + ",".join(str(0.1 * (i + 1)) for i in range(100))],
+     ["--values", "at most 10000 cases"]),
+    ("plot-suffix", FIG7, ["--values", "0.5,3", "--plot", "x.jpg"], ["--plot", ".png"]),
+    ("out-directory", FIG7, ["--values", "0.5,3", "--out", "dir.csv"], ["--out", "directory"]),
+    ("missing-config-path", "/no/such/paper_fig7_pullout.yaml", ["--values", "0.5,3"], ["config", "no such file"]),
+]
+
+
+@pytest.mark.parametrize(("config", "args", "needles"), [pytest.param(c, a, n, id=i) for i, c, a, n in SWEEP_CASES])
+def test_bad_sweep_input_is_one_line_exit_2(config: str, args: list[str], needles: list[str], workdir: Path,
+                                            capsys: pytest.CaptureFixture, monkeypatch: pytest.MonkeyPatch) -> None:
+    monkeypatch.chdir(workdir)
+    argv = ["sweep", config, *SWEEP, *args, *([] if "--out" in args else ["--out", "out.csv"]),
+            *([] if "--duration-s" in args else ["--duration-s", "5"])]
+    with pytest.raises(SystemExit) as ex:
+        raise SystemExit(main(argv))
+    _assert_refused(ex.value.code, capsys.readouterr().err, workdir, *needles)
+
+
 def test_error_values_are_truncated() -> None:
     nested: list = ["lol"] * 9
     for _ in range(7):
