@@ -157,6 +157,20 @@ def parse_train_config(data: Any, source: str = "<dict>") -> TrainConfig:
         save_replay_buffer=bool(data.get("save_replay_buffer", True)), vec_env=vec_env,
         algo_kwargs={k: _yaml12_float(v) for k, v in data.items() if k not in _HARNESS_KEYS},
     )
+    # keywords the harness passes itself: verbose / device may override its defaults, the others may not
+    for key in ("tensorboard_log", "_init_setup_model"):
+        _expect(key not in cfg.algo_kwargs, key, cfg.algo_kwargs.get(key), "no value (set by the harness)")
+    if "verbose" in cfg.algo_kwargs:
+        v = cfg.algo_kwargs["verbose"]
+        _expect(v in (0, 1, 2) and not isinstance(v, bool), "verbose", v, "0, 1 or 2")
+    if "device" in cfg.algo_kwargs:
+        d = cfg.algo_kwargs["device"]
+        _expect(isinstance(d, str) and re.fullmatch(r"cpu|auto|cuda(:\d+)?", d) is not None, "device", d,
+                "cpu, auto or cuda[:N]")
+        if d.startswith("cuda"):
+            import torch
+
+            _expect(torch.cuda.is_available(), "device", d, "cpu or auto (no CUDA device here)")
     # Unknown keys would otherwise surface as a TypeError deep inside SB3, far from the YAML line.
     accepted = set(inspect.signature(algorithms()[algo].__init__).parameters) - {"self", "policy", "env"}
     for key in sorted(set(cfg.algo_kwargs) - accepted):
@@ -389,10 +403,9 @@ def train(cfg: TrainConfig, out_dir: str | Path, total_timesteps: int | None = N
         if resume:
             log(f"resume: no checkpoint in {out / 'checkpoints'}, starting from scratch")
         venv = VecNormalize(venv_raw, **cfg.normalize) if cfg.normalize is not None else venv_raw
-        kwargs = {k: schedule(v) for k, v in cfg.algo_kwargs.items()}
+        kwargs = {"device": "cpu", "verbose": 0, **{k: schedule(v) for k, v in cfg.algo_kwargs.items()}}
         model = algorithms()[cfg.algo](cfg.policy, venv, policy_kwargs=build_policy_kwargs(cfg.policy_kwargs),
-                                       tensorboard_log=str(out / "tb"), seed=cfg.seed, device="cpu",
-                                       verbose=0, **kwargs)
+                                       tensorboard_log=str(out / "tb"), seed=cfg.seed, **kwargs)
     if cfg.normalize is not None:
         # evaluation sees normalised observations but raw rewards; EvalCallback syncs the statistics
         eval_env = VecNormalize(eval_env, training=False, norm_obs=cfg.normalize.get("norm_obs", True),

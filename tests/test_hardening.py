@@ -428,6 +428,9 @@ TRAIN_CASES = [
     ("env-id-module-import", _smoke_yaml("env_id: 'evilmod:Env-v0'\n"), ["env_id", "evilmod:Env-v0", "srenv/"]),
     ("env-id-foreign", _smoke_yaml("env_id: CartPole-v1\n"), ["env_id", "CartPole-v1"]),
     ("seed-string", _smoke_yaml("seed: abc\n"), ["seed", "integer seed"]),
+    ("verbose-bad", _smoke_yaml("verbose: 7\n"), ["verbose", "0, 1 or 2"]),
+    ("device-bad", _smoke_yaml("device: tpu\n"), ["device", "cpu, auto"]),
+    ("tensorboard-log", _smoke_yaml("tensorboard_log: /tmp/x\n"), ["tensorboard_log", "harness"]),
 ]
 
 
@@ -498,3 +501,10 @@ def test_a_resumed_run_does_not_replace_a_better_best_model(tmp_path: Path) -> N
     assert summary["num_timesteps"] >= 64
     assert (best / "best_model.zip").read_bytes() == b"the better model"
     assert (tmp_path / "model_vecnormalize.json").is_file()  # evaluation's non-pickle statistics
+
+
+def test_verbose_and_device_given_once_override_the_harness_defaults() -> None:
+    from agents.train import parse_train_config
+
+    cfg = parse_train_config({"algo": "ppo", "verbose": 1, "device": "cpu"})
+    assert cfg.algo_kwargs == {"verbose": 1, "device": "cpu"}
