@@ -136,6 +136,13 @@ class PumpConfig:
     law: str = choice("constant", ("constant", "nonmonotone"), "plunger upstroke law (paper eq. 32)")
     dynamic_load_n: float = num(7090.0, unit="N", check="any", doc="P_inf of the nonmonotone law (true load)")
     reference_velocity_m_s: float = num(1.0, unit="m/s", doc="v0 of the nonmonotone law")
+    intake_gas_fraction: float = num(0.0, unit="-", check="unit_interval",
+                                     doc="free-gas volume fraction of the intake mixture at p_in (gas interference)")
+    intake_glr_m3_m3: float = num(0.0, unit="m^3/m^3", check="nonneg",
+                                  doc="free gas-liquid ratio at standard conditions (instead of the fraction)")
+    gas_polytropic_exponent: float = num(1.0, unit="-", doc="k of p V^k = const in the chamber (1 = isothermal)")
+    clearance_volume_fraction: float = num(0.05, unit="-", check="nonneg",
+                                           doc="unswept chamber volume / swept volume at surface.stroke_length_m")
 
 
 @dataclass(frozen=True)
@@ -324,6 +331,18 @@ def _check_consistency(cfg: WellConfig) -> None:
         if not p.downstroke_load_n < p.dynamic_load_n <= p.upstroke_load_n:
             raise ConfigError("pump.dynamic_load_n", p.dynamic_load_n,
                               "a load in N between pump.downstroke_load_n and pump.upstroke_load_n")
+    if p.intake_gas_fraction > 0 or p.intake_glr_m3_m3 > 0:
+        if p.intake_gas_fraction > 0 and p.intake_glr_m3_m3 > 0:
+            raise ConfigError("pump.intake_glr_m3_m3", p.intake_glr_m3_m3,
+                              "0 when pump.intake_gas_fraction is given (one measure of the free gas)")
+        if p.intake_gas_fraction >= 1:
+            raise ConfigError("pump.intake_gas_fraction", p.intake_gas_fraction, "a fraction below 1")
+        if p.load_source != "pressures" or p.law != "constant":
+            raise ConfigError("pump.load_source", p.load_source, "'pressures' with pump.law 'constant' when the "
+                              "intake carries free gas (the chamber pressure sets the plunger load)")
+        if p.gas_polytropic_exponent < 1:
+            raise ConfigError("pump.gas_polytropic_exponent", p.gas_polytropic_exponent,
+                              "an exponent >= 1 (1 isothermal, 1.3 adiabatic natural gas)")
     f = cfg.friction
     if f.law == "nonmonotone" and f.kinetic_coefficient > f.coefficient:
         raise ConfigError("friction.kinetic_coefficient", f.kinetic_coefficient,
