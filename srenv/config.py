@@ -77,6 +77,20 @@ class TaperConfig:
     density_kg_m3: float = num(7850.0, unit="kg/m^3")
     coupling_mass_kg_per_m: float = num(0.0, unit="kg/m", check="nonneg",
                                         doc="couplings / sinker-bar extra mass smeared per metre")
+    material: str = choice("steel", ("steel", "fiberglass", "sinker_bar"),
+                           "fiberglass / sinker_bar: E, density and strength default to the material's "
+                           "(MATERIAL_DEFAULTS) unless given")
+    tensile_strength_pa: float = num(0.0, unit="Pa", check="nonneg",
+                                     doc="T for Goodman; 0 = from the grade (steel, sinker bar) or the material")
+
+
+# Per-material defaults filled in for fields a taper does not give (config_from_dict). Fiberglass: a typical
+# API 11C rod body (E 48 GPa ~ 7e6 psi, 2 000 kg/m^3 with its steel end fittings smeared, 690 MPa); sinker
+# bars are steel (the grade sets T).
+MATERIAL_DEFAULTS: dict[str, dict[str, float]] = {
+    "fiberglass": {"youngs_modulus_pa": 4.8e10, "density_kg_m3": 2000.0, "tensile_strength_pa": 6.9e8},
+    "sinker_bar": {"youngs_modulus_pa": 2.0e11, "density_kg_m3": 7850.0},
+}
 
 
 @dataclass(frozen=True)
@@ -165,6 +179,9 @@ class SurfaceConfig:
                                  "more; the last full stroke is used); a relative path is from the working directory")
     measured_spm: float = num(0.0, unit="strokes/min", check="nonneg",
                               doc="measured: the card's stroke rate; 0 = from its t_s column (required without one)")
+    stuffing_box_friction_n: float = num(0.0, unit="N", check="nonneg",
+                                         doc="Coulomb friction of the polished rod in the stuffing box (adds to "
+                                         "the load going up, subtracts going down)")
 
 
 @dataclass(frozen=True)
@@ -225,6 +242,16 @@ class RewardConfig:
 
 
 @dataclass(frozen=True)
+class TubingConfig:
+    anchored: bool = opt(True, doc="false: the tubing stretches under the fluid load (shortens the pump stroke)")
+    outer_diameter_mm: float = num(73.0, unit="mm", doc="tubing body OD (2 7/8 in)")
+    inner_diameter_mm: float = num(62.0, unit="mm")
+    youngs_modulus_pa: float = num(2.07e11, unit="Pa")
+    anchor_depth_m: float = num(0.0, unit="m", check="nonneg",
+                                doc="MD of a tubing anchor above the pump; 0 = none (free from the surface)")
+
+
+@dataclass(frozen=True)
 class WellConfig:
     name: str = opt("well")
     description: str = opt("")
@@ -239,6 +266,7 @@ class WellConfig:
     simulation: SimulationConfig = field(default_factory=SimulationConfig)
     control: ControlConfig = field(default_factory=ControlConfig)
     reward: RewardConfig = field(default_factory=RewardConfig)
+    tubing: TubingConfig = field(default_factory=TubingConfig)
 
     @property
     def rod_length_m(self) -> float:
@@ -343,6 +371,19 @@ def _check_consistency(cfg: WellConfig) -> None:
         if p.gas_polytropic_exponent < 1:
             raise ConfigError("pump.gas_polytropic_exponent", p.gas_polytropic_exponent,
                               "an exponent >= 1 (1 isothermal, 1.3 adiabatic natural gas)")
+    tb = cfg.tubing
+    if not tb.anchored:
+        if tb.inner_diameter_mm >= tb.outer_diameter_mm:
+            raise ConfigError("tubing.inner_diameter_mm", tb.inner_diameter_mm,
+                              f"a diameter in mm below tubing.outer_diameter_mm = {tb.outer_diameter_mm}")
+        if tb.anchor_depth_m >= cfg.rod_length_m:
+            raise ConfigError("tubing.anchor_depth_m", tb.anchor_depth_m,
+                              f"a depth in m above the pump ({cfg.rod_length_m} m)")
+        if p.intake_gas_fraction > 0 or p.intake_glr_m3_m3 > 0:
+            raise ConfigError("tubing.anchored", tb.anchored, "true when the intake carries free gas (the "
+                              "two chamber models are not combined)")
+        if p.law != "constant":
+            raise ConfigError("tubing.anchored", tb.anchored, "true with pump.law 'nonmonotone'")
     f = cfg.friction
     if f.law == "nonmonotone" and f.kinetic_coefficient > f.coefficient:
         raise ConfigError("friction.kinetic_coefficient", f.kinetic_coefficient,
@@ -500,8 +541,23 @@ def read_raw(path_or_name: str | Path) -> dict:
     return data
 
 
+def _material_defaults(data: dict) -> dict:
+    """Fill a fiberglass / sinker-bar taper's unset E, density and strength from MATERIAL_DEFAULTS."""
+    tapers = (data.get("rod") or {}).get("tapers") if isinstance(data.get("rod"), dict) else None
+    if not isinstance(tapers, list):
+        return data
+    import copy
+
+    data = copy.deepcopy(data)
+    for t in data["rod"]["tapers"]:
+        if isinstance(t, dict) and t.get("material") in MATERIAL_DEFAULTS:
+            for key, value in MATERIAL_DEFAULTS[t["material"]].items():
+                t.setdefault(key, value)
+    return data
+
+
 def config_from_dict(data: dict) -> WellConfig:
-    cfg = _parse(WellConfig, data, "")
+    cfg = _parse(WellConfig, _material_defaults(data), "")
     _check_consistency(cfg)
     return cfg
 

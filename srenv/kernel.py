@@ -52,7 +52,7 @@ N_PAR = 41
 I_STEP, I_DCIT, I_HAVEQP, I_MAXCORR, I_DCMAX, I_ALWAYSQP, I_NONSMOOTH = 0, 1, 2, 3, 4, 5, 6
 I_PLDIR, I_EVENT, I_VOID, I_NCERT, I_NCORR, I_NQP, I_NDC, I_RECORD, I_NREC = 7, 8, 9, 10, 11, 12, 13, 14, 15
 I_PUMP_NONMONO, I_FRIC_NONMONO = 16, 17
-I_GAS = 18  # 1: free gas in the chamber is followed (kernel.gas_valves)
+I_GAS = 18  # 1: free gas in the chamber is followed (kernel.gas_valves); 2: unanchored tubing (a spring)
 I_GASON = 19  # 1 this step: the plunger load follows the chamber pressure at its position (gas spring)
 N_IST = 20
 
@@ -181,8 +181,8 @@ def set_bounds(par, ist, u, ua, ea_len, fa, fw, fc, lo, hi, ns, nforce, fric_s):
     # than a small plunger travel) the chamber pressure is a spring on the plunger (gas_spring, taken
     # implicitly in advance) and the pump node keeps only the plunger friction as its interval; less gas:
     # the rigid valve law
-    gas_on = False
-    if ist[I_GAS] != 0 and par[P_GAS_V0] > 0.0:
+    gas_on = ist[I_GAS] == 2  # unanchored tubing: its stretch always carries the load transfer
+    if ist[I_GAS] == 1 and par[P_GAS_V0] > 0.0:
         ik = 1.0 / par[P_GAS_K]
         v_in = par[P_GAS_V0] * (par[P_GAS_P0] / par[P_GAS_PIN]) ** ik
         gas_on = v_in - par[P_GAS_V0] * (par[P_GAS_P0] / par[P_GAS_PD]) ** ik >= par[P_GAS_VMIN]
@@ -194,8 +194,8 @@ def set_bounds(par, ist, u, ua, ea_len, fa, fw, fc, lo, hi, ns, nforce, fric_s):
             phi = plo
             gas_on = False
     if gas_on:
-        plo = -par[P_GAS_FRIC]
-        phi = par[P_GAS_FRIC]
+        plo = -par[P_GAS_FRIC] if ist[I_GAS] == 1 else 0.0
+        phi = -plo
     ist[I_GASON] = 1 if gas_on else 0
     lo[n - 1] = plo
     hi[n - 1] = phi
@@ -207,6 +207,8 @@ def gas_spring(par, ub):
     """(centre, stiffness) of the plunger reaction -(p_out - p_c) A_pl = (p_c - p_out) A_pl with the chamber
     pressure p_c = p0 (V0 / V)^k, V = V0 - A_pl (u_B - u0), held between the intake and discharge pressures
     (the valves); stiffness d(centre)/du_B = A_pl^2 k p_c / V inside that range, 0 outside."""
+    if par[P_GAS_APL] == 0.0:
+        return tubing_spring(par, ub)
     a = par[P_GAS_APL]
     vg = par[P_GAS_V0] - a * (ub - par[P_GAS_U0])
     pc = par[P_GAS_PD]
@@ -223,11 +225,30 @@ def gas_spring(par, ub):
 
 
 @njit(cache=True)
+def tubing_spring(par, ub):
+    """Unanchored tubing: while the plunger is stuck in its barrel the load transfer stretches or releases
+    the tubing (stiffness k_t = E A_t / L, in P_GAS_K), so the reaction moves along
+    centre = c0 + k_t (u_B - u0) between the valve law's bounds [-P-_eq, -P+_eq] (sliding in the barrel)."""
+    c = par[P_GAS_P0] + par[P_GAS_K] * (ub - par[P_GAS_U0])
+    if c <= par[P_PUMP_LO]:
+        return par[P_PUMP_LO], 0.0
+    if c >= par[P_PUMP_HI]:
+        return par[P_PUMP_HI], 0.0
+    return c, par[P_GAS_K]
+
+
+@njit(cache=True)
 def gas_valves(par, ub):
     """After a step: a valve that opened changes what the chamber holds; the state is re-referenced at the
     plunger's new position. Below p_in the standing valve is open and the chamber draws intake mixture
     (gas fraction phi at p_in); above p_d the travelling valve is open and the chamber expels its own
     mixture (gas and liquid in the proportion it holds at p_d). Both valves closed: nothing changes."""
+    if par[P_GAS_APL] == 0.0:  # unanchored tubing: the plunger slid in its barrel, the spring re-references
+        c = par[P_GAS_P0] + par[P_GAS_K] * (ub - par[P_GAS_U0])
+        if c <= par[P_PUMP_LO] or c >= par[P_PUMP_HI]:
+            par[P_GAS_P0] = min(max(c, par[P_PUMP_LO]), par[P_PUMP_HI])
+            par[P_GAS_U0] = ub
+        return
     a = par[P_GAS_APL]
     k = par[P_GAS_K]
     v0 = par[P_GAS_V0]

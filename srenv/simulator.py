@@ -130,6 +130,11 @@ class Simulator:
         if cfg.inflow.model != "none":
             self.annulus = Annulus(cfg.inflow, cfg.fluid, float(x[-1]), self.survey.tvd)
         self.gas = GasChamber.from_config(cfg.pump, self.surface.stroke_length_m(cfg.surface.stroke_length_m))
+        tb = cfg.tubing
+        self.tubing_stiffness_n_m = 0.0  # anchored: the barrel does not move
+        if not tb.anchored:  # the free tubing between the anchor (or the surface) and the pump, as a spring
+            area = math.pi / 4 * ((tb.outer_diameter_mm * 1e-3) ** 2 - (tb.inner_diameter_mm * 1e-3) ** 2)
+            self.tubing_stiffness_n_m = tb.youngs_modulus_pa * area / (cfg.rod_length_m - tb.anchor_depth_m)
         self.f1_hz = first_natural_frequency_hz(mesh, cfg.rod.mass_matrix)
         self._check_convexity()
 
@@ -257,6 +262,8 @@ class Simulator:
         self._gas = np.zeros(5)
         if self.gas is not None:
             self._gas_start()
+        elif self.tubing_stiffness_n_m > 0:  # the plunger holds P+ at rest: the tubing carries the fluid load
+            self._gas[:] = (1.0, float(self.u[-1]), 0.0, -self.law.down_eq_n, 0.0)
         self.fillage = 1.0
         self.energy = np.zeros(K.N_ENERGY)
         self.e0 = self.mechanical_energy_j()
@@ -345,6 +352,10 @@ class Simulator:
             par[K.P_GAS_POUT], par[K.P_GAS_FRIC] = self.p_pump_pa, cfg.pump.plunger_friction_n
             par[K.P_GAS_VMIN] = self.gas.area_m2 * GAS_MIN_DELAY_FRACTION * self.surface.stroke_length_m(
                 cfg.surface.stroke_length_m)
+        elif self.tubing_stiffness_n_m > 0:  # kernel mode 2: a plunger area of 0 marks the tubing spring
+            ist[K.I_GAS] = 2
+            par[K.P_GAS_U0], par[K.P_GAS_P0] = self._gas[1], self._gas[3]
+            par[K.P_GAS_K], par[K.P_GAS_APL] = self.tubing_stiffness_n_m, 0.0
         return par, ist
 
     def run_stroke(self, spm: float | None = None, stroke_length_m: float | None = None,
@@ -421,7 +432,7 @@ class Simulator:
         self.pl_dir, self.void = int(ist[K.I_PLDIR]), int(ist[K.I_VOID])
         self._ub_max, self._ub_min = float(par[K.P_UBMAX]), float(par[K.P_UBMIN])
         self.void_until = float(par[K.P_VOID_UNTIL])
-        if self.gas is not None:  # the kernel moved the gas phase's reference on
+        if self.gas is not None or self.tubing_stiffness_n_m > 0:  # the kernel moved the reference on
             self._gas[1:5] = par[K.P_GAS_U0], par[K.P_GAS_V0], par[K.P_GAS_P0], par[K.P_GAS_LIQ]
         self.time_s = t0 + n_steps * dt
         trace = self._trace(rec[:, : ist[K.I_NREC]]) if record else None
@@ -490,6 +501,9 @@ class Simulator:
                 liquid_m = upstroke * self.gas.liquid_fraction(
                     self._intake_pa(), self.p_pump_pa + self.cfg.pump.discharge_overpressure_pa, upstroke)
                 fillage = liquid_m / upstroke
+            if self.tubing_stiffness_n_m > 0:  # the barrel rose with the plunger while the load transferred
+                stretch = (self.law.up_eq_n - self.law.down_eq_n) / self.tubing_stiffness_n_m
+                liquid_m = min(liquid_m, max(upstroke - stretch, 0.0))
             if self.annulus is not None:
                 liquid_m = min(self._liquid_stroke_m, liquid_m)
                 self.annulus.take(plunger_area_m2(self.cfg.pump) * liquid_m, time_s)
@@ -516,11 +530,15 @@ class Simulator:
         return fillage
 
     def _trace(self, rec: np.ndarray) -> dict:
+        prl = rec[K.R_PRL]
+        f_sb = self.cfg.surface.stuffing_box_friction_n
+        if f_sb > 0:  # the stuffing box resists the polished rod: the dynamometer reads it, the rod does not
+            prl = prl + f_sb * np.sign(rec[K.R_VA])
         return {
             "t_s": rec[K.R_T],  # views into the record: no copies per stroke
             "polished_rod_position_m": rec[K.R_UA],
             "polished_rod_velocity_m_s": rec[K.R_VA],
-            "polished_rod_load_n": rec[K.R_PRL],
+            "polished_rod_load_n": prl,
             "pump_position_m": rec[K.R_UB],
             "pump_velocity_m_s": rec[K.R_VB],
             "pump_load_n": rec[K.R_PUMP],
