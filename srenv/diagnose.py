@@ -198,7 +198,9 @@ def summary(cfg: WellConfig, card: PumpCard) -> dict:
     a_pl = plunger_area_m2(cfg.pump)
     friction = cfg.pump.plunger_friction_n if cfg.pump.load_source == "pressures" else 0.0
     # fluid load = (p_out - p_in) A_pl + 2 P_f between the two plateaus (valve law, design §2)
-    p_in = max(0.0, p_out - (s["fluid_load_n"] - 2 * friction - cfg.pump.discharge_overpressure_pa * a_pl) / a_pl)
+    # (with the loads given directly the config has no plunger area to turn the load into a pressure: null)
+    p_in = None if cfg.pump.load_source == "loads" else max(
+        0.0, p_out - (s["fluid_load_n"] - 2 * friction - cfg.pump.discharge_overpressure_pa * a_pl) / a_pl)
     return {
         "period_s": card.period_s,
         "spm": 60.0 / card.period_s,
