@@ -139,6 +139,20 @@ class TaperConfig:
     density_kg_m3: float = num(7850.0, unit="kg/m^3", lo=100.0, hi=2.0e4)
     coupling_mass_kg_per_m: float = num(0.0, unit="kg/m", check="nonneg", hi=1.0e3,
                                         doc="couplings / sinker-bar extra mass smeared per metre")
+    material: str = choice("steel", ("steel", "fiberglass", "sinker_bar"),
+                           "fiberglass / sinker_bar: E, density and strength default to the material's "
+                           "(MATERIAL_DEFAULTS) unless given")
+    tensile_strength_pa: float = num(0.0, unit="Pa", check="nonneg", hi=1.0e10,
+                                     doc="T for Goodman; 0 = from the grade (steel, sinker bar) or the material")
+
+
+# Per-material defaults filled in for fields a taper does not give (config_from_dict). Fiberglass: a typical
+# API 11C rod body (E 48 GPa ~ 7e6 psi, 2 000 kg/m^3 with its steel end fittings smeared, 690 MPa); sinker
+# bars are steel (the grade sets T).
+MATERIAL_DEFAULTS: dict[str, dict[str, float]] = {
+    "fiberglass": {"youngs_modulus_pa": 4.8e10, "density_kg_m3": 2000.0, "tensile_strength_pa": 6.9e8},
+    "sinker_bar": {"youngs_modulus_pa": 2.0e11, "density_kg_m3": 7850.0},
+}
 
 
 @dataclass(frozen=True)
@@ -198,6 +212,13 @@ class PumpConfig:
     law: str = choice("constant", ("constant", "nonmonotone"), "plunger upstroke law (paper eq. 32)")
     dynamic_load_n: float = num(7090.0, unit="N", check="any", lo=-1.0e7, hi=1.0e7, doc="P_inf of the nonmonotone law (true load)")
     reference_velocity_m_s: float = num(1.0, unit="m/s", lo=1e-6, hi=100.0, doc="v0 of the nonmonotone law")
+    intake_gas_fraction: float = num(0.0, unit="-", check="unit_interval", hi=1.0,
+                                     doc="free-gas volume fraction of the intake mixture at p_in (gas interference)")
+    intake_glr_m3_m3: float = num(0.0, unit="m^3/m^3", check="nonneg", hi=1.0e4,
+                                  doc="free gas-liquid ratio at standard conditions (instead of the fraction)")
+    gas_polytropic_exponent: float = num(1.0, unit="-", lo=1.0, hi=2.0, doc="k of p V^k = const in the chamber (1 = isothermal)")
+    clearance_volume_fraction: float = num(0.05, unit="-", check="nonneg", hi=10.0,
+                                           doc="unswept chamber volume / swept volume at surface.stroke_length_m")
 
 
 @dataclass(frozen=True)
@@ -220,6 +241,9 @@ class SurfaceConfig:
                                  "more; the last full stroke is used); a relative path is from the working directory")
     measured_spm: float = num(0.0, unit="strokes/min", hi=60.0, check="nonneg",
                               doc="measured: the card's stroke rate; 0 = from its t_s column (required without one)")
+    stuffing_box_friction_n: float = num(0.0, unit="N", check="nonneg", hi=1.0e6,
+                                         doc="Coulomb friction of the polished rod in the stuffing box (adds to "
+                                         "the load going up, subtracts going down)")
 
 
 @dataclass(frozen=True)
@@ -326,6 +350,16 @@ class TaskConfig:
 
 
 @dataclass(frozen=True)
+class TubingConfig:
+    anchored: bool = opt(True, doc="false: the tubing stretches under the fluid load (shortens the pump stroke)")
+    outer_diameter_mm: float = num(73.0, unit="mm", lo=10.0, hi=500.0, doc="tubing body OD (2 7/8 in)")
+    inner_diameter_mm: float = num(62.0, unit="mm", lo=5.0, hi=500.0)
+    youngs_modulus_pa: float = num(2.07e11, unit="Pa", lo=1.0e9, hi=1.0e12)
+    anchor_depth_m: float = num(0.0, unit="m", check="nonneg", hi=2.0e4,
+                                doc="MD of a tubing anchor above the pump; 0 = none (free from the surface)")
+
+
+@dataclass(frozen=True)
 class WellConfig:
     name: str = opt("well")
     description: str = opt("")
@@ -340,6 +374,7 @@ class WellConfig:
     simulation: SimulationConfig = field(default_factory=SimulationConfig)
     control: ControlConfig = field(default_factory=ControlConfig)
     reward: RewardConfig = field(default_factory=RewardConfig)
+    tubing: TubingConfig = field(default_factory=TubingConfig)
     economics: EconomicsConfig = field(default_factory=EconomicsConfig)
     task: TaskConfig = field(default_factory=TaskConfig)
 
@@ -452,6 +487,31 @@ def _check_consistency(cfg: WellConfig) -> None:
         if not p.downstroke_load_n < p.dynamic_load_n <= p.upstroke_load_n:
             raise ConfigError("pump.dynamic_load_n", p.dynamic_load_n,
                               "a load in N between pump.downstroke_load_n and pump.upstroke_load_n")
+    if p.intake_gas_fraction > 0 or p.intake_glr_m3_m3 > 0:
+        if p.intake_gas_fraction > 0 and p.intake_glr_m3_m3 > 0:
+            raise ConfigError("pump.intake_glr_m3_m3", p.intake_glr_m3_m3,
+                              "0 when pump.intake_gas_fraction is given (one measure of the free gas)")
+        if p.intake_gas_fraction >= 1:
+            raise ConfigError("pump.intake_gas_fraction", p.intake_gas_fraction, "a fraction below 1")
+        if p.load_source != "pressures" or p.law != "constant":
+            raise ConfigError("pump.load_source", p.load_source, "'pressures' with pump.law 'constant' when the "
+                              "intake carries free gas (the chamber pressure sets the plunger load)")
+        if p.gas_polytropic_exponent < 1:
+            raise ConfigError("pump.gas_polytropic_exponent", p.gas_polytropic_exponent,
+                              "an exponent >= 1 (1 isothermal, 1.3 adiabatic natural gas)")
+    tb = cfg.tubing
+    if not tb.anchored:
+        if tb.inner_diameter_mm >= tb.outer_diameter_mm:
+            raise ConfigError("tubing.inner_diameter_mm", tb.inner_diameter_mm,
+                              f"a diameter in mm below tubing.outer_diameter_mm = {tb.outer_diameter_mm}")
+        if tb.anchor_depth_m >= cfg.rod_length_m:
+            raise ConfigError("tubing.anchor_depth_m", tb.anchor_depth_m,
+                              f"a depth in m above the pump ({cfg.rod_length_m} m)")
+        if p.intake_gas_fraction > 0 or p.intake_glr_m3_m3 > 0:
+            raise ConfigError("tubing.anchored", tb.anchored, "true when the intake carries free gas (the "
+                              "two chamber models are not combined)")
+        if p.law != "constant":
+            raise ConfigError("tubing.anchored", tb.anchored, "true with pump.law 'nonmonotone'")
     f = cfg.friction
     if f.law == "nonmonotone" and f.kinetic_coefficient > f.coefficient:
         raise ConfigError("friction.kinetic_coefficient", f.kinetic_coefficient,
@@ -690,8 +750,23 @@ def read_raw(path_or_name: str | Path) -> dict:
     return data
 
 
+def _material_defaults(data: dict) -> dict:
+    """Fill a fiberglass / sinker-bar taper's unset E, density and strength from MATERIAL_DEFAULTS."""
+    tapers = (data.get("rod") or {}).get("tapers") if isinstance(data.get("rod"), dict) else None
+    if not isinstance(tapers, list):
+        return data
+    import copy
+
+    data = copy.deepcopy(data)
+    for t in data["rod"]["tapers"]:
+        if isinstance(t, dict) and t.get("material") in MATERIAL_DEFAULTS:
+            for key, value in MATERIAL_DEFAULTS[t["material"]].items():
+                t.setdefault(key, value)
+    return data
+
+
 def config_from_dict(data: dict) -> WellConfig:
-    cfg = _parse(WellConfig, data, "")
+    cfg = _parse(WellConfig, _material_defaults(data), "")
     _check_consistency(cfg)
     _check_resources(cfg)
     return cfg

@@ -159,6 +159,10 @@ def diagnose_card(cfg: WellConfig, t_s: np.ndarray, position_m: np.ndarray, load
     p_top = float(cfg.fluid.wellhead_pressure_pa)
     survey = Survey.from_config(cfg.survey, cfg.rod_length_m)
     p_pump = float(tubing_pressure_pa(cfg.fluid, survey.tvd(cfg.rod_length_m)))
+    f_sb = cfg.surface.stuffing_box_friction_n
+    if f_sb > 0:  # the stuffing box's share of the measured load: opposite to the polished rod's velocity
+        vx = np.gradient(np.r_[xs[-1], xs, xs[0]])[1:-1]
+        fs = fs - f_sb * np.sign(vx)
     ub, nb, vb = march(cfg, -xs, fs + p_top * sg_top.top_area_m2, period, harmonics, segment_length_m, friction)
     tt = t[0] + np.arange(m) * (period / m)
     # back onto the input's own times (the same base as the surface card)
@@ -194,7 +198,9 @@ def summary(cfg: WellConfig, card: PumpCard) -> dict:
     a_pl = plunger_area_m2(cfg.pump)
     friction = cfg.pump.plunger_friction_n if cfg.pump.load_source == "pressures" else 0.0
     # fluid load = (p_out - p_in) A_pl + 2 P_f between the two plateaus (valve law, design §2)
-    p_in = max(0.0, p_out - (s["fluid_load_n"] - 2 * friction - cfg.pump.discharge_overpressure_pa * a_pl) / a_pl)
+    # (with the loads given directly the config has no plunger area to turn the load into a pressure: null)
+    p_in = None if cfg.pump.load_source == "loads" else max(
+        0.0, p_out - (s["fluid_load_n"] - 2 * friction - cfg.pump.discharge_overpressure_pa * a_pl) / a_pl)
     return {
         "period_s": card.period_s,
         "spm": 60.0 / card.period_s,

@@ -38,13 +38,23 @@ P_MA, P_MOA, P_CA, P_FA, P_KC, P_MC = 12, 13, 14, 15, 17, 18  # 16: free
 P_PB, P_PA, P_VOID_UNTIL = 19, 20, 21
 P_EA0 = 22
 P_UBMAX, P_UBMIN = 24, 25  # plunger position extremes since the caller last reset them (stroke bookkeeping)
-N_PAR = 26
+# gas in the pump chamber (pump.GasChamber): the chamber state (reference plunger position, gas volume and
+# pressure there, liquid volume), the polytropic exponent, the valve pressures (intake, discharge), the plunger
+# area, the pressure above the plunger, the plunger friction and the intake gas fraction
+P_GAS_U0, P_GAS_V0, P_GAS_P0, P_GAS_K, P_GAS_PIN, P_GAS_PD, P_GAS_APL, P_GAS_POUT, P_GAS_FRIC = (
+    26, 27, 28, 29, 30, 31, 32, 33, 34)
+P_GAS_DK, P_GAS_SHIFT = 35, 36  # the current linearisation: c2 * gas stiffness (in K*_BB), force moved into b
+P_GAS_PHI, P_GAS_LIQ, P_GAS_UT = 37, 38, 39  # intake gas fraction, chamber liquid, this step's u-tilde_B
+P_GAS_VMIN = 40  # A_pl x the smallest valve delay the gas spring resolves (less: rigid valve law)
+N_PAR = 41
 
 # indices into the integer state vector `ist`
 I_STEP, I_DCIT, I_HAVEQP, I_MAXCORR, I_DCMAX, I_ALWAYSQP, I_NONSMOOTH = 0, 1, 2, 3, 4, 5, 6
 I_PLDIR, I_EVENT, I_VOID, I_NCERT, I_NCORR, I_NQP, I_NDC, I_RECORD, I_NREC = 7, 8, 9, 10, 11, 12, 13, 14, 15
 I_PUMP_NONMONO, I_FRIC_NONMONO = 16, 17
-N_IST = 18
+I_GAS = 18  # 1: free gas in the chamber is followed (kernel.gas_valves); 2: unanchored tubing (a spring)
+I_GASON = 19  # 1 this step: the plunger load follows the chamber pressure at its position (gas spring)
+N_IST = 20
 
 # rows of the per-step record (one column per step; upward positions and velocities)
 R_T, R_UA, R_PRL, R_UB, R_VB, R_PUMP, R_PATH, R_VA = 0, 1, 2, 3, 4, 5, 6, 7
@@ -167,15 +177,113 @@ def set_bounds(par, ist, u, ua, ea_len, fa, fw, fc, lo, hi, ns, nforce, fric_s):
     fric_s[n - 1] = 0.0
     plo = par[P_PUMP_LO]
     phi = par[P_PUMP_HI]
+    # gas interference: with enough gas in the chamber (its volume at p_in exceeds its volume at p_d by more
+    # than a small plunger travel) the chamber pressure is a spring on the plunger (gas_spring, taken
+    # implicitly in advance) and the pump node keeps only the plunger friction as its interval; less gas:
+    # the rigid valve law
+    gas_on = ist[I_GAS] == 2  # unanchored tubing: its stretch always carries the load transfer
+    if ist[I_GAS] == 1 and par[P_GAS_V0] > 0.0:
+        ik = 1.0 / par[P_GAS_K]
+        v_in = par[P_GAS_V0] * (par[P_GAS_P0] / par[P_GAS_PIN]) ** ik
+        gas_on = v_in - par[P_GAS_V0] * (par[P_GAS_P0] / par[P_GAS_PD]) ** ik >= par[P_GAS_VMIN]
     # fluid pound: above the liquid level in the barrel (u_B < P_VOID_UNTIL, positions positive down) the
     # travelling valve cannot open, so the plunger carries P- whether it moves up, rests or moves down
     if ist[I_VOID] != 0:
         ist[I_VOID] = 2 if u[n - 1] < par[P_VOID_UNTIL] else 1
         if ist[I_VOID] == 2:
             phi = plo
+            gas_on = False
+    if gas_on:
+        plo = -par[P_GAS_FRIC] if ist[I_GAS] == 1 else 0.0
+        phi = -plo
+    ist[I_GASON] = 1 if gas_on else 0
     lo[n - 1] = plo
     hi[n - 1] = phi
     ns[n - 1] = phi > plo
+
+
+@njit(cache=True)
+def gas_spring(par, ub):
+    """(centre, stiffness) of the plunger reaction -(p_out - p_c) A_pl = (p_c - p_out) A_pl with the chamber
+    pressure p_c = p0 (V0 / V)^k, V = V0 - A_pl (u_B - u0), held between the intake and discharge pressures
+    (the valves); stiffness d(centre)/du_B = A_pl^2 k p_c / V inside that range, 0 outside."""
+    if par[P_GAS_APL] == 0.0:
+        return tubing_spring(par, ub)
+    a = par[P_GAS_APL]
+    vg = par[P_GAS_V0] - a * (ub - par[P_GAS_U0])
+    pc = par[P_GAS_PD]
+    k = 0.0
+    if vg > 0.0:
+        pc = par[P_GAS_P0] * (par[P_GAS_V0] / vg) ** par[P_GAS_K]
+        if pc <= par[P_GAS_PIN]:
+            pc = par[P_GAS_PIN]
+        elif pc >= par[P_GAS_PD]:
+            pc = par[P_GAS_PD]
+        else:
+            k = a * a * par[P_GAS_K] * pc / vg
+    return (pc - par[P_GAS_POUT]) * a, k
+
+
+@njit(cache=True)
+def tubing_spring(par, ub):
+    """Unanchored tubing: while the plunger is stuck in its barrel the load transfer stretches or releases
+    the tubing (stiffness k_t = E A_t / L, in P_GAS_K), so the reaction moves along
+    centre = c0 + k_t (u_B - u0) between the valve law's bounds [-P-_eq, -P+_eq] (sliding in the barrel)."""
+    c = par[P_GAS_P0] + par[P_GAS_K] * (ub - par[P_GAS_U0])
+    if c <= par[P_PUMP_LO]:
+        return par[P_PUMP_LO], 0.0
+    if c >= par[P_PUMP_HI]:
+        return par[P_PUMP_HI], 0.0
+    return c, par[P_GAS_K]
+
+
+@njit(cache=True)
+def gas_valves(par, ub):
+    """After a step: a valve that opened changes what the chamber holds; the state is re-referenced at the
+    plunger's new position. Below p_in the standing valve is open and the chamber draws intake mixture
+    (gas fraction phi at p_in); above p_d the travelling valve is open and the chamber expels its own
+    mixture (gas and liquid in the proportion it holds at p_d). Both valves closed: nothing changes."""
+    if par[P_GAS_APL] == 0.0:  # unanchored tubing: the plunger slid in its barrel, the spring re-references
+        c = par[P_GAS_P0] + par[P_GAS_K] * (ub - par[P_GAS_U0])
+        if c <= par[P_PUMP_LO] or c >= par[P_PUMP_HI]:
+            par[P_GAS_P0] = min(max(c, par[P_PUMP_LO]), par[P_PUMP_HI])
+            par[P_GAS_U0] = ub
+        return
+    a = par[P_GAS_APL]
+    k = par[P_GAS_K]
+    v0 = par[P_GAS_V0]
+    p0 = par[P_GAS_P0]
+    vg = v0 - a * (ub - par[P_GAS_U0])
+    phi = par[P_GAS_PHI]
+    if vg > 0.0 and (v0 <= 0.0 or p0 * (v0 / vg) ** k < par[P_GAS_PIN]):
+        v_open = v0 * (p0 / par[P_GAS_PIN]) ** (1.0 / k) if v0 > 0.0 else 0.0
+        par[P_GAS_V0] = v_open + phi * (vg - v_open)
+        par[P_GAS_LIQ] += (1.0 - phi) * (vg - v_open)
+        par[P_GAS_P0] = par[P_GAS_PIN]
+        par[P_GAS_U0] = ub
+    elif v0 > 0.0 and (vg <= 0.0 or p0 * (v0 / vg) ** k > par[P_GAS_PD]):
+        v_open = v0 * (p0 / par[P_GAS_PD]) ** (1.0 / k)
+        out = v_open - vg
+        f = v_open / (v_open + par[P_GAS_LIQ])
+        par[P_GAS_V0] = max(v_open - f * out, 0.0)
+        par[P_GAS_LIQ] = max(par[P_GAS_LIQ] - (1.0 - f) * out, 0.0)
+        par[P_GAS_P0] = par[P_GAS_PD]
+        par[P_GAS_U0] = ub
+    elif v0 <= 0.0 and vg <= 0.0:
+        par[P_GAS_U0] = ub  # liquid-full chamber moving down: the travelling valve is open
+
+
+@njit(cache=True)
+def gas_linearise(par, ksd, b0, n, c2, u_lin):
+    """Linearise the gas spring at plunger position u_lin and move it into the step problem: K*_BB gains
+    c2 k_g, b_B loses centre + k_g (u-tilde_B - u_lin) (undoing the previous linearisation first)."""
+    ksd[n - 1] -= par[P_GAS_DK]
+    b0[n - 1] += par[P_GAS_SHIFT]
+    centre, kg = gas_spring(par, u_lin)
+    par[P_GAS_DK] = c2 * kg
+    par[P_GAS_SHIFT] = centre + kg * (par[P_GAS_UT] - u_lin)
+    ksd[n - 1] += par[P_GAS_DK]
+    b0[n - 1] -= par[P_GAS_SHIFT]
 
 
 @njit(cache=True)
@@ -251,10 +359,22 @@ def advance(par, ist, u, v, a, uav, va_t, t0,
             ist[I_DCIT] = 0
             for i in range(n):
                 vk[i] = prev_v[i]  # linearise j2 at v_n first
+        # the chamber's gas: a stiff nonlinear spring on the plunger, taken implicitly by Newton passes (each
+        # pass linearises it at the latest iterate's position u_B = u-tilde_B + c2 v_B, inside the DC loop)
+        gas = ist[I_GASON] != 0 and ist[I_NONSMOOTH] != 0
+        if gas:
+            if ist[I_HAVEQP] == 0:
+                par[P_GAS_UT] = rhs[n - 1]
+                ksd[n - 1] -= par[P_GAS_DK]  # nothing is left from a previous step; kept for safety
+                par[P_GAS_DK] = 0.0
+                par[P_GAS_SHIFT] = 0.0
+                gas_linearise(par, ksd, b0, n, c2, u[n - 1])
+            else:  # resumed after NEED_QP: b0 was rebuilt, K* still holds this pass's linearisation
+                b0[n - 1] -= par[P_GAS_SHIFT]
         used_qp = ist[I_HAVEQP] != 0
         corrected = False
         # DC iterations (a single pass when both laws are monotone)
-        nonmono = ist[I_PUMP_NONMONO] != 0 or ist[I_FRIC_NONMONO] != 0
+        nonmono = ist[I_PUMP_NONMONO] != 0 or ist[I_FRIC_NONMONO] != 0 or gas
         while True:
             if nonmono:
                 concave_shift(par, ist, vk, fric_s, shift)
@@ -289,6 +409,8 @@ def advance(par, ist, u, v, a, uav, va_t, t0,
                 vk[i] = v[i]
             if dv <= par[P_DCTOL] or ist[I_DCIT] >= ist[I_DCMAX]:
                 break
+            if gas:
+                gas_linearise(par, ksd, b0, n, c2, par[P_GAS_UT] + c2 * v[n - 1])
         ist[I_NDC] += ist[I_DCIT]
         # reactions lam = b - K*v (exact for every node, whatever path produced v)
         for i in range(n):
@@ -298,6 +420,12 @@ def advance(par, ist, u, v, a, uav, va_t, t0,
             if i < n - 1:
                 kv += kso[i] * v[i + 1]
             lam[i] = b[i] - kv - shift[i] if nonmono else b[i] - kv
+        if par[P_GAS_DK] != 0.0 or par[P_GAS_SHIFT] != 0.0:
+            # the plunger's whole reaction: friction part + the gas spring moved into K* and b
+            lam[n - 1] += par[P_GAS_SHIFT] + par[P_GAS_DK] * v[n - 1]
+            ksd[n - 1] -= par[P_GAS_DK]
+            par[P_GAS_DK] = 0.0
+            par[P_GAS_SHIFT] = 0.0
         # energy: trapezoidal work of each force over du (closes exactly for the trapezoidal rule)
         du_a = ua_new - ua_old
         for i in range(n):
@@ -361,6 +489,8 @@ def advance(par, ist, u, v, a, uav, va_t, t0,
                 rec[R_VA, r] = -va_new
                 ist[I_NREC] = r + 1
         ist[I_STEP] = k + 1
+        if ist[I_GAS] != 0:
+            gas_valves(par, u[n - 1])
         par[P_UBMAX] = max(par[P_UBMAX], u[n - 1])
         par[P_UBMIN] = min(par[P_UBMIN], u[n - 1])
         vb = v[n - 1]

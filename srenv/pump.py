@@ -51,3 +51,68 @@ def true_loads_n(law: ValveLaw, p_out_pa: float, rod_area_m2: float) -> tuple[fl
     """(P-, P+) as true loads, for reporting."""
     shift = p_out_pa * rod_area_m2
     return law.up_eq_n - shift, law.down_eq_n - shift
+
+
+STANDARD_PRESSURE_PA = 101325.0
+
+
+@dataclass(frozen=True)
+class GasChamber:
+    """Free gas in the pump chamber (ideal gas, polytropic p V^k = const, liquid incompressible).
+
+    The upstroke fills the chamber (clearance V_d + swept A_pl L) with intake mixture of free-gas volume
+    fraction phi at p_in. On the downstroke both valves stay closed until the plunger has compressed the gas
+    to the discharge pressure p_d = p_out + dp_out: over the travel
+        s_open = phi V_c (1 - (p_in / p_d)^(1/k)) / A_pl,
+    the load falls along the compression curve (p_out - p_c) A_pl instead of at once (gas interference).
+    The clearance keeps the compressed mixture (gas fraction phi_d); on the upstroke it re-expands to p_in
+    before the standing valve opens, over s_up = V_gd ((p_d / p_in)^(1/k) - 1) / A_pl.
+    ``intake_glr_m3_m3`` gives phi from the free gas-liquid ratio at standard conditions (isothermal,
+    z = 1): G = GLR p_std / p_in, phi = G / (1 + G).
+    """
+
+    area_m2: float
+    clearance_m3: float
+    exponent: float
+    gas_fraction: float = 0.0
+    glr_m3_m3: float = 0.0
+
+    @classmethod
+    def from_config(cls, pump: PumpConfig, nominal_stroke_m: float) -> GasChamber | None:
+        if pump.intake_gas_fraction <= 0 and pump.intake_glr_m3_m3 <= 0:
+            return None
+        a = plunger_area_m2(pump)
+        return cls(a, pump.clearance_volume_fraction * a * nominal_stroke_m, pump.gas_polytropic_exponent,
+                   pump.intake_gas_fraction, pump.intake_glr_m3_m3)
+
+    def fraction(self, p_in_pa: float) -> float:
+        """Free-gas volume fraction of the intake mixture at p_in."""
+        if self.glr_m3_m3 > 0:
+            g = self.glr_m3_m3 * STANDARD_PRESSURE_PA / max(p_in_pa, STANDARD_PRESSURE_PA)
+            return g / (1.0 + g)
+        return self.gas_fraction
+
+    def top_gas_m3(self, p_in_pa: float, upstroke_m: float) -> float:
+        """Gas volume at p_in in the chamber at the top of the stroke."""
+        return self.fraction(p_in_pa) * (self.clearance_m3 + self.area_m2 * max(upstroke_m, 0.0))
+
+    def clearance_gas_m3(self, p_in_pa: float, p_d_pa: float) -> float:
+        """Gas volume at p_d left in the clearance at the bottom of the stroke."""
+        phi = self.fraction(p_in_pa)
+        vg = phi * (p_in_pa / p_d_pa) ** (1.0 / self.exponent)
+        return self.clearance_m3 * vg / (vg + 1.0 - phi)
+
+    def compression_travel_m(self, p_in_pa: float, p_d_pa: float, upstroke_m: float,
+                             p_to_pa: float | None = None) -> float:
+        """Plunger travel from the top until the chamber reaches p_to (default p_d: the valve opens)."""
+        p_to = p_d_pa if p_to_pa is None else p_to_pa
+        v0 = self.top_gas_m3(p_in_pa, upstroke_m)
+        return v0 * (1.0 - (p_in_pa / p_to) ** (1.0 / self.exponent)) / self.area_m2
+
+    def liquid_fraction(self, p_in_pa: float, p_d_pa: float, upstroke_m: float) -> float:
+        """Liquid delivered per stroke / swept volume (what the gas leaves of the pump's displacement)."""
+        swept = self.area_m2 * max(upstroke_m, 1e-12)
+        phi = self.fraction(p_in_pa)
+        vg_d = self.clearance_gas_m3(p_in_pa, p_d_pa)
+        liquid_in = (1.0 - phi) * (self.clearance_m3 + swept)
+        return float(min(max((liquid_in - (self.clearance_m3 - vg_d)) / swept, 0.0), 1.0))

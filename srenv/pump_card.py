@@ -26,10 +26,10 @@ NO_LOAD_FRACTION = 0.05
 
 def _crossing(x: np.ndarray, f: np.ndarray, level: float) -> float:
     """Position where f first falls to `level` along the samples (linear between samples)."""
-    below = np.flatnonzero(f <= level)
-    if len(below) == 0:
+    below = f <= level
+    i = int(np.argmax(below))
+    if not below[i]:
         return float(x[-1])
-    i = int(below[0])
     if i == 0:
         return float(x[0])
     a = (f[i - 1] - level) / (f[i - 1] - f[i])
@@ -39,7 +39,12 @@ def _crossing(x: np.ndarray, f: np.ndarray, level: float) -> float:
 def analyse_pump_card(position_m: np.ndarray, load_n: np.ndarray) -> dict:
     x = np.asarray(position_m, dtype=float)
     f = np.asarray(load_n, dtype=float)
-    up, down = float(np.percentile(f, 85)), float(np.percentile(f, 10))
+    # the two percentiles by one partial sort (np.percentile's 'linear' rule; this runs on every env step)
+    m = len(f) - 1
+    q = (0.10 * m, 0.85 * m)
+    lo_i = [int(np.floor(v)) for v in q]
+    part = np.partition(f, sorted({*lo_i, *(min(i + 1, m) for i in lo_i)}))
+    down, up = (float(part[i] + (v - i) * (part[min(i + 1, m)] - part[i])) for i, v in zip(lo_i, q))
     fluid = up - down
     x_min, x_max = float(x.min()), float(x.max())
     stroke = x_max - x_min
@@ -49,9 +54,11 @@ def analyse_pump_card(position_m: np.ndarray, load_n: np.ndarray) -> dict:
         return out
     # the downstroke: from the top of the plunger travel to the following bottom (the card is periodic)
     i_top = int(np.argmax(x))
-    xr, fr = np.roll(x, -i_top), np.roll(f, -i_top)
-    i_bot = int(np.argmin(xr))
-    xd, fd = xr[: i_bot + 1], fr[: i_bot + 1]
+    i_min = int(np.argmin(x))
+    if i_min >= i_top:  # the downstroke lies inside the record
+        xd, fd = x[i_top:i_min + 1], f[i_top:i_min + 1]
+    else:  # it wraps round the end of the (periodic) record
+        xd, fd = np.r_[x[i_top:], x[:i_min + 1]], np.r_[f[i_top:], f[:i_min + 1]]
     x_mid = _crossing(xd, fd, down + 0.5 * fluid)
     x90 = _crossing(xd, fd, down + 0.9 * fluid)
     x10 = _crossing(xd, fd, down + 0.1 * fluid)

@@ -19,7 +19,7 @@ from . import kernel as K
 from .config import ConfigError, WellConfig, check_dense_size
 from .fluid import tubing_pressure_pa
 from .inflow import Annulus
-from .pump import ValveLaw, plunger_area_m2, valve_law
+from .pump import GasChamber, ValveLaw, plunger_area_m2, valve_law
 from .rod import (
     GRAVITY_M_S2,
     build_mesh,
@@ -32,6 +32,10 @@ from .rod import (
 from .step_qp import StepQP
 from .surface import SurfaceMotion
 from .survey import Survey
+
+# gas whose compression from the intake to the discharge pressure spans less than this fraction of the stroke
+# leaves the valve law rigid: a spring far stiffer than the rod, whose transfer would span a step or two
+GAS_MIN_DELAY_FRACTION = 0.01
 
 TRACE_COLUMNS = ("t_s", "polished_rod_position_m", "polished_rod_velocity_m_s", "polished_rod_load_n",
                  "pump_position_m", "pump_velocity_m_s", "pump_load_n", "step_path")
@@ -126,6 +130,12 @@ class Simulator:
         self.annulus = None
         if cfg.inflow.model != "none":
             self.annulus = Annulus(cfg.inflow, cfg.fluid, float(x[-1]), self.survey.tvd)
+        self.gas = GasChamber.from_config(cfg.pump, self.surface.stroke_length_m(cfg.surface.stroke_length_m))
+        tb = cfg.tubing
+        self.tubing_stiffness_n_m = 0.0  # anchored: the barrel does not move
+        if not tb.anchored:  # the free tubing between the anchor (or the surface) and the pump, as a spring
+            area = math.pi / 4 * ((tb.outer_diameter_mm * 1e-3) ** 2 - (tb.inner_diameter_mm * 1e-3) ** 2)
+            self.tubing_stiffness_n_m = tb.youngs_modulus_pa * area / (cfg.rod_length_m - tb.anchor_depth_m)
         self.f1_hz = first_natural_frequency_hz(mesh, cfg.rod.mass_matrix)
         self._check_convexity()
 
@@ -249,6 +259,14 @@ class Simulator:
             self._plan_upstroke(float(self.u[-1]), 0.0, 60.0 / self.surface.default_spm(self.cfg.surface.spm),
                                 plan_ist, plan_par)
             self.void, self.void_until = int(plan_ist[K.I_VOID]), float(plan_par[K.P_VOID_UNTIL])
+        # gas in the chamber: the first upstroke re-expands what the clearance holds at the bottom
+        # (on, reference plunger position, gas volume and pressure there, liquid volume) of the chamber; the
+        # kernel re-references it when a valve opens (kernel.gas_valves)
+        self._gas = np.zeros(5)
+        if self.gas is not None:
+            self._gas_start()
+        elif self.tubing_stiffness_n_m > 0:  # the plunger holds P+ at rest: the tubing carries the fluid load
+            self._gas[:] = (1.0, float(self.u[-1]), 0.0, -self.law.down_eq_n, 0.0)
         self.fillage = 1.0
         self.energy = np.zeros(K.N_ENERGY)
         self.e0 = self.mechanical_energy_j()
@@ -267,6 +285,16 @@ class Simulator:
         self.uav[1], self.uav[2] = v_m_s, a_m_s2
         n0 = self._ea_len[0] * (self.u[0] - self.uav[0])
         self.uav[3] = n0 + self._f_all[0] - md[0] * a_m_s2 - mo[0] * self.a[0] - cd[0] * v_m_s
+
+    def _intake_pa(self) -> float:
+        return self.annulus.intake_pressure_pa() if self.annulus is not None else self.cfg.pump.intake_pressure_pa
+
+    def _gas_start(self) -> None:
+        """The chamber at the bottom of the stroke after reset: the clearance holds the compressed mixture
+        (gas at p_d); from here the kernel follows it (kernel.gas_valves)."""
+        p_in, p_d = self._intake_pa(), self.p_pump_pa + self.cfg.pump.discharge_overpressure_pa
+        vg = self.gas.clearance_gas_m3(p_in, p_d)
+        self._gas[:] = (1.0, float(self.u[-1]), vg, p_d, self.gas.clearance_m3 - vg)
 
     def mechanical_energy_j(self) -> float:
         """Kinetic + strain energy of the whole string (top node included)."""
@@ -317,6 +345,20 @@ class Simulator:
         ist[K.I_PLDIR], ist[K.I_VOID] = self.pl_dir, self.void
         ist[K.I_PUMP_NONMONO] = int(law.drop_n > 0)
         ist[K.I_FRIC_NONMONO] = int(fr.law == "nonmonotone" and fr.coefficient > fr.kinetic_coefficient)
+        if self.gas is not None:
+            ist[K.I_GAS] = int(self._gas[0])
+            par[K.P_GAS_U0], par[K.P_GAS_V0], par[K.P_GAS_P0], par[K.P_GAS_LIQ] = self._gas[1:5]
+            par[K.P_GAS_K], par[K.P_GAS_APL] = self.gas.exponent, self.gas.area_m2
+            par[K.P_GAS_PIN] = self._intake_pa()
+            par[K.P_GAS_PHI] = self.gas.fraction(par[K.P_GAS_PIN])
+            par[K.P_GAS_PD] = self.p_pump_pa + cfg.pump.discharge_overpressure_pa
+            par[K.P_GAS_POUT], par[K.P_GAS_FRIC] = self.p_pump_pa, cfg.pump.plunger_friction_n
+            par[K.P_GAS_VMIN] = self.gas.area_m2 * GAS_MIN_DELAY_FRACTION * self.surface.stroke_length_m(
+                cfg.surface.stroke_length_m)
+        elif self.tubing_stiffness_n_m > 0:  # kernel mode 2: a plunger area of 0 marks the tubing spring
+            ist[K.I_GAS] = 2
+            par[K.P_GAS_U0], par[K.P_GAS_P0] = self._gas[1], self._gas[3]
+            par[K.P_GAS_K], par[K.P_GAS_APL] = self.tubing_stiffness_n_m, 0.0
         return par, ist
 
     def run_stroke(self, spm: float | None = None, stroke_length_m: float | None = None,
@@ -393,6 +435,8 @@ class Simulator:
         self.pl_dir, self.void = int(ist[K.I_PLDIR]), int(ist[K.I_VOID])
         self._ub_max, self._ub_min = float(par[K.P_UBMAX]), float(par[K.P_UBMIN])
         self.void_until = float(par[K.P_VOID_UNTIL])
+        if self.gas is not None or self.tubing_stiffness_n_m > 0:  # the kernel moved the reference on
+            self._gas[1:5] = par[K.P_GAS_U0], par[K.P_GAS_V0], par[K.P_GAS_P0], par[K.P_GAS_LIQ]
         self.time_s = t0 + n_steps * dt
         trace = self._trace(rec[:, : ist[K.I_NREC]]) if record else None
         self.fillage = fillage
@@ -408,7 +452,15 @@ class Simulator:
 
     def _solve_qp(self, ksd, kso, dt, par, ist, step, time_s) -> None:
         w = self._work
-        inv = self.qp.inverse(ksd, kso, dt)
+        dk = float(par[K.P_GAS_DK])
+        if dk == 0.0:
+            inv = self.qp.inverse(ksd, kso, dt)
+        else:  # the kernel added the gas spring dk to K*_BB (ksd holds it): Sherman-Morrison on the cached K*^-1
+            ksd0 = ksd.copy()
+            ksd0[-1] -= dk
+            inv = self.qp.inverse(ksd0, kso, dt)
+            col = inv[:, -1] / (1.0 + dk * inv[-1, -1])
+            inv = inv - dk * np.outer(col, inv[-1, :])
         v_raw, status = self.qp.solve(inv, w.wb, w.wlo, w.whi, w.ns.copy(), step, time_s)
         # polish: exact active-set solve from the QP's pattern, kept only if it is KKT-certified
         v = np.empty(self.n_free)
@@ -453,8 +505,15 @@ class Simulator:
             self._top_ub = float(par[K.P_UBMIN])
             self._rising_s = time_s - self._t_bottom
             liquid_m = upstroke
+            if self.gas is not None:  # the gas takes its share of the displacement
+                liquid_m = upstroke * self.gas.liquid_fraction(
+                    self._intake_pa(), self.p_pump_pa + self.cfg.pump.discharge_overpressure_pa, upstroke)
+                fillage = liquid_m / upstroke
+            if self.tubing_stiffness_n_m > 0:  # the barrel rose with the plunger while the load transferred
+                stretch = (self.law.up_eq_n - self.law.down_eq_n) / self.tubing_stiffness_n_m
+                liquid_m = min(liquid_m, max(upstroke - stretch, 0.0))
             if self.annulus is not None:
-                liquid_m = min(self._liquid_stroke_m, upstroke)
+                liquid_m = min(self._liquid_stroke_m, liquid_m)
                 # book what the annulus actually gave: the plan at the bottom predicted the inflow of the
                 # upstroke, and the pump cannot lift liquid the annulus does not hold (mass conservation)
                 liquid_m *= self.annulus.take(plunger_area_m2(self.cfg.pump) * liquid_m, time_s)
@@ -464,12 +523,17 @@ class Simulator:
             par[K.P_UBMAX] = ub
             events.append(("top", time_s, ub, fillage))
         elif direction < 0 and self._pump_phase == "down":  # bottom: intake pressure sets the next P-
-            if float(par[K.P_UBMAX]) - self._top_ub <= min_travel:
+            # travel from the highest point since the top was accepted (P_UBMIN is not reset there: a top
+            # accepted early, e.g. a mid-upstroke bounce on gas, must not hide the rest of the upstroke)
+            if float(par[K.P_UBMAX]) - min(self._top_ub, float(par[K.P_UBMIN])) <= min_travel:
                 return fillage
             if self.annulus is not None:
                 self.law = self._valve()
                 par[K.P_PUMP_LO] = -self.law.up_eq_n
                 self._plan_upstroke(float(par[K.P_UBMAX]), time_s, period_s, ist, par)
+            if self.gas is not None:  # the intake pressure of the coming upstroke (inflow model)
+                par[K.P_GAS_PIN] = self._intake_pa()
+                par[K.P_GAS_PHI] = self.gas.fraction(par[K.P_GAS_PIN])
             self._pump_phase = "up"
             self._t_bottom = time_s
             par[K.P_UBMIN] = ub
@@ -477,11 +541,15 @@ class Simulator:
         return fillage
 
     def _trace(self, rec: np.ndarray) -> dict:
+        prl = rec[K.R_PRL]
+        f_sb = self.cfg.surface.stuffing_box_friction_n
+        if f_sb > 0:  # the stuffing box resists the polished rod: the dynamometer reads it, the rod does not
+            prl = prl + f_sb * np.sign(rec[K.R_VA])
         return {
             "t_s": rec[K.R_T],  # views into the record: no copies per stroke
             "polished_rod_position_m": rec[K.R_UA],
             "polished_rod_velocity_m_s": rec[K.R_VA],
-            "polished_rod_load_n": rec[K.R_PRL],
+            "polished_rod_load_n": prl,
             "pump_position_m": rec[K.R_UB],
             "pump_velocity_m_s": rec[K.R_VB],
             "pump_load_n": rec[K.R_PUMP],

@@ -37,7 +37,7 @@ def _taper_top_data(sim: Simulator) -> tuple[np.ndarray, np.ndarray, np.ndarray,
         mesh, cfg = sim.mesh, sim.cfg
         e = np.array(taper_tops(sim))
         p_top = tubing_pressure_pa(cfg.fluid, sim.survey.tvd(mesh.x_m[e]))
-        tensile = np.array([metrics.ROD_GRADE_TENSILE_PA[t.grade] for t in cfg.rod.tapers])
+        tensile = np.array([t.tensile_strength_pa or metrics.ROD_GRADE_TENSILE_PA[t.grade] for t in cfg.rod.tapers])
         cached = (e, mesh.area_m2[e], p_top * mesh.area_m2[e], tensile)
         sim._taper_top_data = cached
     return cached
