@@ -21,6 +21,7 @@ from typing import Any
 import yaml
 
 from .errors import ConfigError
+from .shipped import shipped_dir
 
 
 class _ConfigLoader(yaml.SafeLoader):
@@ -385,7 +386,7 @@ def _known_solvers() -> list[str]:
 
 
 # ----------------------------------------------------------------------------------------------- loading
-CONFIG_DIR = Path(__file__).resolve().parents[1] / "configs" / "wells"
+CONFIG_DIR = shipped_dir("wells")  # configs/wells of the checkout, or the wheel's package data
 
 
 def shipped_configs() -> list[str]:

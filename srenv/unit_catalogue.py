@@ -1,8 +1,7 @@
 """Catalogue of API 11E conventional pumping units, read with ``yaml.safe_load`` (nothing is evaluated).
 
-The loader reads the copy shipped inside the package, ``srenv/data/units_catalogue.yaml``, so it works
-from a non-editable install; ``configs/units/catalogue.yaml`` is the same file for people browsing the
-repository (a test keeps the two identical). Each entry gives either ``k_m`` or ``h_m`` (saddle bearing
+The loader reads ``configs/units/catalogue.yaml``: in a checkout directly, from a wheel as the package
+data it ships (:func:`srenv.shipped.shipped_dir`). Each entry gives either ``k_m`` or ``h_m`` (saddle bearing
 height above the crank shaft), see :class:`~srenv.beam_unit.BeamUnitGeometry`.
 """
 
@@ -18,8 +17,9 @@ import yaml
 
 from .beam_unit import BeamUnitGeometry
 from .errors import ConfigError
+from .shipped import shipped_dir
 
-PACKAGE_CATALOGUE_PATH = Path(__file__).parent / "data" / "units_catalogue.yaml"
+PACKAGE_CATALOGUE_PATH = shipped_dir("units") / "catalogue.yaml"
 REPO_CATALOGUE_PATH = Path(__file__).parents[1] / "configs" / "units" / "catalogue.yaml"
 
 IN_LB_TO_NM = 0.0254 * 4.4482216152605
