@@ -8,16 +8,28 @@ __version__ = "0.1.0"
 
 ENV_ID = "srenv/SuckerRod-v0"
 
+# Every env srenv registers: id -> (entry point, default kwargs shown by gymnasium.spec(id)). Adding an env
+# is one line here. No TimeLimit (max_episode_steps) and no reward_threshold are registered on purpose:
+# the env truncates itself from its well config (control.max_episode_s, the horizon, and
+# control.max_episode_steps, a cap), so the config stays the one source of the episode length, and its
+# returns are time integrals of production less penalties, with no level that "solves" the task.
+ENVS: dict[str, tuple[str, dict]] = {
+    ENV_ID: ("srenv.envs.sucker_rod_v0:SuckerRodEnv", {"config": "default"}),
+}
 
-def _register() -> None:
+
+def register_envs() -> None:
+    """Register :data:`ENVS` with gymnasium (idempotent; run on ``import srenv``)."""
     import gymnasium
 
-    if ENV_ID not in gymnasium.registry:
-        # entry point by string: importing srenv stays light (the kernel compiles only when an env is made)
-        gymnasium.register(id=ENV_ID, entry_point="srenv.envs.sucker_rod_v0:SuckerRodEnv")
+    for env_id, (entry_point, kwargs) in ENVS.items():
+        if env_id not in gymnasium.registry:
+            # entry point by string: importing srenv stays light (the kernel compiles only when an env is made)
+            gymnasium.register(id=env_id, entry_point=entry_point, kwargs=dict(kwargs),
+                               max_episode_steps=None, reward_threshold=None, nondeterministic=False)
 
 
-_register()
+register_envs()
 
 
 def __getattr__(name: str) -> type:
