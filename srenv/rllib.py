@@ -9,8 +9,9 @@ second):
 2. ``import srenv.rllib; srenv.rllib.register()`` once in the driver, then the plain id
    ``config.environment("srenv/SuckerRod-v0", env_config={...})``: every srenv id is put in Ray Tune's
    cluster-wide registry with a creator that imports srenv in the runner.
-3. ``config.environment(srenv.rllib.env_creator, env_config={"env_id": "srenv/SuckerRod-v0", ...})``
-   (or ``ray.tune.register_env("any-name", srenv.rllib.env_creator)``): the creator itself.
+3. ``ray.tune.register_env("any-name", srenv.rllib.env_creator)``, then
+   ``config.environment("any-name", env_config={"env_id": "srenv/SuckerRod-v0", ...})``: the creator
+   itself, under a name of your choice (RLlib takes a creator only through its registry).
 
 ``env_config`` holds the ``gymnasium.make`` keyword arguments (``config``, ``overrides``, ...). A creator
 must return one env per call: ``lambda c: gym.make(...)`` fails in the runners (srenv not imported there),
