@@ -8,58 +8,24 @@ from __future__ import annotations
 
 import argparse
 import json
-import math
-import os
 import sys
-import tempfile
 from pathlib import Path
 
 import numpy as np
 
+from .cli_types import positive as _positive
+from .cli_types import positive_int as _positive_int
 from .errors import ConfigError, SolverFailure
+from .outputs import atomic_write
 
 EXIT_BAD_INPUT = 2
 EXIT_SOLVER = 3
-
-
-def _positive(name: str, unit: str):
-    def parse(text: str) -> float:
-        try:
-            x = float(text)
-        except ValueError:
-            raise argparse.ArgumentTypeError(f"{name} = {text!r}: expected a positive number in {unit}") from None
-        if not math.isfinite(x) or x <= 0:
-            raise argparse.ArgumentTypeError(f"{name} = {text!r}: expected a positive number in {unit}")
-        return x
-    return parse
-
-
-def _positive_int(name: str):
-    def parse(text: str) -> int:
-        if not text.isdigit() or int(text) <= 0:
-            raise argparse.ArgumentTypeError(f"{name} = {text!r}: expected a positive integer")
-        return int(text)
-    return parse
 
 
 class _Parser(argparse.ArgumentParser):
     def error(self, message: str) -> None:  # one line, status 2, no usage dump
         print(f"srenv: error: {message}", file=sys.stderr)
         sys.exit(EXIT_BAD_INPUT)
-
-
-def atomic_write(path: str | Path, write) -> None:
-    """Write through a temporary file in the target directory, then rename: never a partial file."""
-    path = Path(path)
-    fd, tmp = tempfile.mkstemp(dir=path.parent if str(path.parent) else ".", suffix=path.suffix)
-    os.close(fd)
-    try:
-        write(tmp)
-        os.replace(tmp, path)
-    except BaseException:
-        if os.path.exists(tmp):
-            os.remove(tmp)
-        raise
 
 
 def write_trace_csv(trace: dict, path: str) -> None:

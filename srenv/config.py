@@ -22,6 +22,7 @@ import yaml
 
 from .errors import ConfigError
 from .shipped import shipped_dir
+from .unit_catalogue import conventional_unit
 
 
 class _ConfigLoader(yaml.SafeLoader):
@@ -374,9 +375,7 @@ def _check_conventional_unit(surface: SurfaceConfig) -> None:
     """A conventional unit's stroke comes from its crank hole: the unit must exist and have that hole, or
     the stroke would be beyond what the unit can make. Checked at load time (not only when a simulator is
     built) so that every loader of a config - CLI, env, sweeps - refuses it before doing any work."""
-    from .surface import _conventional_unit  # the one place that resolves a unit; lazy: it imports us
-
-    _conventional_unit(surface.unit, surface.crank_hole)
+    conventional_unit(surface.unit, surface.crank_hole)
 
 
 def _known_solvers() -> list[str]:

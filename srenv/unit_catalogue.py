@@ -15,7 +15,7 @@ from typing import Any
 
 import yaml
 
-from .beam_unit import BeamUnitGeometry
+from .beam_unit import BeamUnitGeometry, ConventionalUnit
 from .errors import ConfigError
 from .shipped import shipped_dir
 
@@ -108,3 +108,18 @@ def get_unit(designation: str) -> BeamUnitGeometry:
     if key not in units:
         raise KeyError(f"unknown pumping unit {designation!r}; known units: {', '.join(units)}")
     return units[key]
+
+
+@functools.lru_cache(maxsize=16)
+def conventional_unit(designation: str, crank_hole: int) -> ConventionalUnit:
+    """Catalogue unit with its crank hole, cached: the env rebuilds simulators on every reset. The one place
+    that resolves a unit (config validation and the surface motion both call it)."""
+    try:
+        geometry = get_unit(designation)
+    except KeyError:
+        raise ConfigError("surface.unit", designation,
+                          "an API designation from the unit catalogue: " + ", ".join(list_units())) from None
+    holes = len(geometry.crank_radii_m)
+    if not 0 <= crank_hole < holes:
+        raise ConfigError("surface.crank_hole", crank_hole, f"an index in 0..{holes - 1} (0 = longest stroke)")
+    return ConventionalUnit(geometry, crank_hole)
