@@ -117,7 +117,7 @@ def parse_rllib_config(data: Any, source: str = "<dict>") -> RLlibTrainConfig:
 def build_algorithm_config(cfg: RLlibTrainConfig) -> Any:
     import srenv.rllib
 
-    if cfg.env_id in srenv.ENVS:
+    if cfg.env_id in srenv.rllib.srenv_ids():
         srenv.rllib.register([cfg.env_id])  # the plain id, known to every env runner of the cluster
     return (algorithm_configs()[cfg.algo]()
             .environment(cfg.env_id, env_config=dict(cfg.env_kwargs))

@@ -24,9 +24,16 @@ from __future__ import annotations
 from functools import partial
 from typing import Any
 
-from . import ENV_ID, ENVS
+from . import ENV_ID
 
-__all__ = ["env_creator", "register"]
+__all__ = ["env_creator", "register", "srenv_ids"]
+
+
+def srenv_ids() -> list[str]:
+    """Every id in gymnasium's registry under the ``srenv/`` namespace (after ``import srenv``)."""
+    import gymnasium as gym
+
+    return sorted(i for i in gym.registry if i.startswith("srenv/"))
 
 
 def _make(env_id: str, env_config: Any) -> Any:
@@ -48,16 +55,17 @@ def env_creator(env_config: Any) -> Any:
 
 
 def register(env_ids: list[str] | None = None) -> list[str]:
-    """Put srenv's ids (default: all of :data:`srenv.ENVS`) in Ray Tune's registry; returns them.
+    """Put srenv's ids (default: all of :func:`srenv_ids`) in Ray Tune's registry; returns them.
 
     Call before (or after) ``ray.init``; Ray ships the registration to every process of the cluster.
     """
     from ray.tune.registry import register_env
 
-    ids = list(ENVS) if env_ids is None else list(env_ids)
+    known = srenv_ids()
+    ids = known if env_ids is None else list(env_ids)
     for env_id in ids:
-        if env_id not in ENVS:
-            raise ValueError(f"env_id = {env_id!r}: expected one of srenv's envs: {', '.join(ENVS)}")
+        if env_id not in known:
+            raise ValueError(f"env_id = {env_id!r}: expected one of srenv's envs: {', '.join(known)}")
         # a partial of a module-level function pickles by reference: the runner imports srenv.rllib
         register_env(env_id, partial(_make, env_id))
     return ids

@@ -91,3 +91,20 @@ def test_wheel_runs_from_elsewhere(wheel: Path, tmp_path: Path) -> None:
     assert probe["shipped"] == sorted(p.stem for p in (ROOT / "configs" / "wells").glob("*.yaml"))
     card = (elsewhere / "card.csv").read_text().splitlines()
     assert len(card) > 100  # one stroke of the shipped paper_fig3_vertical well, written where we ran
+
+
+def test_spec_shows_the_default_kwargs() -> None:
+    import gymnasium as gym
+
+    import srenv
+
+    spec = gym.spec(srenv.ENV_ID)
+    assert spec.kwargs == {"config": "default"} and spec.entry_point == srenv.ENVS[srenv.ENV_ID][0]
+    # no TimeLimit: the env truncates itself from its config (one source of the episode length)
+    assert spec.max_episode_steps is None
+    env = gym.make(srenv.ENV_ID, control__max_episode_steps=3)
+    env.reset(seed=0)
+    ends = [env.step(env.action_space.sample())[3] for _ in range(3)]
+    assert ends == [False, False, True]
+    env.close()
+
