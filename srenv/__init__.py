@@ -7,14 +7,17 @@ __all__ = ["ConfigError", "Simulator", "SolverFailure", "WellConfig", "load_conf
 __version__ = "0.1.0"
 
 ENV_ID = "srenv/SuckerRod-v0"
+ENV_ID_V1 = "srenv/SuckerRod-v1"
 
 # Every env srenv registers: id -> (entry point, default kwargs shown by gymnasium.spec(id)). Adding an env
 # is one line here. No TimeLimit (max_episode_steps) and no reward_threshold are registered on purpose:
-# the env truncates itself from its well config (control.max_episode_s, the horizon, and
-# control.max_episode_steps, a cap), so the config stays the one source of the episode length, and its
-# returns are time integrals of production less penalties, with no level that "solves" the task.
+# each env truncates itself from its config (v0: control.max_episode_s, the horizon, and
+# control.max_episode_steps, a cap; v1: task.episode_hours of well time, 144 five-minute intervals by
+# default), so the config stays the one source of the episode length; the returns are time integrals of
+# production less penalties (v1: less costs), with no level that "solves" the task.
 ENVS: dict[str, tuple[str, dict]] = {
     ENV_ID: ("srenv.envs.sucker_rod_v0:SuckerRodEnv", {"config": "default"}),
+    ENV_ID_V1: ("srenv.envs.sucker_rod_v1:SuckerRodV1Env", {"scenario": "train", "observation": "field"}),
 }
 
 

@@ -112,6 +112,9 @@ def run(repeats: int = 5, strokes: int = 10) -> dict:
     env = env_figures(repeats)
     if env is not None:
         out["env"] = env
+    from .envs.bench_env import v1_figures
+
+    out["env_v1"] = v1_figures(repeats=max(1, repeats // 2))
     return out
 
 

@@ -131,6 +131,12 @@ def build_parser() -> argparse.ArgumentParser:
         add_sweep = None
     if add_sweep is not None:
         add_sweep(sub)
+    from .diagnose import add_parser as add_diagnose  # field engineering (docs/field.md)
+
+    add_diagnose(sub)
+    from .fit import add_parser as add_fit
+
+    add_fit(sub)
     return p
 
 

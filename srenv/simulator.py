@@ -224,9 +224,9 @@ class Simulator:
         self.u = solve_tridiagonal(kd[1:], ko[1:], rhs)
         self.v = np.zeros(n)
         self.a = np.zeros(n)
-        ea0 = self._ea_len[0]
-        prl_eq0 = ea0 * self.u[0] + self._f_all[0]
-        self.uav = np.array([0.0, 0.0, 0.0, prl_eq0])
+        self.uav = np.zeros(4)
+        self._at_rest = True  # until the first run: the string is static (see _start_top)
+        self._start_top(0.0, 0.0)  # each run_stroke starts from its motion's state; run_velocity may name one
         self.time_s = 0.0
         self.status = np.zeros(n, dtype=np.int64)
         self.prev_lam = np.zeros(n)
@@ -243,12 +243,27 @@ class Simulator:
         if self.annulus is not None:
             plan_par = np.zeros(K.N_PAR)
             plan_ist = np.zeros(K.N_IST, dtype=np.int64)
-            self._plan_upstroke(float(self.u[-1]), 0.0, 60.0 / self.cfg.surface.spm, plan_ist, plan_par)
+            self._plan_upstroke(float(self.u[-1]), 0.0, 60.0 / self.surface.default_spm(self.cfg.surface.spm),
+                                plan_ist, plan_par)
             self.void, self.void_until = int(plan_ist[K.I_VOID]), float(plan_par[K.P_VOID_UNTIL])
         self.fillage = 1.0
         self.energy = np.zeros(K.N_ENERGY)
         self.e0 = self.mechanical_energy_j()
         self._work = _Work(n)
+
+    def _start_top(self, v_m_s: float, a_m_s2: float) -> None:
+        """Set the prescribed top's velocity and acceleration (start of a stroke, see
+        SurfaceMotion.stroke_start_state) and the polished-rod load that goes with them. While the string is
+        still static (after reset) and the mass matrix is consistent, the free nodes' accelerations follow
+        from M_ff a_f = -M_fA a_A."""
+        (md, mo), cd = self._m, self._c
+        if self._at_rest and mo[0] != 0.0:
+            rhs = np.zeros(self.n_free)
+            rhs[0] = -mo[0] * a_m_s2
+            self.a = solve_tridiagonal(md[1:], mo[1:], rhs)
+        self.uav[1], self.uav[2] = v_m_s, a_m_s2
+        n0 = self._ea_len[0] * (self.u[0] - self.uav[0])
+        self.uav[3] = n0 + self._f_all[0] - md[0] * a_m_s2 - mo[0] * self.a[0] - cd[0] * v_m_s
 
     def mechanical_energy_j(self) -> float:
         """Kinetic + strain energy of the whole string (top node included)."""
@@ -305,12 +320,14 @@ class Simulator:
                    record: bool = True) -> RunResult:
         """One full stroke starting at the bottom, at the given (or configured) SPM and stroke length."""
         sc = self.cfg.surface
-        spm = sc.spm if spm is None else float(spm)
+        spm = self.surface.default_spm(sc.spm) if spm is None else float(spm)
         stroke = self.surface.stroke_length_m(sc.stroke_length_m if stroke_length_m is None
                                               else float(stroke_length_m))
         period = 60.0 / spm
         n_steps = max(1, math.ceil(period / self.cfg.simulation.time_step_s - 1e-9))
         va = self.surface.stroke_velocity(spm, stroke, n_steps)
+        # the stroke's own start state: the top's acceleration jumps when the SPM (or stroke) changes
+        self._start_top(*self.surface.stroke_start_state(spm, stroke))
         return self._run(va, period / n_steps, record, spm, stroke)
 
     def run_duration(self, duration_s: float, pull_velocity_m_s: float | None = None,
@@ -323,8 +340,16 @@ class Simulator:
         va = self.surface.pull_velocity(t, speed)
         return self._run(va, dt, record, 0.0, 0.0)
 
-    def run_velocity(self, top_velocity_m_s: np.ndarray, dt: float, record: bool = True) -> RunResult:
-        """Advance with an arbitrary prescribed top velocity series (positive down), one value per step."""
+    def run_velocity(self, top_velocity_m_s: np.ndarray, dt: float, record: bool = True,
+                     start_velocity_m_s: float | None = None, start_acceleration_m_s2: float | None = None
+                     ) -> RunResult:
+        """Advance with an arbitrary prescribed top velocity series (positive down), one value per step.
+        `start_velocity_m_s` / `start_acceleration_m_s2` (positive down) set the top's state before the first
+        step (default: keep the current one); give the series' own values, or the polished-rod load carries a
+        Nyquist sawtooth of (top node mass) x (acceleration mismatch) for the whole run."""
+        if start_velocity_m_s is not None or start_acceleration_m_s2 is not None:
+            self._start_top(self.uav[1] if start_velocity_m_s is None else float(start_velocity_m_s),
+                            self.uav[2] if start_acceleration_m_s2 is None else float(start_acceleration_m_s2))
         return self._run(np.ascontiguousarray(top_velocity_m_s, dtype=float), float(dt), record, 0.0, 0.0)
 
     def _run(self, va: np.ndarray, dt: float, record: bool, spm: float, stroke: float) -> RunResult:
@@ -361,6 +386,7 @@ class Simulator:
             else:
                 fillage = self._on_event(int(ist[K.I_EVENT]), par, ist, t0 + step * dt, events, fillage, stroke,
                                          60.0 / spm if spm > 0 else 0.0)
+        self._at_rest = False
         self.pl_dir, self.void = int(ist[K.I_PLDIR]), int(ist[K.I_VOID])
         self._ub_max, self._ub_min = float(par[K.P_UBMAX]), float(par[K.P_UBMIN])
         self.void_until = float(par[K.P_VOID_UNTIL])
@@ -421,7 +447,9 @@ class Simulator:
             liquid_m = upstroke
             if self.annulus is not None:
                 liquid_m = min(self._liquid_stroke_m, upstroke)
-                self.annulus.take(plunger_area_m2(self.cfg.pump) * liquid_m, time_s)
+                # book what the annulus actually gave: the plan at the bottom predicted the inflow of the
+                # upstroke, and the pump cannot lift liquid the annulus does not hold (mass conservation)
+                liquid_m *= self.annulus.take(plunger_area_m2(self.cfg.pump) * liquid_m, time_s)
                 fillage = liquid_m / upstroke
             self._pumped_m3 += plunger_area_m2(self.cfg.pump) * liquid_m
             self._pump_phase = "down"
@@ -453,6 +481,37 @@ class Simulator:
 
     def run_strokes(self, n: int, record: bool = True, **kw) -> list[RunResult]:
         return [self.run_stroke(record=record, **kw) for _ in range(n)]
+
+    # ------------------------------------------------------------------------------------------ idle time
+    # The v1 env stops the unit between strokes (intermittent pumping) and fast-forwards quasi-steady
+    # strokes; these keep the annulus, the clock and the fluid-pound plan consistent when it does.
+    def stop_at_bottom(self) -> None:
+        """The unit stops at the bottom of a stroke: the string settles to its static state (plunger at rest
+        holding P+); the annulus contents and the clock are kept."""
+        t = self.time_s
+        if self.annulus is not None:
+            self.annulus.accumulate(t)  # the inflow since the stroke's last valve event
+        vol = self.annulus.volume_m3 if self.annulus is not None else 0.0
+        self.reset(self.annulus.level_m if self.annulus is not None else None)
+        self.time_s = t
+        if self.annulus is not None:
+            self.annulus.volume_m3 = vol
+            self.annulus.last_time_s = t
+
+    def idle(self, duration_s: float) -> None:
+        """Let `duration_s` pass with the unit stopped: the annulus refills, no rod dynamics."""
+        self.time_s += max(float(duration_s), 0.0)
+        if self.annulus is not None:
+            self.annulus.accumulate(self.time_s)
+
+    def replan_upstroke(self, period_s: float) -> None:
+        """Re-plan the coming upstroke's liquid (fluid pound) after the annulus changed outside a stroke."""
+        if self.annulus is None or self._pump_phase != "up":
+            return
+        plan_par = np.zeros(K.N_PAR)
+        plan_ist = np.zeros(K.N_IST, dtype=np.int64)
+        self._plan_upstroke(self._ub_max, self.time_s, period_s, plan_ist, plan_par)
+        self.void, self.void_until = int(plan_ist[K.I_VOID]), float(plan_par[K.P_VOID_UNTIL])
 
 
 class _Work:

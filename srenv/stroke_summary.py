@@ -1,7 +1,10 @@
 """Per-stroke summary: composes ``metrics`` (pure functions on traces) with a simulator run.
 
-This is where a run's raw records become the numbers users read: PPRL/MPRL, pump stroke, fillage,
-production, Goodman loading per taper, card work, stick-slip index and the solver path counts; with a
+This is where a run's raw records become the numbers users read: PPRL/MPRL (``pprl_n``/``mprl_n`` over
+every stroke of the run, start-up included; ``last_stroke_pprl_n``/``last_stroke_mprl_n`` of the last
+stroke only, the periodic state a measured card is compared with), pump stroke, fillage,
+production, the card class (``card_class``: full, fluid_pound, gas_interference, no_fluid_load),
+Goodman loading per taper, card work, stick-slip index and the solver path counts; with a
 conventional beam unit also the gearbox torque, its loading against the reducer rating and the
 polished-rod and motor power (``gearbox.py``).
 """
@@ -13,6 +16,7 @@ import numpy as np
 from . import metrics
 from .fluid import tubing_pressure_pa
 from .inflow import SECONDS_PER_DAY
+from .pump_card import analyse_pump_card
 from .simulator import RunResult, Simulator, concat_traces
 
 # Smooth stroke-frequency curvature of du leaks through the moving average (metrics docstring);
@@ -52,10 +56,15 @@ def summarize(sim: Simulator, results: list[RunResult]) -> dict:
     tr = results[0].trace if len(results) == 1 else concat_traces(results)
     n_strokes = len(results)
     pos, load = tr["polished_rod_position_m"], tr["polished_rod_load_n"]
-    card = metrics.card_metrics(pos, load)
+    card = metrics.card_metrics(pos, load)  # every stroke, start-up included
+    last = card if n_strokes == 1 else metrics.card_metrics(results[-1].trace["polished_rod_position_m"],
+                                                            results[-1].trace["polished_rod_load_n"])
     pump_stroke = metrics.pump_stroke_m(tr["pump_position_m"]) if n_strokes == 1 else float(np.mean(
         [metrics.pump_stroke_m(r.trace["pump_position_m"]) for r in results]))
     fill = float(np.mean([r.fillage for r in results]))
+    # the card class of the last stroke's pump card (labelled cards for classifiers; pump_card.py)
+    last_tr = results[-1].trace
+    pump_card = analyse_pump_card(last_tr["pump_position_m"], last_tr["pump_load_n"])
     spm = results[-1].spm
     # production = liquid actually lifted over the time it took (a stroke whose barrel only partly filled
     # counts its liquid, not its swept volume; slow and fast strokes are weighed by their duration)
@@ -75,9 +84,13 @@ def summarize(sim: Simulator, results: list[RunResult]) -> dict:
         "spm": spm,
         "pprl_n": card["pprl_n"],
         "mprl_n": card["mprl_n"],
+        "last_stroke_pprl_n": last["pprl_n"],  # the periodic stroke a measured card compares with
+        "last_stroke_mprl_n": last["mprl_n"],
         "polished_rod_stroke_m": card["stroke_m"],
         "pump_stroke_m": pump_stroke,
         "fillage": fill,
+        "card_class": pump_card["card_class"],
+        "card_fillage": pump_card["fillage"],  # read off the last pump card, as a diagnosis would
         "production_m3_day": production,
         "duration_s": duration_s,
         "card_work_j_per_stroke": card["card_area_j"] / n_strokes,

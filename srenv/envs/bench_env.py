@@ -35,3 +35,36 @@ def env_overhead(repeats: int = 5, n_strokes: int = 50) -> dict:
     te, ts = statistics.median(t_env), statistics.median(t_sim)
     return {"env_steps_per_s": n_strokes / te, "bare_strokes_per_s": n_strokes / ts,
             "env_overhead_pct": 100.0 * (te - ts) / ts, "strokes_per_env_step": env.cfg.control.strokes_per_step}
+
+
+def v1_figures(repeats: int = 3, steps: int = 48) -> dict:
+    """srenv/SuckerRod-v1 for ``srenv bench``: env steps/s at full speed, at the VSD minimum and idle, on the
+    same train well (medians over `repeats`), and what an interval costs in exact strokes."""
+    from .sucker_rod_v1 import SuckerRodV1Env, action_from_setpoints
+
+    env = SuckerRodV1Env(scenario="train")
+    env.reset(seed=0)
+    ctl = env.cfg.control
+    modes = {"pumping_full_speed": action_from_setpoints(ctl.spm_max, ctl.stroke_max_m, ctl),
+             "pumping_vsd_minimum": action_from_setpoints(ctl.spm_min, ctl.stroke_min_m, ctl),
+             "intermittent_half_duty": action_from_setpoints(0.5 * ctl.spm_min, ctl.stroke_max_m, ctl),
+             "idle": action_from_setpoints(0.0, ctl.stroke_min_m, ctl)}
+    out: dict = {"well": env.well.well_id, "interval_s": env.cfg.task.interval_s, "steps": steps}
+    for name, action in modes.items():
+        rates, exact, ff = [], 0, 0.0
+        for rep in range(repeats + 1):
+            env.reset(seed=0)
+            t = time.perf_counter()
+            for _ in range(steps):
+                info = env.step(action)[4]
+                exact += info["exact_strokes"] if rep else 0
+                ff += info["fast_forward_strokes"] if rep else 0.0
+            if rep:
+                rates.append(steps / (time.perf_counter() - t))
+        out[name] = {"env_steps_per_s": statistics.median(rates),
+                     "well_hours_per_wall_s": statistics.median(rates) * env.cfg.task.interval_s / 3600.0,
+                     "exact_strokes_per_step": exact / (repeats * steps),
+                     "fast_forward_strokes_per_step": ff / (repeats * steps)}
+    out["idle_vs_full_speed_cost_ratio"] = (out["pumping_full_speed"]["env_steps_per_s"]
+                                            / out["idle"]["env_steps_per_s"])
+    return out

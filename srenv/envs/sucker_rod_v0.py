@@ -53,7 +53,7 @@ The stroke metrics of :func:`srenv.stroke_summary.summarize` (``pprl_n``, ``mprl
 ``production_m3_day``, ``goodman_pct``, ``goodman_max_pct``, ``stick_slip_index``,
 ``plunger_extra_stick_episodes``, ``certified_steps``, ``corrected_steps``, ``qp_steps``,
 ``solver_calls``, ...), ``spm``, ``stroke_length_m``, ``fluid_level_m``, the reward terms, and
-``failure`` (text) when the episode ended on a failure.
+``failure`` (text) when the episode ended on a failure. ``fluid_level_m`` is 0.0 for a well without an inflow model.
 
 Episode end
 -----------
@@ -72,6 +72,13 @@ time to pump-off varies from episode to episode). ``reset(options={"randomize": 
 as is. If the warm-up stroke of ``reset`` cannot be solved, a randomised reset draws another well (up to 5
 times, from ``np_random``); only if every draw fails (or without randomisation) does ``reset`` raise
 :class:`~srenv.errors.SolverFailure`: the configured operating point itself cannot be run.
+
+Version history
+---------------
+* v0 (kept for reproducibility; fixes only): ``info["fluid_level_m"]`` is 0.0, not NaN, for a well without an
+  inflow model (NaN made the checkers' determinism test fail on four shipped configs); a pull-out config is
+  refused at construction with a ``ConfigError`` instead of failing in ``reset``. The control task is
+  ``srenv/SuckerRod-v1`` (:mod:`srenv.envs.sucker_rod_v1`).
 """
 
 from __future__ import annotations
@@ -83,7 +90,7 @@ import numpy as np
 from gymnasium import spaces
 
 from ..config import WellConfig, load_config
-from ..errors import SolverFailure
+from ..errors import ConfigError, SolverFailure
 from ..metrics import resample_prescribed_card
 from ..reward import RodFailureMonitor, SuckerRodReward
 from ..simulator import Simulator
@@ -111,6 +118,10 @@ class SuckerRodEnv(gym.Env):
         merged = dict(overrides or {})
         merged.update(_overrides_from_kwargs(kwargs))
         self.base_cfg = load_config(config, merged or None)
+        if self.base_cfg.surface.motion == "pullout":
+            raise ConfigError("surface.motion", "pullout",
+                              "'harmonic' or 'conventional' for the env (a pull-out has no strokes to control; "
+                              "run it with `srenv simulate --duration-s`)")
         if render_mode is not None and render_mode not in self.metadata["render_modes"]:
             raise ValueError(f"render_mode = {render_mode!r}: expected one of {self.metadata['render_modes']}")
         self.render_mode = render_mode
@@ -186,8 +197,10 @@ class SuckerRodEnv(gym.Env):
 
     def _info(self, m: dict, failure: str | None) -> dict:
         info = dict(m)
+        # a well without an inflow model has no annulus: report no level (0.0), never NaN (NaN != NaN breaks every
+        # determinism check on info)
         info.update(spm=self._spm, stroke_length_m=self._stroke,
-                    fluid_level_m=self.sim.annulus.level_m if self.sim.annulus is not None else float("nan"))
+                    fluid_level_m=self.sim.annulus.level_m if self.sim.annulus is not None else 0.0)
         if failure:
             info["failure"] = failure
         return info
