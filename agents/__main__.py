@@ -87,6 +87,13 @@ def build_parser() -> argparse.ArgumentParser:
     e.add_argument("--env-kwarg", type=_key_value, action="append", default=[], metavar="KEY=VALUE",
                    help="extra keyword for gymnasium.make (value read as YAML)")
     e.add_argument("--plot", help="PNG of a sample episode's cards and controls per policy")
+    e.add_argument("--trust-model", action="store_true",
+                   help="load model zips and *_vecnormalize.pkl through SB3/pickle, which runs any code they "
+                   "contain: only for files you made yourself (default: read as data, nothing unpickled)")
+
+    c = sub.add_parser("convert-stats", help="convert trusted *_vecnormalize.pkl files to the JSON that "
+                       "evaluation reads without unpickling")
+    c.add_argument("pickles", nargs="+", help="VecNormalize pickles you made yourself (they are unpickled)")
 
     q = sub.add_parser("quickstart", help="train briefly, evaluate against both baselines, plot")
     q.add_argument("--config", default=str(QUICK_CONFIG), help="training YAML (default ppo_quick.yaml)")
@@ -131,8 +138,28 @@ def report_evaluation(results: dict[str, dict], episodes: int, seed: int, config
 def cmd_evaluate(args: argparse.Namespace) -> dict:
     from .evaluate import evaluate
 
-    results = evaluate(args.policy, args.episodes, args.seed, args.config, dict(args.env_kwarg), args.plot)
+    results = evaluate(args.policy, args.episodes, args.seed, args.config, dict(args.env_kwarg), args.plot,
+                       trust_model=args.trust_model)
     return report_evaluation(results, args.episodes, args.seed, args.config)
+
+
+def cmd_convert_stats(args: argparse.Namespace) -> dict:
+    """X_vecnormalize.pkl -> X_vecnormalize.json (the pickle is trusted: the user says they made it)."""
+    import pickle
+
+    from .model_io import STATS_SUFFIX, write_stats
+
+    written = []
+    for name in args.pickles:
+        src = Path(name)
+        if not src.name.endswith("_vecnormalize.pkl") or not src.is_file():
+            raise FileNotFoundError(f"{name}: expected an existing <model>_vecnormalize.pkl")
+        with open(src, "rb") as fh:
+            vn = pickle.load(fh)  # explicitly trusted by the caller
+        dst = src.with_name(src.name.removesuffix("_vecnormalize.pkl") + STATS_SUFFIX)
+        write_stats(vn, dst)
+        written.append(str(dst))
+    return {"written": written}
 
 
 def cmd_quickstart(args: argparse.Namespace) -> dict:
@@ -161,7 +188,8 @@ def main(argv: list[str] | None = None) -> int:
 
     from .train import TrainConfigError
 
-    commands = {"train": cmd_train, "evaluate": cmd_evaluate, "quickstart": cmd_quickstart}
+    commands = {"train": cmd_train, "evaluate": cmd_evaluate, "quickstart": cmd_quickstart,
+                "convert-stats": cmd_convert_stats}
     try:
         result = commands[args.command](args)
     except (ConfigError, TrainConfigError, ValueError, FileNotFoundError) as exc:

@@ -21,10 +21,8 @@ and each is summarised over episodes as mean and standard deviation (``mean_<met
 
 from __future__ import annotations
 
-import json
 import math
 import pickle
-import zipfile
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Protocol
@@ -32,6 +30,7 @@ from typing import Any, Protocol
 import numpy as np
 
 from .baselines import FillagePolicy, RockingMachinePolicy
+from .model_io import ModelFileError, load_policy, read_data, read_stats, space_shape, stats_path
 from .train import ENV_ID, algorithms, make_env, vecnormalize_path
 
 BASELINES = ("rocking", "fillage")
@@ -74,8 +73,7 @@ class SB3Policy:
 
 def detect_algo(model_path: str | Path) -> str:
     """The algorithm a saved zip was trained with, from its JSON hyperparameters (nothing unpickled)."""
-    with zipfile.ZipFile(model_path) as zf:
-        data = json.loads(zf.read("data"))
+    data = read_data(model_path)
     # keys that only one supported algorithm stores
     for key, algo in (("clip_range", "ppo"), ("target_entropy", "sac"), ("policy_delay", "td3"),
                       ("normalize_advantage", "a2c")):
@@ -97,21 +95,40 @@ def check_spaces(model_obs: Any, model_act: Any, env_obs: Any, env_act: Any, pat
                          + " (trained on a different env config or version?)")
 
 
-def load_model(path: str | Path, env: Any) -> SB3Policy:
+def load_model(path: str | Path, env: Any, trust: bool = False) -> SB3Policy:
     """Load an SB3 zip (PPO, SAC, A2C, TD3) and its VecNormalize statistics, checked against ``env``.
 
-    Only load files you trust: SB3 zips and VecNormalize pickles can execute code when unpickled.
+    By default as data only (:mod:`agents.model_io`): nothing in the file is unpickled, so a model file
+    cannot run code. ``trust=True`` (``--trust-model``) loads through SB3 and pickle instead - which runs
+    whatever the file's pickles name: only for files you made yourself.
     """
     path = Path(path)
     if not path.is_file():
         raise FileNotFoundError(f"--policy {path}: no such model file (or use rocking / fillage)")
-    model = algorithms()[detect_algo(path)].load(str(path), device="cpu")
+    algo_cls = algorithms()[detect_algo(path)]
+    if not trust:
+        data = read_data(path)
+        obs_shape = space_shape(data, "observation_space", path)
+        act_shape = space_shape(data, "action_space", path)
+        check_spaces(obs_shape, act_shape, env.observation_space.shape, env.action_space.shape, path)
+        policy = load_policy(path, algo_cls, env.observation_space, env.action_space)
+        normalizer = None
+        json_stats = stats_path(path)
+        if json_stats.is_file():
+            normalizer = read_stats(json_stats, env.observation_space.shape)
+        elif vecnormalize_path(path) is not None:
+            raise ModelFileError(f"{vecnormalize_path(path)}: normalisation statistics only as a pickle, "
+                                 "which can run arbitrary code when loaded; convert it to "
+                                 f"{json_stats.name} (python -m agents convert-stats) or pass --trust-model "
+                                 "if you made it yourself")
+        return SB3Policy(policy, normalizer, str(path))
+    model = algo_cls.load(str(path), device="cpu")
     check_spaces(model.observation_space, model.action_space, env.observation_space, env.action_space, path)
     normalizer = None
     stats = vecnormalize_path(path)
     if stats is not None:
         with open(stats, "rb") as fh:
-            normalizer = pickle.load(fh)  # a VecNormalize without its venv: normalize_obs needs only obs_rms
+            normalizer = pickle.load(fh)  # trusted only: a VecNormalize without its venv (needs obs_rms)
         if normalizer.norm_obs and normalizer.obs_rms.mean.shape != env.observation_space.shape:
             raise ValueError(f"{stats}: normalisation statistics of shape {normalizer.obs_rms.mean.shape} "
                              f"do not fit the env's observation space {env.observation_space}")
@@ -133,7 +150,7 @@ def fillage_index(env: Any) -> int:
     return obs_index("fillage", env.unwrapped.card_points)
 
 
-def make_policy(spec: str, env: Any) -> Policy:
+def make_policy(spec: str, env: Any, trust: bool = False) -> Policy:
     if spec == "rocking":
         return RockingMachinePolicy(well_config(env))
     if spec == "fillage":
@@ -141,8 +158,8 @@ def make_policy(spec: str, env: Any) -> Policy:
     from .rllib_backend import is_rllib_checkpoint, load_rllib_policy
 
     if is_rllib_checkpoint(spec):  # a directory from backend: rllib (its checkpoint/ or step_<N>/)
-        return load_rllib_policy(spec, env)
-    return load_model(spec, env)
+        return load_rllib_policy(spec, env, trust=trust)
+    return load_model(spec, env, trust=trust)
 
 
 def policy_label(spec: str) -> str:
@@ -227,7 +244,7 @@ def summarize(episodes: list[Episode]) -> dict[str, float]:
 
 def evaluate(specs: list[str], episodes: int, seed: int, config: str = "default",
              env_kwargs: dict | None = None, plot: str | Path | None = None,
-             env_id: str = ENV_ID) -> dict[str, Any]:
+             env_id: str = ENV_ID, trust_model: bool = False) -> dict[str, Any]:
     """Evaluate each policy on seeds seed..seed+episodes-1; returns {label: summary} and writes the plot."""
     env = make_env(env_id, config=config, **(env_kwargs or {}))
     control = well_config(env).control
@@ -235,7 +252,7 @@ def evaluate(specs: list[str], episodes: int, seed: int, config: str = "default"
     samples: dict[str, Episode] = {}
     try:
         for spec in specs:
-            policy = make_policy(spec, env)
+            policy = make_policy(spec, env, trust=trust_model)
             eps = [run_episode(env, policy, seed + k, record_cards=plot is not None and k == 0)
                    for k in range(episodes)]
             label = policy_label(spec)

@@ -20,7 +20,9 @@ bound to the loopback interface and without dashboard, unless ``--address`` name
 ``ray://host:10001``): the cluster's nodes then need srenv installed. Outputs in ``--out DIR``:
 ``checkpoint/`` (the final algorithm checkpoint: ``python -m agents evaluate --policy DIR/checkpoint``),
 ``checkpoints/step_<N>/`` (every ``checkpoint_freq`` steps; ``--resume`` continues from the newest that
-restores) and ``train_config.json``. Every checkpoint also holds ``srenv_progress.json`` (steps done).
+restores) and ``train_config.json``. Every checkpoint also holds ``srenv_progress.json`` (steps done) and
+the policy as data (``srenv_policy.json`` + ``srenv_policy_weights.pt``): ``evaluate`` reads those, never
+RLlib's pickles, unless ``--trust-model`` is given.
 """
 
 from __future__ import annotations
@@ -44,6 +46,8 @@ from .train import ENV_ID, TrainConfigError, _expect, _positive_int, _yaml12_flo
 
 BACKEND = "rllib"
 PROGRESS_FILE = "srenv_progress.json"
+POLICY_WEIGHTS = "srenv_policy_weights.pt"  # the policy as data (evaluate without --trust-model)
+POLICY_JSON = "srenv_policy.json"
 _STEP_DIR_RE = re.compile(r"^step_(\d+)$")
 _HARNESS_KEYS = {"backend", "algo", "env_id", "env_kwargs", "n_timesteps", "num_env_runners",
                  "num_envs_per_env_runner", "seed", "checkpoint_freq", "num_cpus", "model_config", "training"}
@@ -157,11 +161,32 @@ def step_checkpoints(out_dir: str | Path) -> list[tuple[int, Path]]:
     return sorted(found, reverse=True)
 
 
-def save_checkpoint(algo: Any, path: Path, num_timesteps: int, iterations: int) -> Path:
+def export_policy(algo: Any, cfg: RLlibTrainConfig, directory: Path) -> None:
+    """The policy as data beside RLlib's pickles: the module's tensors (``torch.save`` of a state dict,
+    read back with ``weights_only=True``) and a JSON description to rebuild the module from, so that
+    ``evaluate`` needs no ``--trust-model`` for a checkpoint this backend wrote."""
+    import torch
+    from ray.rllib.core import DEFAULT_MODULE_ID
+
+    module = algo.get_module(DEFAULT_MODULE_ID)  # the env runners' copy: inference-only for PPO
+    torch.save({k: v.detach().cpu() for k, v in module.state_dict().items()}, directory / POLICY_WEIGHTS)
+    obs, act = module.observation_space, module.action_space
+    # the model config the module was built with: the YAML's merged with the algorithm's own defaults
+    model_config = dict(algo.config.model_config)
+    json.dumps(model_config)  # plain data only, or this export cannot be read back as data
+    (directory / POLICY_JSON).write_text(json.dumps({
+        "algo": cfg.algo, "model_config": model_config, "inference_only": bool(module.inference_only),
+        "module_class": type(module).__name__,
+        "observation_shape": list(obs.shape), "action_shape": list(act.shape),
+        "action_low": np.asarray(act.low).tolist(), "action_high": np.asarray(act.high).tolist()}, indent=1))
+
+
+def save_checkpoint(algo: Any, cfg: RLlibTrainConfig, path: Path, num_timesteps: int, iterations: int) -> Path:
     """Atomic: written beside ``path`` and renamed, so a kill never leaves a half checkpoint under its name."""
     tmp = path.with_name(f".tmp_{path.name}")
     shutil.rmtree(tmp, ignore_errors=True)
     algo.save_to_path(str(tmp.resolve()))
+    export_policy(algo, cfg, tmp)
     (tmp / PROGRESS_FILE).write_text(json.dumps({"num_timesteps": num_timesteps, "iterations": iterations}))
     old = path.with_name(f".old_{path.name}")
     if path.exists():
@@ -233,11 +258,11 @@ def train(cfg: RLlibTrainConfig, out_dir: str | Path, total_timesteps: int | Non
             last_return = _episode_return(result) if _episode_return(result) is not None else last_return
             log(f"rllib iteration {iterations}: {steps} steps, episode return mean {last_return}")
             if steps >= next_ckpt and steps < target:
-                save_checkpoint(algo, out / "checkpoints" / f"step_{steps}", steps, iterations)
+                save_checkpoint(algo, cfg, out / "checkpoints" / f"step_{steps}", steps, iterations)
                 next_ckpt = (steps // cfg.checkpoint_freq + 1) * cfg.checkpoint_freq
         (out / "checkpoints").mkdir(exist_ok=True)
-        save_checkpoint(algo, out / "checkpoints" / f"step_{steps}", steps, iterations)
-        final = save_checkpoint(algo, out / "checkpoint", steps, iterations)
+        save_checkpoint(algo, cfg, out / "checkpoints" / f"step_{steps}", steps, iterations)
+        final = save_checkpoint(algo, cfg, out / "checkpoint", steps, iterations)
     finally:
         if algo is not None:
             algo.stop()
@@ -295,11 +320,46 @@ class RLlibPolicy:
         return f"RLlibPolicy({type(self.module).__name__}, {self.path})"
 
 
-def load_rllib_policy(path: str | Path, env: Any) -> RLlibPolicy:
-    """The default policy's RL module of an RLlib checkpoint, checked against ``env``'s spaces.
+def _module_from_data(p: Path, env: Any) -> Any:
+    """Rebuild the module from ``srenv_policy.json`` (plain JSON) and load its tensors with
+    ``torch.load(weights_only=True)``, which refuses anything but tensors and plain containers."""
+    import torch
 
-    Only load checkpoints you trust: they hold pickles, which can execute code when read.
+    from .evaluate import check_spaces
+
+    meta = json.loads((p / POLICY_JSON).read_text())
+    configs = algorithm_configs()
+    if meta.get("algo") not in configs or not isinstance(meta.get("model_config"), dict):
+        raise ValueError(f"{p / POLICY_JSON}: expected algo one of {', '.join(configs)} and a model_config mapping")
+    saved_obs, saved_act = tuple(meta["observation_shape"]), tuple(meta["action_shape"])
+    check_spaces(saved_obs, saved_act, env.observation_space.shape, env.action_space.shape, p)
+    if not (np.allclose(meta["action_low"], env.action_space.low)
+            and np.allclose(meta["action_high"], env.action_space.high)):
+        raise ValueError(f"{p} does not fit this env: action bounds {meta['action_low']}..{meta['action_high']} "
+                         f"vs {env.action_space}")
+    spec = configs[meta["algo"]]().rl_module(model_config=meta["model_config"]).get_default_rl_module_spec()
+    spec.observation_space, spec.action_space = env.observation_space, env.action_space
+    spec.model_config, spec.inference_only = meta["model_config"], bool(meta.get("inference_only", False))
+    module = spec.build()
+    module.load_state_dict(torch.load(p / POLICY_WEIGHTS, weights_only=True, map_location="cpu"))
+    module.eval()
+    return module
+
+
+def load_rllib_policy(path: str | Path, env: Any, trust: bool = False) -> RLlibPolicy:
+    """The default policy of an RLlib checkpoint directory, checked against ``env``'s spaces.
+
+    By default read as data (``srenv_policy.json`` + ``srenv_policy_weights.pt``, written by this backend);
+    ``trust=True`` (``--trust-model``) loads RLlib's own pickled module instead - pickles can run code when
+    read, so only for checkpoints you made (e.g. written by RLlib outside this backend).
     """
+    p = Path(path)
+    if not trust:
+        if not ((p / POLICY_JSON).is_file() and (p / POLICY_WEIGHTS).is_file()):
+            raise ValueError(f"--policy {p}: an RLlib checkpoint without {POLICY_JSON} / {POLICY_WEIGHTS} holds "
+                             "only pickles, which can run arbitrary code when loaded; pass --trust-model if you "
+                             "made it yourself")
+        return RLlibPolicy(_module_from_data(p, env), env.action_space, str(p))
     from ray.rllib.core import (
         COMPONENT_LEARNER,
         COMPONENT_LEARNER_GROUP,
@@ -310,7 +370,6 @@ def load_rllib_policy(path: str | Path, env: Any) -> RLlibPolicy:
 
     from .evaluate import check_spaces
 
-    p = Path(path)
     module_dir = p / COMPONENT_LEARNER_GROUP / COMPONENT_LEARNER / COMPONENT_RL_MODULE / DEFAULT_MODULE_ID
     if not module_dir.is_dir():
         raise FileNotFoundError(f"--policy {p}: an RLlib checkpoint without {module_dir.relative_to(p)}")
@@ -319,12 +378,20 @@ def load_rllib_policy(path: str | Path, env: Any) -> RLlibPolicy:
     return RLlibPolicy(module, env.action_space, str(p))
 
 
+def _read_yaml(path: str | Path) -> Any:
+    """srenv's bounded safe loader, its problems as one TrainConfigError line (as agents.train does)."""
+    from srenv.config import load_yaml_file
+    from srenv.errors import ConfigError, short_repr
+
+    try:
+        return load_yaml_file(path, "train config")
+    except ConfigError as exc:
+        raise TrainConfigError(f"train config {short_repr(str(path))}: expected {exc.expected}") from None
+
+
 def read_backend(path: str | Path) -> str:
     """The ``backend`` key of a training YAML (``sb3`` when absent)."""
-    import yaml
-
-    with open(path, encoding="utf-8") as fh:
-        data = yaml.safe_load(fh)
+    data = _read_yaml(path)
     backend = data.get("backend", "sb3") if isinstance(data, dict) else "sb3"
     if backend not in ("sb3", BACKEND):
         raise TrainConfigError(f"train config: backend = {backend!r}: expected sb3 or rllib")
@@ -332,10 +399,7 @@ def read_backend(path: str | Path) -> str:
 
 
 def load_rllib_config(path: str | Path, overrides: dict[str, Any] | None = None) -> RLlibTrainConfig:
-    import yaml
-
-    with open(path, encoding="utf-8") as fh:
-        data = yaml.safe_load(fh)
+    data = _read_yaml(path)
     if isinstance(data, dict) and overrides:
         data = {**data, **overrides}
     return parse_rllib_config(data, str(path))

@@ -1,6 +1,7 @@
 """Stable-Baselines3 training from an rl-zoo3-style hyperparameter YAML.
 
-One YAML file describes one run (read with ``yaml.safe_load``; nothing in it is evaluated as code)::
+One YAML file describes one run (read with srenv's bounded safe loader, duplicate keys refused; nothing in
+it is evaluated as code, and ``env_id`` must be an id srenv registers)::
 
     algo: ppo                      # ppo | sac | a2c | td3
     env_kwargs: {config: default}  # passed to gymnasium.make("srenv/SuckerRod-v0", **env_kwargs)
@@ -17,9 +18,11 @@ One YAML file describes one run (read with ``yaml.safe_load``; nothing in it is 
     learning_rate: lin_3.0e-4      # every other key is an algorithm keyword argument
     ...
 
-Outputs in ``--out DIR``: ``model.zip`` + ``model_vecnormalize.pkl`` (the normalisation statistics are
-part of the policy: without them the network sees unscaled inputs), ``best/best_model.zip`` +
-``best/best_model_vecnormalize.pkl`` (EvalCallback), ``checkpoints/`` (model, VecNormalize and, for
+Outputs in ``--out DIR``: ``model.zip`` + ``model_vecnormalize.json`` (the normalisation statistics are
+part of the policy: without them the network sees unscaled inputs; JSON so that evaluation reads them
+without unpickling, the ``.pkl`` beside it is for resuming), ``best/best_model.zip`` +
+``best/best_model_vecnormalize.json`` / ``.pkl`` + ``best/best_model.json`` (EvalCallback; its best mean
+reward), ``checkpoints/`` (model, VecNormalize and, for
 off-policy algorithms, replay buffer every ``checkpoint_freq`` steps), ``tb/`` (TensorBoard) and
 ``train_config.json`` (the resolved configuration). ``--resume`` continues from the newest readable
 checkpoint with its statistics and the step count carried on (``reset_num_timesteps=False``).
@@ -39,7 +42,7 @@ from dataclasses import asdict, dataclass, field
 from pathlib import Path
 from typing import Any
 
-import yaml
+from srenv.errors import short_repr
 
 ENV_ID = "srenv/SuckerRod-v0"
 VECNORM_SUFFIX = "_vecnormalize.pkl"
@@ -57,6 +60,15 @@ def algorithms() -> dict[str, type]:
     from stable_baselines3 import A2C, PPO, SAC, TD3
 
     return {"ppo": PPO, "sac": SAC, "a2c": A2C, "td3": TD3}
+
+
+def allowed_env_ids() -> list[str]:
+    """The Gymnasium ids srenv registers (``srenv/...``): the only ones a training YAML may name."""
+    import gymnasium as gym
+
+    import srenv  # noqa: F401  (registers its envs)
+
+    return sorted(k for k in gym.registry if k.startswith("srenv/") and ":" not in k)
 
 
 class TrainConfigError(ValueError):
@@ -98,6 +110,13 @@ def _positive_int(data: dict, key: str, default: int) -> int:
     return int(v)
 
 
+def _seed(data: dict, key: str, default: int) -> int:
+    v = data.get(key, default)
+    _expect(isinstance(v, int) and not isinstance(v, bool) and 0 <= v < 2**32, key, v,
+            "an integer seed in [0, 2^32)")
+    return int(v)
+
+
 _FLOAT_RE = re.compile(r"^[-+]?[0-9][0-9_]*(?:\.[0-9_]*)?[eE][-+]?[0-9]+$")
 
 
@@ -124,17 +143,36 @@ def parse_train_config(data: Any, source: str = "<dict>") -> TrainConfig:
             "a mapping (strings of Python code are not evaluated)")
     vec_env = data.get("vec_env", "subproc")
     _expect(vec_env in ("subproc", "dummy"), "vec_env", vec_env, "subproc or dummy")
+    env_id = data.get("env_id", ENV_ID)
+    allowed = allowed_env_ids()
+    # gymnasium.make("module:Env-v0") imports `module` (from the working directory, too): only ids that
+    # srenv itself registers are accepted, so a YAML can never name code to import
+    _expect(isinstance(env_id, str) and env_id in allowed, "env_id", env_id, "one of " + ", ".join(allowed))
     cfg = TrainConfig(
-        algo=algo, env_id=str(data.get("env_id", ENV_ID)), env_kwargs=dict(env_kwargs), n_envs=n_envs,
+        algo=algo, env_id=env_id, env_kwargs=dict(env_kwargs), n_envs=n_envs,
         n_timesteps=_positive_int(data, "n_timesteps", 100_000), policy=str(data.get("policy", "MlpPolicy")),
         policy_kwargs=dict(policy_kwargs),
         normalize=(dict(normalize) if isinstance(normalize, dict) else ({} if normalize else None)),
-        seed=int(data.get("seed", 0)), checkpoint_freq=_positive_int(data, "checkpoint_freq", 10_000),
+        seed=_seed(data, "seed", 0), checkpoint_freq=_positive_int(data, "checkpoint_freq", 10_000),
         eval_freq=_positive_int(data, "eval_freq", 10_000),
-        n_eval_episodes=_positive_int(data, "n_eval_episodes", 5), eval_seed=int(data.get("eval_seed", 10_000)),
+        n_eval_episodes=_positive_int(data, "n_eval_episodes", 5), eval_seed=_seed(data, "eval_seed", 10_000),
         save_replay_buffer=bool(data.get("save_replay_buffer", True)), vec_env=vec_env,
         algo_kwargs={k: _yaml12_float(v) for k, v in data.items() if k not in _HARNESS_KEYS},
     )
+    # keywords the harness passes itself: verbose / device may override its defaults, the others may not
+    for key in ("tensorboard_log", "_init_setup_model"):
+        _expect(key not in cfg.algo_kwargs, key, cfg.algo_kwargs.get(key), "no value (set by the harness)")
+    if "verbose" in cfg.algo_kwargs:
+        v = cfg.algo_kwargs["verbose"]
+        _expect(v in (0, 1, 2) and not isinstance(v, bool), "verbose", v, "0, 1 or 2")
+    if "device" in cfg.algo_kwargs:
+        d = cfg.algo_kwargs["device"]
+        _expect(isinstance(d, str) and re.fullmatch(r"cpu|auto|cuda(:\d+)?", d) is not None, "device", d,
+                "cpu, auto or cuda[:N]")
+        if d.startswith("cuda"):
+            import torch
+
+            _expect(torch.cuda.is_available(), "device", d, "cpu or auto (no CUDA device here)")
     # Unknown keys would otherwise surface as a TypeError deep inside SB3, far from the YAML line.
     accepted = set(inspect.signature(algorithms()[algo].__init__).parameters) - {"self", "policy", "env"}
     for key in sorted(set(cfg.algo_kwargs) - accepted):
@@ -143,8 +181,15 @@ def parse_train_config(data: Any, source: str = "<dict>") -> TrainConfig:
 
 
 def load_train_config(path: str | Path, overrides: dict[str, Any] | None = None) -> TrainConfig:
-    with open(path, encoding="utf-8") as fh:
-        data = yaml.safe_load(fh)
+    """Read a training YAML with srenv's bounded safe loader: bad syntax, a key given twice, a file too
+    large or unreadable are each one TrainConfigError line."""
+    from srenv.config import load_yaml_file
+    from srenv.errors import ConfigError
+
+    try:
+        data = load_yaml_file(path, "train config")
+    except ConfigError as exc:
+        raise TrainConfigError(f"train config {short_repr(str(path))}: expected {exc.expected}") from None
     if isinstance(data, dict) and overrides:
         data = {**data, **overrides}
     return parse_train_config(data, str(path))
@@ -222,18 +267,38 @@ def checkpoints(out_dir: str | Path) -> list[tuple[int, Path]]:
     return sorted(found, reverse=True)
 
 
+BEST_RECORD = "best_model.json"
+
+
 def _save_vecnormalize_callback(path: Path) -> Any:
-    """EvalCallback's ``callback_on_new_best``: keep the statistics that the best model was evaluated with."""
+    """EvalCallback's ``callback_on_new_best``: keep the statistics that the best model was evaluated with
+    (pickle for resuming, JSON for evaluation) and the best mean reward, so that a resumed run whose eval
+    history is lost still does not overwrite a better best_model with a worse one."""
     from stable_baselines3.common.callbacks import BaseCallback
+
+    from .model_io import stats_path, write_stats
 
     class SaveVecNormalize(BaseCallback):
         def _on_step(self) -> bool:
             vn = self.model.get_vec_normalize_env()
             if vn is not None:
                 vn.save(str(path))
+                write_stats(vn, stats_path(path.parent / "best_model.zip"))
+            best = float(self.parent.best_mean_reward)
+            record = {"best_mean_reward": best, "num_timesteps": int(self.num_timesteps)}
+            (path.parent / BEST_RECORD).write_text(json.dumps(record))
             return True
 
     return SaveVecNormalize()
+
+
+def _recorded_best(best_dir: Path) -> float:
+    """Best mean reward of an earlier run into the same directory (-inf when none is readable)."""
+    try:
+        value = float(json.loads((best_dir / BEST_RECORD).read_text())["best_mean_reward"])
+    except (OSError, ValueError, KeyError, TypeError):
+        return -math.inf
+    return value if math.isfinite(value) else -math.inf
 
 
 def _eval_reporter() -> Any:
@@ -271,7 +336,11 @@ def _load_checkpoint(cfg: TrainConfig, venv_raw: Any, out_dir: Path) -> tuple[An
             continue
         buffer = path.with_name(f"{CHECKPOINT_PREFIX}_replay_buffer_{steps}_steps.pkl")
         if buffer.is_file() and hasattr(model, "load_replay_buffer"):
-            model.load_replay_buffer(str(buffer))
+            try:
+                model.load_replay_buffer(str(buffer))
+            except Exception as exc:  # noqa: BLE001 - a truncated buffer: continue with an empty one
+                print(f"resume: skipping replay buffer {buffer.name} ({type(exc).__name__}: "
+                      f"{str(exc)[:120]}); continuing with an empty buffer", file=sys.stderr)
         return model, venv, path
     return None
 
@@ -286,11 +355,18 @@ def _restore_eval_history(eval_cb: Any, npz_path: Path, upto_steps: int) -> None
 
     if not npz_path.is_file():
         return
-    with np.load(npz_path) as h:
-        keep = h["timesteps"] <= upto_steps
-        eval_cb.evaluations_timesteps = h["timesteps"][keep].tolist()
-        eval_cb.evaluations_results = h["results"][keep].tolist()
-        eval_cb.evaluations_length = h["ep_lengths"][keep].tolist()
+    try:
+        with np.load(npz_path, allow_pickle=False) as h:
+            keep = h["timesteps"] <= upto_steps
+            timesteps = h["timesteps"][keep].tolist()
+            results = h["results"][keep].tolist()
+            lengths = h["ep_lengths"][keep].tolist()
+    except Exception as exc:  # noqa: BLE001 - truncated / not an npz: resume without the history
+        print(f"resume: skipping evaluation history {npz_path.name} ({type(exc).__name__}: {str(exc)[:120]})",
+              file=sys.stderr)
+        return
+    eval_cb.evaluations_timesteps, eval_cb.evaluations_results, eval_cb.evaluations_length = (
+        timesteps, results, lengths)
     if eval_cb.evaluations_results:
         eval_cb.best_mean_reward = float(max(np.mean(r) for r in eval_cb.evaluations_results))
 
@@ -329,10 +405,9 @@ def train(cfg: TrainConfig, out_dir: str | Path, total_timesteps: int | None = N
         if resume:
             log(f"resume: no checkpoint in {out / 'checkpoints'}, starting from scratch")
         venv = VecNormalize(venv_raw, **cfg.normalize) if cfg.normalize is not None else venv_raw
-        kwargs = {k: schedule(v) for k, v in cfg.algo_kwargs.items()}
+        kwargs = {"device": "cpu", "verbose": 0, **{k: schedule(v) for k, v in cfg.algo_kwargs.items()}}
         model = algorithms()[cfg.algo](cfg.policy, venv, policy_kwargs=build_policy_kwargs(cfg.policy_kwargs),
-                                       tensorboard_log=str(out / "tb"), seed=cfg.seed, device="cpu",
-                                       verbose=0, **kwargs)
+                                       tensorboard_log=str(out / "tb"), seed=cfg.seed, **kwargs)
     if cfg.normalize is not None:
         # evaluation sees normalised observations but raw rewards; EvalCallback syncs the statistics
         eval_env = VecNormalize(eval_env, training=False, norm_obs=cfg.normalize.get("norm_obs", True),
@@ -346,6 +421,9 @@ def train(cfg: TrainConfig, out_dir: str | Path, total_timesteps: int | None = N
         callback_after_eval=_eval_reporter())
     if resumed_from is not None:
         _restore_eval_history(eval_cb, out / "eval" / "evaluations.npz", model.num_timesteps)
+    if (best_dir / "best_model.zip").is_file():
+        # whatever the history says, never replace an existing best_model by a worse one
+        eval_cb.best_mean_reward = max(eval_cb.best_mean_reward, _recorded_best(best_dir))
     ckpt_cb = CheckpointCallback(
         save_freq=max(cfg.checkpoint_freq // n_envs, 1), save_path=str(out / "checkpoints"),
         name_prefix=CHECKPOINT_PREFIX, save_vecnormalize=True, save_replay_buffer=cfg.save_replay_buffer)
@@ -357,8 +435,12 @@ def train(cfg: TrainConfig, out_dir: str | Path, total_timesteps: int | None = N
     model.save(str(model_path))
     stats_path = None
     if model.get_vec_normalize_env() is not None:
+        from .model_io import stats_path as json_stats_path
+        from .model_io import write_stats
+
         stats_path = out / ("model" + VECNORM_SUFFIX)
-        model.get_vec_normalize_env().save(str(stats_path))
+        model.get_vec_normalize_env().save(str(stats_path))  # pickle: what SB3 needs to resume
+        write_stats(model.get_vec_normalize_env(), json_stats_path(model_path))  # JSON: what evaluation reads
     venv.close()
     eval_env.close()
     best = best_dir / "best_model.zip"

@@ -23,7 +23,13 @@ ENVS: dict[str, tuple[str, dict]] = {
 
 def register_envs() -> None:
     """Register :data:`ENVS` with gymnasium (idempotent; run on ``import srenv``)."""
+    import warnings
+
     import gymnasium
+
+    # gymnasium 1.2 warns on every make of v0 that v1 supersedes it: v1 is another task, v0 keeps its contract
+    warnings.filterwarnings("ignore", message=r".*The environment srenv/SuckerRod-v0 is out of date",
+                            category=DeprecationWarning)
 
     for env_id, (entry_point, kwargs) in ENVS.items():
         if env_id not in gymnasium.registry:

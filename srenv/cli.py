@@ -8,24 +8,53 @@ from __future__ import annotations
 
 import argparse
 import json
+import math
+import signal
 import sys
-from pathlib import Path
 
 import numpy as np
 
+from .cli_types import MAX_DURATION_S
+from .cli_types import bounded as _bounded
 from .cli_types import positive as _positive
 from .cli_types import positive_int as _positive_int
-from .errors import ConfigError, SolverFailure
-from .outputs import atomic_write
+from .errors import ConfigError, NumericFailure, SolverFailure
+from .outputs import atomic_write, check_output_path
 
 EXIT_BAD_INPUT = 2
 EXIT_SOLVER = 3
+EXIT_INTERRUPTED = 130
+MAX_STROKES = 100_000  # --strokes; the recorded size of the run is bounded separately (MAX_RUN_SAMPLES)
+
+
+def _raise_on_sigterm(signum: int, frame: object) -> None:
+    # SIGTERM becomes an exception, so that every `finally` runs: temporary files are removed, Ray and
+    # worker processes shut down (a killed command leaves nothing behind)
+    raise KeyboardInterrupt(f"signal {signum}")
 
 
 class _Parser(argparse.ArgumentParser):
     def error(self, message: str) -> None:  # one line, status 2, no usage dump
         print(f"srenv: error: {message}", file=sys.stderr)
         sys.exit(EXIT_BAD_INPUT)
+
+
+def check_finite(trace: dict, summary: dict) -> None:
+    """A run whose numbers are not finite is a failure, not a result (and NaN is not JSON)."""
+    for name, col in trace.items():
+        if not np.all(np.isfinite(col)):
+            raise NumericFailure(name, "the simulation diverged; check the config's magnitudes")
+
+    def walk(key: str, v: object) -> None:
+        if isinstance(v, dict):
+            for k, w in v.items():
+                walk(k, w)
+        elif isinstance(v, (list, tuple)):
+            for w in v:
+                walk(key, w)
+        elif isinstance(v, (float, np.floating)) and not math.isfinite(v):
+            raise NumericFailure(key, "the summary is not finite; check the config's magnitudes")
+    walk("summary", summary)
 
 
 def write_trace_csv(trace: dict, path: str) -> None:
@@ -40,7 +69,7 @@ def write_trace_csv(trace: dict, path: str) -> None:
 
 
 def cmd_simulate(args: argparse.Namespace) -> int:
-    from .config import load_config
+    from .config import check_run_samples, load_config, steps_per_stroke
     from .simulator import Simulator, concat_traces
     from .stroke_summary import summarize
 
@@ -53,20 +82,25 @@ def cmd_simulate(args: argparse.Namespace) -> int:
         overrides.append(f"surface.pull_velocity_m_s={args.pull_velocity_m_s}")
     if args.qp_solver is not None:
         overrides.append(f"simulation.qp_solver={args.qp_solver}")
+    check_output_path("--out", args.out, (".csv",))
+    check_output_path("--plot", args.plot, (".png",))
     cfg = load_config(args.config, overrides)
-    for p in (args.out, args.plot):
-        if p and not Path(p).resolve().parent.is_dir():
-            raise ConfigError("--out" if p == args.out else "--plot", p, "a path in an existing directory")
-    sim = Simulator(cfg, always_qp=True if args.always_qp else None)
-    if cfg.surface.motion == "pullout" or args.duration_s is not None:
+    # the run's size, before any allocation: strokes x steps per stroke, or duration / time step
+    if cfg.surface.motion == "pullout":
         duration = args.duration_s if args.duration_s is not None else 60.0
-        if cfg.surface.motion == "pullout":
-            results = [sim.run_duration(duration)]
-        else:
-            n = max(1, round(duration * cfg.surface.spm / 60.0))
-            results = sim.run_strokes(n)
+        check_run_samples(math.ceil(duration / cfg.simulation.time_step_s), "--duration-s", duration)
     else:
-        results = sim.run_strokes(args.strokes)
+        n_strokes = args.strokes
+        if args.duration_s is not None:
+            n_strokes = max(1, round(args.duration_s * cfg.surface.spm / 60.0))
+        check_run_samples(n_strokes * steps_per_stroke(cfg, cfg.surface.spm),
+                          "--duration-s" if args.duration_s is not None else "--strokes",
+                          args.duration_s if args.duration_s is not None else args.strokes)
+    sim = Simulator(cfg, always_qp=True if args.always_qp else None)
+    if cfg.surface.motion == "pullout":
+        results = [sim.run_duration(duration)]
+    else:
+        results = sim.run_strokes(n_strokes)
     trace = concat_traces(results)
     if cfg.surface.motion == "pullout":
         summary = pullout_summary(sim, results[0])
@@ -74,13 +108,14 @@ def cmd_simulate(args: argparse.Namespace) -> int:
         summary = summarize(sim, results)
     summary["natural_frequency_hz"] = sim.f1_hz
     summary["energy_residual_j"] = sim.energy_balance()["residual_j"]
+    check_finite(trace, summary)
     write_trace_csv(trace, args.out)
     if args.plot:
         from .render import save_cards
 
         period = 60.0 / cfg.surface.spm if cfg.surface.motion != "pullout" else None
         atomic_write(args.plot, lambda tmp: save_cards(trace, tmp, cfg.name, period))
-    print(json.dumps(summary, default=float))
+    print(json.dumps(summary, default=float, allow_nan=False))
     return 0
 
 
@@ -107,8 +142,9 @@ def build_parser() -> argparse.ArgumentParser:
     s = sub.add_parser("simulate", help="simulate a well and write a per-time-step CSV")
     s.add_argument("config", help="well YAML path or shipped name")
     g = s.add_mutually_exclusive_group()
-    g.add_argument("--strokes", type=_positive_int("--strokes"), default=3)
-    g.add_argument("--duration-s", type=_positive("--duration-s", "s"))
+    g.add_argument("--strokes", type=_positive_int("--strokes", MAX_STROKES), default=3)
+    g.add_argument("--duration-s", type=_bounded(_positive("--duration-s", "s"), "--duration-s", "s",
+                                                 MAX_DURATION_S))
     s.add_argument("--spm", type=_positive("--spm", "strokes/min"))
     s.add_argument("--stroke-length-m", type=_positive("--stroke-length-m", "m"))
     s.add_argument("--pull-velocity-m-s", type=_positive("--pull-velocity-m-s", "m/s"))
@@ -119,8 +155,8 @@ def build_parser() -> argparse.ArgumentParser:
     s.add_argument("--plot", help="PNG with the surface and pump cards")
     s.set_defaults(func=cmd_simulate)
     b = sub.add_parser("bench", help="performance figures as JSON")
-    b.add_argument("--repeats", type=_positive_int("--repeats"), default=5)
-    b.add_argument("--strokes", type=_positive_int("--strokes"), default=10)
+    b.add_argument("--repeats", type=_positive_int("--repeats", 1000), default=5)
+    b.add_argument("--strokes", type=_positive_int("--strokes", 1000), default=10)
     b.add_argument("--quick", action="store_true", help="fewer repeats and strokes (smoke run)")
     b.set_defaults(func=lambda a: __import__("srenv.bench", fromlist=["main"]).main(a))
     d = sub.add_parser("config-doc", help="print the table of config fields")
@@ -142,14 +178,26 @@ def build_parser() -> argparse.ArgumentParser:
 
 def main(argv: list[str] | None = None) -> int:
     args = build_parser().parse_args(argv)
+    previous = None
+    if argv is None:  # the command itself, not a test calling main() in-process
+        previous = signal.signal(signal.SIGTERM, _raise_on_sigterm)
     try:
         rc = args.func(args)
     except ConfigError as exc:
         print(f"srenv: error: {exc}", file=sys.stderr)
         return EXIT_BAD_INPUT
+    except NumericFailure as exc:
+        print(f"srenv: error: {exc}", file=sys.stderr)
+        return EXIT_BAD_INPUT
     except SolverFailure as exc:
         print(f"srenv: solver failure: {exc}", file=sys.stderr)
         return EXIT_SOLVER
+    except KeyboardInterrupt:
+        print("srenv: interrupted", file=sys.stderr)
+        return EXIT_INTERRUPTED
+    finally:
+        if previous is not None:
+            signal.signal(signal.SIGTERM, previous)
     return int(rc or 0)
 
 

@@ -2,6 +2,31 @@
 
 from __future__ import annotations
 
+import reprlib
+
+# An error message shows at most this many characters of the offending value: a value can be huge (a
+# 400-digit integer, a list expanded from YAML aliases) and must not turn one line into megabytes.
+VALUE_REPR_CHARS = 80
+
+_repr = reprlib.Repr()
+_repr.maxlevel = 3          # nested containers beyond this depth print as [...]: bounded work, not only text
+_repr.maxlist = _repr.maxtuple = _repr.maxdict = _repr.maxset = 6
+_repr.maxstring = _repr.maxother = VALUE_REPR_CHARS
+_repr.maxlong = 40
+
+
+def short_repr(value: object, limit: int = VALUE_REPR_CHARS) -> str:
+    """``repr(value)``, bounded in work and capped at ``limit`` characters (``...`` marks a cut)."""
+    if isinstance(value, int) and not isinstance(value, bool) and abs(value) >= 10**30:
+        # str() of a huge int is slow (and refused beyond 4300 digits): say how big it is instead
+        digits = int(abs(value).bit_length() * 0.30103) + 1
+        return f"<{'-' if value < 0 else ''}integer of about {digits} digits>"
+    try:
+        text = _repr.repr(value)
+    except Exception:  # noqa: BLE001 - a value whose repr fails must not hide the error being reported
+        text = f"<{type(value).__name__}>"
+    return text if len(text) <= limit else text[: limit - 3] + "..."
+
 
 class ConfigError(ValueError):
     """A config value is invalid. The message names the field, the value and the expected unit."""
@@ -10,7 +35,16 @@ class ConfigError(ValueError):
         self.field = field
         self.value = value
         self.expected = expected
-        super().__init__(f"config field '{field}' = {value!r}: expected {expected}")
+        super().__init__(f"config field '{field}' = {short_repr(value)}: expected {expected}")
+
+
+class NumericFailure(RuntimeError):
+    """A run produced non-finite numbers (the config's magnitudes are outside what the model can handle)."""
+
+    def __init__(self, what: str, detail: str) -> None:
+        self.what = what
+        self.detail = detail
+        super().__init__(f"non-finite result in '{what}': {detail}")
 
 
 class SolverFailure(RuntimeError):

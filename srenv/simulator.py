@@ -16,7 +16,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from . import kernel as K
-from .config import ConfigError, WellConfig
+from .config import ConfigError, WellConfig, check_dense_size
 from .fluid import tubing_pressure_pa
 from .inflow import Annulus
 from .pump import ValveLaw, plunger_area_m2, valve_law
@@ -73,6 +73,7 @@ class Simulator:
         self.cfg = cfg
         sim = cfg.simulation
         self.always_qp = sim.always_qp if always_qp is None else always_qp
+        check_dense_size(cfg, self.always_qp)  # the config alone was checked at load; --always-qp was not
         self.qp = StepQP(qp_solver or sim.qp_solver, sim.qp_eps_abs, persistent=persistent_qp)
         self.polish = True  # exact active-set polish of QP answers (off: keep the solver's raw velocity)
         self.linear_reference = False  # bench only: skip friction and valve law (a plain linear Newmark step)

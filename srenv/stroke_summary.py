@@ -51,6 +51,18 @@ def goodman_per_taper(sim: Simulator, fmax_eq: np.ndarray, fmin_eq: np.ndarray) 
     return np.atleast_1d(metrics.goodman_loading_pct(s["max_stress_pa"], s["min_stress_pa"], tensile))
 
 
+def slip_window_s(t_s: np.ndarray, f1_hz: float) -> float:
+    """Moving-average window of the slip amplitude: one natural period, clipped to what the trace can hold.
+
+    A stroke shorter than a natural period (a fast SPM on a long string) or a natural period shorter than
+    two time steps (a short, stiff string) would otherwise make the metric raise - inside ``env.step``,
+    where any legal SPM must work. Clipped, the amplitude is taken about the average over the whole stroke
+    (respectively about the samples themselves, i.e. 0)."""
+    n = len(t_s)
+    dt = float(t_s[-1] - t_s[0]) / (n - 1) if n > 1 else 1.0
+    return min(max(1.0 / f1_hz, 2.0 * dt), max(n - 2, 2) * dt)
+
+
 def summarize(sim: Simulator, results: list[RunResult]) -> dict:
     """Metrics of the strokes in `results` (recorded runs), as a flat JSON-ready dict."""
     tr = results[0].trace if len(results) == 1 else concat_traces(results)
@@ -74,7 +86,7 @@ def summarize(sim: Simulator, results: list[RunResult]) -> dict:
     one = results[0] if n_strokes == 1 else None  # the env's case: skip the list reductions
     rod_eps = one.rod_stick_episodes if one else np.sum([r.rod_stick_episodes for r in results], axis=0)
     ss = metrics.stick_slip_index(tr["t_s"], tr["pump_velocity_m_s"], du, rod_eps, n_strokes,
-                                  1.0 / sim.f1_hz, slip_floor_m=SLIP_FLOOR_M)
+                                  slip_window_s(tr["t_s"], sim.f1_hz), slip_floor_m=SLIP_FLOOR_M)
     fmax = one.element_force_max_eq_n if one else np.max([r.element_force_max_eq_n for r in results], axis=0)
     fmin = one.element_force_min_eq_n if one else np.min([r.element_force_min_eq_n for r in results], axis=0)
     goodman = goodman_per_taper(sim, fmax, fmin)

@@ -21,10 +21,14 @@ effort. The critical value of each set (stdout JSON) is the lowest swept value f
 has no extra plunger stick episode; it lies in (``last_sticking_...``, ``critical_...``]. The amplitude is
 not used for it: a decaying transient leaves a small nonzero amplitude in any finite run.
 
-Parallel runs: each case is a Ray task (1 CPU); a local Ray with ``--workers`` CPUs (default: all cores) is
-started and shut down unless ``--address`` names a running cluster, whose nodes must have ``srenv``
-installed. Each case is a deterministic function of its config, so the CSV is identical whichever backend
-ran it (tested); ``--serial`` runs in this process without Ray.
+Parallel runs: locally, each case runs in a pool of ``--workers`` processes (default: all cores) that
+talk to this one through pipes only - no network listener, and the pool is terminated on any exit. A
+local Ray is *not* started: Ray 2.x's gcs_server, raylet, workers and dashboard agent bind their gRPC
+ports on all interfaces whatever ``_node_ip_address`` says (checked with ``ss -ltnp``), i.e. an
+unauthenticated cluster reachable from the network. Ray is used only when ``--address`` names a running
+cluster (one that its operator secures), whose nodes must have ``srenv`` installed; each case is then a
+Ray task (1 CPU). Each case is a deterministic function of its config, so the CSV is identical whichever
+backend ran it (tested); ``--serial`` runs in this process.
 """
 
 from __future__ import annotations
@@ -50,6 +54,8 @@ METRIC_COLUMNS = ("duration_s", "plunger_stick_episodes", "plunger_extra_stick_e
                   "peak_polished_rod_load_n", "min_polished_rod_load_n", "polished_rod_load_oscillation_pp_n",
                   "dc_iterations_per_step", "qp_steps")
 SET_COLUMN = "parameter_set"
+MAX_CASES = 10_000  # simulations of one study (rows of its CSV)
+MAX_WORKERS = 256
 
 
 @dataclass(frozen=True)
@@ -219,27 +225,56 @@ def run_serial(cases: list[Case], duration_s: float, settle_fraction: float,
             for c in tqdm(cases, desc="sweep", unit="case", disable=not progress)]
 
 
+def _run_indexed(job: tuple[int, dict, float, float]) -> tuple[int, dict[str, Any]]:
+    index, raw, duration_s, settle_fraction = job
+    return index, _run_case_portable(raw, duration_s, settle_fraction)
+
+
+def run_local(cases: list[Case], duration_s: float, settle_fraction: float, workers: int | None = None,
+              progress: bool = True) -> list[dict[str, float]]:
+    """Cases in a local process pool (spawned, so no state of this process is shared); results come back
+    in case order. The pool is terminated on any exit, an error, Ctrl-C or SIGTERM included."""
+    import multiprocessing
+
+    from tqdm import tqdm
+
+    n = min(workers or os.cpu_count() or 1, len(cases))
+    pool = multiprocessing.get_context("spawn").Pool(n)
+    try:
+        out: list[dict[str, float] | None] = [None] * len(cases)
+        jobs = [(c.index, c.raw, duration_s, settle_fraction) for c in cases]
+        with tqdm(total=len(cases), desc="sweep", unit="case", disable=not progress) as bar:
+            for i, result in pool.imap_unordered(_run_indexed, jobs):
+                out[i] = _unwrap(result)
+                bar.update()
+        pool.close()
+        return [r for r in out if r is not None]
+    finally:
+        pool.terminate()
+        pool.join()
+
+
 def run_ray(cases: list[Case], duration_s: float, settle_fraction: float, workers: int | None = None,
             address: str | None = None, progress: bool = True,
             timings: dict[str, float] | None = None) -> list[dict[str, float]]:
-    """One Ray task per case; results are returned in case order whatever order they finish in.
-    ``timings`` (if given) receives ``ray_init_s``, the part of the wall time spent starting Ray."""
+    """One Ray task per case on the running cluster at ``address``; results are returned in case order
+    whatever order they finish in. ``timings`` (if given) receives ``ray_init_s``, the time spent
+    connecting. No local Ray is ever started here (module docstring: it would listen on every interface)."""
     import logging
 
     import ray
     from tqdm import tqdm
 
+    if not address:
+        raise ConfigError("--address", address, "the address of a running Ray cluster (local runs use "
+                          "run_local, which opens no network port)")
     started = False
     t0 = time.perf_counter()
-    if address:
-        _check_reachable(address)
+    _check_reachable(address)
     if not ray.is_initialized():
         quiet = {"include_dashboard": False, "log_to_driver": False, "logging_level": logging.ERROR}
         try:
-            if address:
-                ray.init(address=address, **quiet)
-            else:
-                ray.init(num_cpus=workers or os.cpu_count() or 1, **quiet)
+            ray.init(address=address, **quiet)
         except ConnectionError as exc:
             raise ConfigError("--address", address, f"the address of a running Ray cluster ({exc})") from None
         started = True
@@ -361,17 +396,24 @@ def plot(rows: list[dict[str, Any]], value_column: str, critical: list[dict[str,
 
 # ----------------------------------------------------------------------------------------------- CLI
 def cmd_sweep(args: argparse.Namespace) -> int:
-    from .config import config_from_dict
+    from .config import MAX_RUN_SAMPLES, config_from_dict
+    from .outputs import check_output_path
     from .simulator import Simulator
 
-    for flag, p in (("--out", args.out), ("--plot", args.plot)):
-        if p and not Path(p).resolve().parent.is_dir():
-            raise ConfigError(flag, p, "a path in an existing directory")
+    check_output_path("--out", args.out, (".csv",))
+    check_output_path("--plot", args.plot, (".png",))
     if not 0.0 <= args.settle_fraction < 1.0:
         raise ConfigError("--settle-fraction", args.settle_fraction, "a fraction of the run in [0, 1)")
     values = parse_values(args.values)
     sets = parameter_sets(parse_grid(args.grid), parse_case(args.case))
+    if len(sets) * len(values) > MAX_CASES:
+        raise ConfigError("--values", args.values, f"at most {MAX_CASES} cases in all (--values times the "
+                          f"parameter sets; this study has {len(sets) * len(values)})")
     cases = build_cases(args.config, args.param, values, args.set, sets)
+    dt = min(config_from_dict(c.raw).simulation.time_step_s for c in cases)
+    if args.duration_s / dt > MAX_RUN_SAMPLES:
+        raise ConfigError("--duration-s", args.duration_s, f"a duration in s of at most {MAX_RUN_SAMPLES} "
+                          f"time steps per case (at most {MAX_RUN_SAMPLES * dt:g} s at {dt:g} s per step)")
     # one simulator per set, here in the driver: shows the convexity warning once and sizes the
     # moving-average window (one natural period) against the measured part of the run
     for si in range(len(sets)):
@@ -387,13 +429,22 @@ def cmd_sweep(args: argparse.Namespace) -> int:
     if args.serial:
         metric_rows = run_serial(cases, args.duration_s, args.settle_fraction, progress)
         backend = "serial"
-    else:
+    elif args.address:
         metric_rows = run_ray(cases, args.duration_s, args.settle_fraction, args.workers, args.address,
                               progress, timings)
         backend = "ray"
+    else:
+        metric_rows = run_local(cases, args.duration_s, args.settle_fraction, args.workers, progress)
+        backend = "processes"
     wall = time.perf_counter() - t0
     value_column = column_names([args.param] + [k for s in sets for k in s])[args.param]
     rows = result_rows(cases, metric_rows, args.param)
+    for row in rows:
+        for key, v in row.items():
+            if isinstance(v, float) and not math.isfinite(v):
+                from .errors import NumericFailure
+
+                raise NumericFailure(key, "a case's metric is not finite; check the config's magnitudes")
     crit = critical_values(rows, value_column)
     write_csv(rows, args.out)
     if args.plot:
@@ -402,11 +453,13 @@ def cmd_sweep(args: argparse.Namespace) -> int:
                       "workers": 1 if args.serial else (args.workers or ("cluster" if args.address
                                                                           else os.cpu_count())),
                       "wall_time_s": round(wall, 3), **timings, "out": args.out, "plot": args.plot,
-                      "sets": crit}))
+                      "sets": crit}, allow_nan=False))
     return 0
 
 
 def add_parser(subparsers: argparse._SubParsersAction) -> None:
+    from .cli_types import MAX_DURATION_S
+    from .cli_types import bounded as _bounded
     from .cli_types import positive as _positive
     from .cli_types import positive_int as _positive_int
 
@@ -416,7 +469,8 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
     s.add_argument("--param", required=True, metavar="KEY.PATH", help="swept config field, e.g. "
                    "surface.pull_velocity_m_s")
     s.add_argument("--values", required=True, help="comma-separated values of --param (its unit)")
-    s.add_argument("--duration-s", type=_positive("--duration-s", "s"), default=60.0,
+    s.add_argument("--duration-s", type=_bounded(_positive("--duration-s", "s"), "--duration-s", "s",
+                                                 MAX_DURATION_S), default=60.0,
                    help="simulated time per case (s); harmonic runs take round(T*spm/60) strokes")
     s.add_argument("--settle-fraction", type=float, default=0.3,
                    help="fraction of each run excluded from the metrics as start transient (default 0.3)")
@@ -425,10 +479,12 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
                    help="parameter-set axis; several --grid form their Cartesian product")
     s.add_argument("--case", action="append", metavar="KEY.PATH=V[,KEY.PATH=V...]",
                    help="one explicit parameter set (repeatable)")
-    s.add_argument("--workers", type=_positive_int("--workers"), help="local Ray CPUs (default: all cores)")
+    s.add_argument("--workers", type=_positive_int("--workers", MAX_WORKERS),
+                   help="local worker processes (default: all cores)")
     where = s.add_mutually_exclusive_group()
-    where.add_argument("--address", help="address of a running Ray cluster (e.g. auto or HOST:PORT)")
-    where.add_argument("--serial", action="store_true", help="run in this process, without Ray")
+    where.add_argument("--address", help="address of a running Ray cluster (e.g. auto or HOST:PORT); "
+                       "without it no Ray is started")
+    where.add_argument("--serial", action="store_true", help="run in this process")
     s.add_argument("--out", required=True, help="CSV file, one row per case")
     s.add_argument("--plot", help="PNG: slip amplitude and stick episodes vs the swept value")
     s.set_defaults(func=cmd_sweep)

@@ -69,11 +69,16 @@ def test_checkpoint_evaluates_next_to_a_baseline(run: tuple[Path, Path, dict]) -
     env = make_env(config="default", **SHORT)
     policy = make_policy(str(out / "checkpoint"), env)
     assert isinstance(policy, RLlibPolicy)
+    # the data route (JSON + weights_only tensors) acts exactly as RLlib's own pickled module (trusted)
+    trusted = make_policy(str(out / "checkpoint"), env, trust=True)
     obs, _ = env.reset(seed=3)
-    a1, _ = policy.predict(obs)
-    a2, _ = policy.predict(obs)
-    assert a1.shape == env.action_space.shape and env.action_space.contains(a1)
-    np.testing.assert_array_equal(a1, a2)  # deterministic: the distribution's mode
+    for _ in range(3):
+        a1, _ = policy.predict(obs)
+        a2, _ = policy.predict(obs)
+        assert a1.shape == env.action_space.shape and env.action_space.contains(a1)
+        np.testing.assert_array_equal(a1, a2)  # deterministic: the distribution's mode
+        np.testing.assert_array_equal(a1, trusted.predict(obs)[0])
+        obs, *_ = env.step(a1)
     env.close()
     results = evaluate([str(out / "checkpoint"), "rocking"], 1, 1000, env_kwargs=SHORT)
     assert list(results) == ["out/checkpoint", "rocking"]
@@ -128,3 +133,20 @@ def test_registration_patterns() -> None:
             ray.shutdown()
     with pytest.raises(ValueError, match="CartPole-v1"):
         srenv.rllib.register(["CartPole-v1"])
+
+
+def test_pickle_only_checkpoint_needs_trust(run: tuple[Path, Path, dict], tmp_path: Path) -> None:
+    import shutil
+
+    from agents.rllib_backend import POLICY_JSON
+
+    _, out, _ = run
+    bare = tmp_path / "bare"
+    shutil.copytree(out / "checkpoint", bare)
+    (bare / POLICY_JSON).unlink()  # as written by RLlib itself: pickles only
+    env = make_env(config="default", **SHORT)
+    with pytest.raises(ValueError, match="--trust-model"):
+        make_policy(str(bare), env)
+    assert isinstance(make_policy(str(bare), env, trust=True), RLlibPolicy)
+    env.close()
+

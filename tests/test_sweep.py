@@ -1,4 +1,4 @@
-"""`srenv sweep`: parameter sets, critical velocity, outputs, bad input, and Ray == serial."""
+"""`srenv sweep`: parameter sets, critical velocity, outputs, bad input, and local processes == serial."""
 
 from __future__ import annotations
 
@@ -42,13 +42,13 @@ def _rows(path: Path) -> list[dict[str, str]]:
         return list(csv.DictReader(fh))
 
 
-def test_serial_and_ray_with_two_workers_give_identical_files(tmp_path: Path,
+def test_serial_and_two_local_workers_give_identical_files(tmp_path: Path,
                                                               capsys: pytest.CaptureFixture) -> None:
     rc_s, js_s, _ = _run(capsys, [*TINY, "--serial", "--out", str(tmp_path / "s.csv"),
                                    "--plot", str(tmp_path / "s.png")])
     rc_r, js_r, _ = _run(capsys, [*TINY, "--workers", "2", "--out", str(tmp_path / "r.csv")])
     assert rc_s == rc_r == 0
-    assert js_s["backend"] == "serial" and js_r["backend"] == "ray" and js_r["workers"] == 2
+    assert js_s["backend"] == "serial" and js_r["backend"] == "processes" and js_r["workers"] == 2
     # every case is a deterministic function of its config and floats are written with repr
     assert (tmp_path / "s.csv").read_bytes() == (tmp_path / "r.csv").read_bytes()
     assert js_s["sets"] == js_r["sets"]

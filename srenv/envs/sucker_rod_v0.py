@@ -89,7 +89,7 @@ import gymnasium as gym
 import numpy as np
 from gymnasium import spaces
 
-from ..config import WellConfig, load_config
+from ..config import WellConfig, check_stroke_steps, field_bounds, load_config
 from ..errors import ConfigError, SolverFailure
 from ..metrics import resample_prescribed_card
 from ..reward import RodFailureMonitor, SuckerRodReward
@@ -122,6 +122,8 @@ class SuckerRodEnv(gym.Env):
             raise ConfigError("surface.motion", "pullout",
                               "'harmonic' or 'conventional' for the env (a pull-out has no strokes to control; "
                               "run it with `srenv simulate --duration-s`)")
+        # the slowest stroke the agent can command must fit the per-stroke bound (refused here, not in step)
+        check_stroke_steps(self.base_cfg, self.base_cfg.control.spm_min, "control.spm_min")
         if render_mode is not None and render_mode not in self.metadata["render_modes"]:
             raise ValueError(f"render_mode = {render_mode!r}: expected one of {self.metadata['render_modes']}")
         self.render_mode = render_mode
@@ -154,6 +156,8 @@ class SuckerRodEnv(gym.Env):
             o["inflow.reservoir_pressure_pa"] = jitter(c.inflow.reservoir_pressure_pa)
             o["inflow.max_rate_m3_day"] = jitter(c.inflow.max_rate_m3_day)
             o["inflow.productivity_index_m3_day_pa"] = jitter(c.inflow.productivity_index_m3_day_pa)
+        # a base value near a field's bound must not be jittered past it (reset would then refuse it)
+        o = {k: float(np.clip(v, *field_bounds(k))) for k, v in o.items()}
         return load_config(c, o)
 
     def _to_operating_point(self, action: np.ndarray) -> tuple[float, float]:
