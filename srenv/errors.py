@@ -6,7 +6,7 @@ import reprlib
 
 # An error message shows at most this many characters of the offending value: a value can be huge (a
 # 400-digit integer, a list expanded from YAML aliases) and must not turn one line into megabytes.
-VALUE_REPR_CHARS = 80
+VALUE_REPR_CHARS = 240  # long enough for a file path, short enough for one line
 
 _repr = reprlib.Repr()
 _repr.maxlevel = 3          # nested containers beyond this depth print as [...]: bounded work, not only text

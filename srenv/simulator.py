@@ -240,6 +240,8 @@ class Simulator:
         # plunger stroke bookkeeping: extremes since the last accepted reversal (see _on_event)
         self._ub_max = self._ub_min = self._top_ub = float(self.u[-1])
         self._pump_phase = "up"  # the initial state is the bottom of the stroke
+        self._t_bottom = self.time_s
+        self._rising_s = None
         self._liquid_stroke_m = np.inf
         if self.annulus is not None:
             plan_par = np.zeros(K.N_PAR)
@@ -428,7 +430,11 @@ class Simulator:
         if self.annulus is None:
             return
         self.annulus.accumulate(time_s)
-        available_m3 = self.annulus.volume_m3 + self.annulus.inflow_m3_s() * 0.5 * period_s
+        # the standing valve is open while the plunger rises: the last upstroke's measured duration (the plunger
+        # rests at both ends, so it is shorter than half the period), half the period before there is one
+        rising_s = getattr(self, "_rising_s", None)
+        rising_s = 0.5 * period_s if rising_s is None or rising_s > period_s else rising_s
+        available_m3 = self.annulus.volume_m3 + self.annulus.inflow_m3_s() * rising_s
         self._liquid_stroke_m = available_m3 / plunger_area_m2(self.cfg.pump)
         par[K.P_VOID_UNTIL] = u_bottom_m - self._liquid_stroke_m
         ist[K.I_VOID] = 1
@@ -445,6 +451,7 @@ class Simulator:
             if upstroke <= min_travel:
                 return fillage
             self._top_ub = float(par[K.P_UBMIN])
+            self._rising_s = time_s - self._t_bottom
             liquid_m = upstroke
             if self.annulus is not None:
                 liquid_m = min(self._liquid_stroke_m, upstroke)
@@ -464,6 +471,7 @@ class Simulator:
                 par[K.P_PUMP_LO] = -self.law.up_eq_n
                 self._plan_upstroke(float(par[K.P_UBMAX]), time_s, period_s, ist, par)
             self._pump_phase = "up"
+            self._t_bottom = time_s
             par[K.P_UBMIN] = ub
             events.append(("bottom", time_s, ub, fillage))
         return fillage
@@ -495,6 +503,7 @@ class Simulator:
         vol = self.annulus.volume_m3 if self.annulus is not None else 0.0
         self.reset(self.annulus.level_m if self.annulus is not None else None)
         self.time_s = t
+        self._t_bottom = t
         if self.annulus is not None:
             self.annulus.volume_m3 = vol
             self.annulus.last_time_s = t

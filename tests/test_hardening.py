@@ -27,7 +27,7 @@ import pytest
 
 from srenv.cli import check_finite, main
 from srenv.config import CONFIG_DIR, MAX_YAML_BYTES
-from srenv.errors import NumericFailure, short_repr
+from srenv.errors import VALUE_REPR_CHARS, NumericFailure, short_repr
 
 ROOT = Path(__file__).resolve().parents[1]
 FIG3 = "paper_fig3_vertical"
@@ -185,7 +185,7 @@ def test_error_values_are_truncated() -> None:
         nested = [nested] * 9  # 9^8 leaves if printed in full
     t0 = time.perf_counter()
     for value in (nested, "x" * 10**6, 10**400, -(10**5000)):
-        assert len(short_repr(value)) <= 80
+        assert len(short_repr(value)) <= VALUE_REPR_CHARS
     assert time.perf_counter() - t0 < 1.0
     assert short_repr(0.02) == "0.02" and short_repr("abc") == "'abc'"
 
