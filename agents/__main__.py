@@ -66,18 +66,21 @@ def build_parser() -> argparse.ArgumentParser:
     p = _Parser(prog="python -m agents", description="Baselines, SB3 training and evaluation for srenv.")
     sub = p.add_subparsers(dest="command", required=True, parser_class=_Parser)
 
-    t = sub.add_parser("train", help="train PPO/SAC from an rl-zoo-style hyperparameter YAML")
+    t = sub.add_parser("train", help="train PPO/SAC from a hyperparameter YAML (SB3, or RLlib with backend: rllib)")
     t.add_argument("config", help="training YAML, e.g. configs/train/ppo_default.yaml")
     t.add_argument("--total-timesteps", type=_positive_int, help="override n_timesteps (total, incl. resumed)")
     t.add_argument("--out", help="output directory (default runs/<config name>)")
     t.add_argument("--resume", action="store_true", help="continue from the newest checkpoint in --out")
-    t.add_argument("--n-envs", type=_positive_int, help="override n_envs (default: all cores)")
+    t.add_argument("--n-envs", type=_positive_int,
+                   help="override n_envs (default: all cores); num_env_runners for backend: rllib")
+    t.add_argument("--address", help="backend: rllib: Ray cluster to join (auto, ray://host:10001); "
+                                     "default a local Ray on 127.0.0.1")
     t.add_argument("--progress", action=argparse.BooleanOptionalAction, default=None,
                    help="progress bar (default: when stdout is a terminal)")
 
     e = sub.add_parser("evaluate", help="evaluate baselines and/or saved models on held-out seeds")
     e.add_argument("--policy", action="append", required=True,
-                   help="rocking, fillage or a model .zip; repeat to compare")
+                   help="rocking, fillage, an SB3 model .zip or an RLlib checkpoint directory; repeat to compare")
     e.add_argument("--episodes", type=_positive_int, default=20)
     e.add_argument("--seed", type=_nonneg_int, default=1000, help="first held-out seed (episodes use S..S+N-1)")
     e.add_argument("--config", default="default", help="well config name or YAML path")
@@ -102,10 +105,20 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 def cmd_train(args: argparse.Namespace) -> dict:
+    from .rllib_backend import read_backend
     from .train import load_train_config, train
 
-    cfg = load_train_config(args.config, {"n_envs": args.n_envs} if args.n_envs else None)
     out = args.out or str(Path("runs") / Path(args.config).stem)
+    if read_backend(args.config) == "rllib":
+        from . import rllib_backend
+
+        rcfg = rllib_backend.load_rllib_config(args.config,
+                                               {"num_env_runners": args.n_envs} if args.n_envs else None)
+        return rllib_backend.train(rcfg, out, total_timesteps=args.total_timesteps, resume=args.resume,
+                                   address=args.address)
+    if args.address:
+        raise ValueError(f"--address {args.address}: only for backend: rllib configs")
+    cfg = load_train_config(args.config, {"n_envs": args.n_envs} if args.n_envs else None)
     progress = sys.stdout.isatty() if args.progress is None else args.progress
     return train(cfg, out, total_timesteps=args.total_timesteps, resume=args.resume, progress_bar=progress)
 

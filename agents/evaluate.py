@@ -155,6 +155,10 @@ def make_policy(spec: str, env: Any, trust: bool = False) -> Policy:
         return RockingMachinePolicy(well_config(env))
     if spec == "fillage":
         return FillagePolicy(well_config(env), fillage_index=fillage_index(env))
+    from .rllib_backend import is_rllib_checkpoint, load_rllib_policy
+
+    if is_rllib_checkpoint(spec):  # a directory from backend: rllib (its checkpoint/ or step_<N>/)
+        return load_rllib_policy(spec, env, trust=trust)
     return load_model(spec, env, trust=trust)
 
 
@@ -162,6 +166,8 @@ def policy_label(spec: str) -> str:
     if spec in BASELINES:
         return spec
     path = Path(spec)
+    if path.name == "checkpoint" and path.parent.name:  # an RLlib run's final checkpoint directory
+        return f"{path.parent.name}/checkpoint"
     stem = path.name.removesuffix(".zip")
     # train() names its outputs model / best_model: the run directory tells runs apart
     return f"{path.parent.name}/{stem}" if stem in ("model", "best_model") and path.parent.name else stem

@@ -52,7 +52,7 @@ _CHECKPOINT_RE = re.compile(rf"^{CHECKPOINT_PREFIX}_(\d+)_steps\.zip$")
 # Keys of the YAML that configure the harness; every other key goes to the algorithm's constructor.
 _HARNESS_KEYS = {"algo", "env_id", "env_kwargs", "n_envs", "n_timesteps", "policy", "policy_kwargs",
                  "normalize", "seed", "checkpoint_freq", "eval_freq", "n_eval_episodes", "eval_seed",
-                 "save_replay_buffer", "vec_env"}
+                 "save_replay_buffer", "vec_env", "backend"}
 
 
 def algorithms() -> dict[str, type]:
@@ -128,6 +128,8 @@ def _yaml12_float(value: Any) -> Any:
 def parse_train_config(data: Any, source: str = "<dict>") -> TrainConfig:
     """Validate a YAML mapping into a :class:`TrainConfig` (clear errors, no evaluation of strings)."""
     _expect(isinstance(data, dict), source, type(data).__name__, "a mapping of hyperparameters")
+    _expect(data.get("backend", "sb3") == "sb3", "backend", data.get("backend"),
+            "sb3 here (backend: rllib is read by agents.rllib_backend)")
     algo = str(data.get("algo", "")).lower()
     _expect(algo in algorithms(), "algo", data.get("algo"), "one of " + ", ".join(algorithms()))
     n_envs = data.get("n_envs") or 0

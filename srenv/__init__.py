@@ -9,27 +9,36 @@ __version__ = "0.1.0"
 ENV_ID = "srenv/SuckerRod-v0"
 ENV_ID_V1 = "srenv/SuckerRod-v1"
 
+# Every env srenv registers: id -> (entry point, default kwargs shown by gymnasium.spec(id)). Adding an env
+# is one line here. No TimeLimit (max_episode_steps) and no reward_threshold are registered on purpose:
+# each env truncates itself from its config (v0: control.max_episode_s, the horizon, and
+# control.max_episode_steps, a cap; v1: task.episode_hours of well time, 144 five-minute intervals by
+# default), so the config stays the one source of the episode length; the returns are time integrals of
+# production less penalties (v1: less costs), with no level that "solves" the task.
+ENVS: dict[str, tuple[str, dict]] = {
+    ENV_ID: ("srenv.envs.sucker_rod_v0:SuckerRodEnv", {"config": "default"}),
+    ENV_ID_V1: ("srenv.envs.sucker_rod_v1:SuckerRodV1Env", {"scenario": "train", "observation": "field"}),
+}
 
-def _register() -> None:
+
+def register_envs() -> None:
+    """Register :data:`ENVS` with gymnasium (idempotent; run on ``import srenv``)."""
     import warnings
 
     import gymnasium
 
-    # v0 is kept on purpose (reproducibility of published runs); gymnasium's "v0 is out of date" notice on every
-    # make would only pollute the one-line stderr our tools promise
+    # v0 is kept on purpose (reproducibility of published runs; v1 is another task); gymnasium's "v0 is out
+    # of date" notice on every make would only pollute the one-line stderr our tools promise
     warnings.filterwarnings("ignore", message=r".*srenv/SuckerRod-v0 is out of date.*")
 
-    if ENV_ID not in gymnasium.registry:
-        # entry point by string: importing srenv stays light (the kernel compiles only when an env is made)
-        gymnasium.register(id=ENV_ID, entry_point="srenv.envs.sucker_rod_v0:SuckerRodEnv")
-    if ENV_ID_V1 not in gymnasium.registry:
-        # the horizon is in well time (task.episode_hours = 12 h of 5-min intervals = 144 steps); the env
-        # truncates itself, so no TimeLimit wrapper is added
-        gymnasium.register(id=ENV_ID_V1, entry_point="srenv.envs.sucker_rod_v1:SuckerRodV1Env",
-                           kwargs={"scenario": "train", "observation": "field"})
+    for env_id, (entry_point, kwargs) in ENVS.items():
+        if env_id not in gymnasium.registry:
+            # entry point by string: importing srenv stays light (the kernel compiles only when an env is made)
+            gymnasium.register(id=env_id, entry_point=entry_point, kwargs=dict(kwargs),
+                               max_episode_steps=None, reward_threshold=None, nondeterministic=False)
 
 
-_register()
+register_envs()
 
 
 def __getattr__(name: str) -> type:

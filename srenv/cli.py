@@ -9,76 +9,22 @@ from __future__ import annotations
 import argparse
 import json
 import math
-import os
 import signal
 import sys
-import tempfile
-from pathlib import Path
 
 import numpy as np
 
+from .cli_types import MAX_DURATION_S
+from .cli_types import bounded as _bounded
+from .cli_types import positive as _positive
+from .cli_types import positive_int as _positive_int
 from .errors import ConfigError, NumericFailure, SolverFailure
+from .outputs import atomic_write, check_output_path
 
 EXIT_BAD_INPUT = 2
 EXIT_SOLVER = 3
 EXIT_INTERRUPTED = 130
 MAX_STROKES = 100_000  # --strokes; the recorded size of the run is bounded separately (MAX_RUN_SAMPLES)
-MAX_DURATION_S = 1.0e6  # --duration-s
-
-
-def _positive(name: str, unit: str):
-    def parse(text: str) -> float:
-        try:
-            x = float(text)
-        except ValueError:
-            raise argparse.ArgumentTypeError(f"{name} = {text!r}: expected a positive number in {unit}") from None
-        if not math.isfinite(x) or x <= 0:
-            raise argparse.ArgumentTypeError(f"{name} = {text!r}: expected a positive number in {unit}")
-        return x
-    return parse
-
-
-def _positive_int(name: str, hi: int | None = None):
-    def parse(text: str) -> int:
-        limit = f" at most {hi}" if hi is not None else ""
-        # digits only, and few of them: int() of a 100 000-digit string is itself slow
-        if not text.isdigit() or len(text) > 18 or int(text) <= 0 or (hi is not None and int(text) > hi):
-            raise argparse.ArgumentTypeError(f"{name} = {text[:40]!r}: expected a positive integer{limit}")
-        return int(text)
-    return parse
-
-
-def _bounded(parse, name: str, unit: str, hi: float):
-    def check(text: str) -> float:
-        x = parse(text)
-        if x > hi:
-            raise argparse.ArgumentTypeError(f"{name} = {text[:40]!r}: expected a positive number in {unit} "
-                                             f"at most {hi:g}")
-        return x
-    return check
-
-
-def check_output_path(flag: str, path: str | None, suffixes: tuple[str, ...]) -> None:
-    """Refuse an output path before any work: wrong suffix, a directory, a missing or unwritable parent
-    directory, or an existing file that cannot be replaced."""
-    if path is None:
-        return
-    p = Path(path)
-    if p.suffix.lower() not in suffixes:
-        raise ConfigError(flag, path, "a file name ending in " + " or ".join(suffixes))
-    if p.is_dir():
-        raise ConfigError(flag, path, "a file path (this is a directory)")
-    parent = p.parent if str(p.parent) else Path(".")
-    if not parent.is_dir():
-        raise ConfigError(flag, path, "a path in an existing directory")
-    if p.exists() and not p.is_file():
-        raise ConfigError(flag, path, "a regular file path (this is a special file)")
-    try:  # the one reliable test of writability (permissions, read-only mounts, root on /proc)
-        fd, probe = tempfile.mkstemp(dir=parent, prefix=f".{p.name}.", suffix=".probe")
-        os.close(fd)
-        os.remove(probe)
-    except OSError as exc:
-        raise ConfigError(flag, path, f"a path in a writable directory ({exc.strerror or exc})") from None
 
 
 def _raise_on_sigterm(signum: int, frame: object) -> None:
@@ -91,33 +37,6 @@ class _Parser(argparse.ArgumentParser):
     def error(self, message: str) -> None:  # one line, status 2, no usage dump
         print(f"srenv: error: {message}", file=sys.stderr)
         sys.exit(EXIT_BAD_INPUT)
-
-
-def atomic_write(path: str | Path, write) -> None:
-    """Write through a temporary file in the target directory, then rename: never a partial file.
-
-    The temporary file is removed on any exit (an error, Ctrl-C, SIGTERM once :func:`main` installed its
-    handler); the result gets the usual permissions (0666 minus the umask), not mkstemp's 0600.
-    """
-    path = Path(path)
-    try:
-        fd, tmp = tempfile.mkstemp(dir=path.parent if str(path.parent) else ".", prefix=f".{path.name}.",
-                                   suffix=".tmp" + path.suffix)
-    except OSError as exc:
-        raise ConfigError("output", str(path), f"a writable path ({exc.strerror or exc})") from None
-    os.close(fd)
-    try:
-        write(tmp)
-        umask = os.umask(0)
-        os.umask(umask)
-        os.chmod(tmp, 0o666 & ~umask)
-        os.replace(tmp, path)
-    except BaseException as exc:
-        if os.path.exists(tmp):
-            os.remove(tmp)
-        if isinstance(exc, OSError):  # disk full, the directory vanished, ...: one line, not a traceback
-            raise ConfigError("output", str(path), f"a writable path ({exc.strerror or exc})") from None
-        raise
 
 
 def check_finite(trace: dict, summary: dict) -> None:

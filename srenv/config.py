@@ -22,6 +22,8 @@ from typing import Any
 import yaml
 
 from .errors import ConfigError, short_repr
+from .shipped import shipped_dir
+from .unit_catalogue import conventional_unit
 
 # Bounds on what a YAML document may ask of the loader (a config is a few hundred nodes; see
 # docs/reliability.md): bytes read, nesting depth, and nodes after alias expansion - a 600-byte "billion
@@ -624,9 +626,7 @@ def _check_conventional_unit(surface: SurfaceConfig) -> None:
     """A conventional unit's stroke comes from its crank hole: the unit must exist and have that hole, or
     the stroke would be beyond what the unit can make. Checked at load time (not only when a simulator is
     built) so that every loader of a config - CLI, env, sweeps - refuses it before doing any work."""
-    from .surface import _conventional_unit  # the one place that resolves a unit; lazy: it imports us
-
-    _conventional_unit(surface.unit, surface.crank_hole)
+    conventional_unit(surface.unit, surface.crank_hole)
 
 
 def _known_solvers() -> list[str]:
@@ -636,7 +636,7 @@ def _known_solvers() -> list[str]:
 
 
 # ----------------------------------------------------------------------------------------------- loading
-CONFIG_DIR = Path(__file__).resolve().parents[1] / "configs" / "wells"
+CONFIG_DIR = shipped_dir("wells")  # configs/wells of the checkout, or the wheel's package data
 
 
 def shipped_configs() -> list[str]:

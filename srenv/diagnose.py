@@ -178,7 +178,7 @@ def read_surface_card(path: str) -> dict[str, np.ndarray]:
 
 
 def write_pump_csv(card: PumpCard, path: str) -> None:
-    from .cli import atomic_write
+    from .outputs import atomic_write
 
     data = np.column_stack([card.t_s, card.pump_position_m, card.pump_load_n])
 
@@ -233,7 +233,7 @@ def cmd_diagnose(args) -> int:
     out = summary(cfg, card)
     write_pump_csv(card, args.out)
     if args.plot:
-        from .cli import atomic_write
+        from .outputs import atomic_write
 
         atomic_write(args.plot, lambda tmp: save_plot(card, tmp, cfg.name))
     print(json.dumps(out, default=float))
@@ -261,7 +261,8 @@ def save_plot(card: PumpCard, path: str, title: str = "") -> None:
 
 
 def add_parser(sub) -> None:
-    from .cli import _positive, _positive_int
+    from .cli_types import positive as _positive
+    from .cli_types import positive_int as _positive_int
 
     d = sub.add_parser("diagnose", help="downhole (pump) card from a measured surface card")
     d.add_argument("card", help="CSV with t_s, polished_rod_position_m, polished_rod_load_n")

@@ -170,7 +170,7 @@ def fit_card(fit: CardFit, max_evaluations: int = 200) -> dict:
 def write_fitted_yaml(fit: CardFit, values: dict, path: str) -> None:
     """The fitted config: the input config with the fitted values and the measured motion, validated
     before it is written atomically."""
-    from .cli import atomic_write
+    from .outputs import atomic_write
 
     data = apply_overrides(fit.raw, values)
     config_from_dict(data)  # validated before the write
@@ -196,7 +196,7 @@ def cmd_fit(args) -> int:
 
 
 def add_parser(sub) -> None:
-    from .cli import _positive_int
+    from .cli_types import positive_int as _positive_int
 
     f = sub.add_parser("fit", help="fit config fields to a measured surface card (least squares)")
     f.add_argument("card", help="CSV with t_s, polished_rod_position_m, polished_rod_load_n")

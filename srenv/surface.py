@@ -14,7 +14,6 @@ trapezoidal rule reproduces a periodic motion without drift.
 from __future__ import annotations
 
 import math
-from functools import lru_cache
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -23,6 +22,7 @@ from .beam_unit import ConventionalUnit
 from .config import SurfaceConfig
 from .errors import ConfigError
 from .measured_motion import MeasuredMotion, load_measured_motion
+from .unit_catalogue import conventional_unit
 
 if TYPE_CHECKING:
     from .gearbox import GearboxReport
@@ -43,7 +43,7 @@ class SurfaceMotion:
             raise ConfigError("surface.motion", self.kind, "'conventional' when a beam unit is given")
         self._unit: ConventionalUnit | None = None
         if self.kind == "conventional":
-            self._unit = unit if unit is not None else _conventional_unit(cfg.unit, cfg.crank_hole)
+            self._unit = unit if unit is not None else conventional_unit(cfg.unit, cfg.crank_hole)
         self._measured: MeasuredMotion | None = None
         if self.kind == "measured":
             self._measured = load_measured_motion(cfg.measured_card_csv, cfg.measured_spm)
@@ -125,19 +125,3 @@ class SurfaceMotion:
             counterbalance_offset_rad=math.radians(self.cfg.counterbalance_offset_deg),
             motor_efficiency=self.cfg.motor_efficiency,
         )
-
-
-@lru_cache(maxsize=16)
-def _conventional_unit(designation: str, crank_hole: int) -> ConventionalUnit:
-    """Catalogue unit with its crank hole, cached: the env rebuilds simulators on every reset."""
-    from .unit_catalogue import get_unit, list_units
-
-    try:
-        geometry = get_unit(designation)
-    except KeyError:
-        raise ConfigError("surface.unit", designation,
-                          "an API designation from the unit catalogue: " + ", ".join(list_units())) from None
-    holes = len(geometry.crank_radii_m)
-    if not 0 <= crank_hole < holes:
-        raise ConfigError("surface.crank_hole", crank_hole, f"an index in 0..{holes - 1} (0 = longest stroke)")
-    return ConventionalUnit(geometry, crank_hole)

@@ -343,7 +343,7 @@ def critical_values(rows: list[dict[str, Any]], value_column: str) -> list[dict[
 
 
 def write_csv(rows: list[dict[str, Any]], path: str) -> None:
-    from .cli import atomic_write
+    from .outputs import atomic_write
 
     columns = list(rows[0])
 
@@ -364,7 +364,7 @@ def plot(rows: list[dict[str, Any]], value_column: str, critical: list[dict[str,
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    from .cli import atomic_write
+    from .outputs import atomic_write
 
     fig, (ax1, ax2) = plt.subplots(2, 1, figsize=(7.5, 7), sharex=True)
     for crit in critical:
@@ -396,8 +396,8 @@ def plot(rows: list[dict[str, Any]], value_column: str, critical: list[dict[str,
 
 # ----------------------------------------------------------------------------------------------- CLI
 def cmd_sweep(args: argparse.Namespace) -> int:
-    from .cli import check_output_path
     from .config import MAX_RUN_SAMPLES, config_from_dict
+    from .outputs import check_output_path
     from .simulator import Simulator
 
     check_output_path("--out", args.out, (".csv",))
@@ -458,7 +458,10 @@ def cmd_sweep(args: argparse.Namespace) -> int:
 
 
 def add_parser(subparsers: argparse._SubParsersAction) -> None:
-    from .cli import MAX_DURATION_S, _bounded, _positive, _positive_int
+    from .cli_types import MAX_DURATION_S
+    from .cli_types import bounded as _bounded
+    from .cli_types import positive as _positive
+    from .cli_types import positive_int as _positive_int
 
     s = subparsers.add_parser("sweep", help="parameter study in parallel on Ray (e.g. slip amplitude vs "
                               "pulling velocity)", description=__doc__.splitlines()[0])

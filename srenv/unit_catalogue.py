@@ -1,8 +1,7 @@
 """Catalogue of API 11E conventional pumping units, read with ``yaml.safe_load`` (nothing is evaluated).
 
-The loader reads the copy shipped inside the package, ``srenv/data/units_catalogue.yaml``, so it works
-from a non-editable install; ``configs/units/catalogue.yaml`` is the same file for people browsing the
-repository (a test keeps the two identical). Each entry gives either ``k_m`` or ``h_m`` (saddle bearing
+The loader reads ``configs/units/catalogue.yaml``: in a checkout directly, from a wheel as the package
+data it ships (:func:`srenv.shipped.shipped_dir`). Each entry gives either ``k_m`` or ``h_m`` (saddle bearing
 height above the crank shaft), see :class:`~srenv.beam_unit.BeamUnitGeometry`.
 """
 
@@ -16,10 +15,11 @@ from typing import Any
 
 import yaml
 
-from .beam_unit import BeamUnitGeometry
+from .beam_unit import BeamUnitGeometry, ConventionalUnit
 from .errors import ConfigError
+from .shipped import shipped_dir
 
-PACKAGE_CATALOGUE_PATH = Path(__file__).parent / "data" / "units_catalogue.yaml"
+PACKAGE_CATALOGUE_PATH = shipped_dir("units") / "catalogue.yaml"
 REPO_CATALOGUE_PATH = Path(__file__).parents[1] / "configs" / "units" / "catalogue.yaml"
 
 IN_LB_TO_NM = 0.0254 * 4.4482216152605
@@ -108,3 +108,18 @@ def get_unit(designation: str) -> BeamUnitGeometry:
     if key not in units:
         raise KeyError(f"unknown pumping unit {designation!r}; known units: {', '.join(units)}")
     return units[key]
+
+
+@functools.lru_cache(maxsize=16)
+def conventional_unit(designation: str, crank_hole: int) -> ConventionalUnit:
+    """Catalogue unit with its crank hole, cached: the env rebuilds simulators on every reset. The one place
+    that resolves a unit (config validation and the surface motion both call it)."""
+    try:
+        geometry = get_unit(designation)
+    except KeyError:
+        raise ConfigError("surface.unit", designation,
+                          "an API designation from the unit catalogue: " + ", ".join(list_units())) from None
+    holes = len(geometry.crank_radii_m)
+    if not 0 <= crank_hole < holes:
+        raise ConfigError("surface.crank_hole", crank_hole, f"an index in 0..{holes - 1} (0 = longest stroke)")
+    return ConventionalUnit(geometry, crank_hole)
