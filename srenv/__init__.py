@@ -17,7 +17,10 @@ ENV_ID_V1 = "srenv/SuckerRod-v1"
 # production less penalties (v1: less costs), with no level that "solves" the task.
 ENVS: dict[str, tuple[str, dict]] = {
     ENV_ID: ("srenv.envs.sucker_rod_v0:SuckerRodEnv", {"config": "default"}),
-    ENV_ID_V1: ("srenv.envs.sucker_rod_v1:SuckerRodV1Env", {"scenario": "train", "observation": "field"}),
+    # v1's horizon is part of its spec: 12 h of well time in 5-min control intervals (144 steps); passing these
+    # kwargs (or None to keep a config's own task section) changes it
+    ENV_ID_V1: ("srenv.envs.sucker_rod_v1:SuckerRodV1Env",
+                {"scenario": "train", "observation": "field", "episode_hours": 12.0, "interval_s": 300.0}),
 }
 
 

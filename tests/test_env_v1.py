@@ -64,7 +64,14 @@ def test_spaces_and_observation_layout() -> None:
     assert PRIVILEGED_OBS_NAMES[: len(FIELD_OBS_NAMES)] == FIELD_OBS_NAMES
     for hidden in ("level", "intake_pressure", "productivity"):
         assert hidden not in FIELD_OBS_NAMES  # a field controller does not measure these
-    assert gym.spec(ID).kwargs == {"scenario": "train", "observation": "field"}
+    assert gym.spec(ID).kwargs == {"scenario": "train", "observation": "field", "episode_hours": 12.0,
+                                   "interval_s": 300.0}
+    env = gym.make(ID, episode_hours=1.0)
+    env.reset(seed=0)
+    steps = 0
+    while not env.step(np.zeros(2, np.float32))[3]:
+        steps += 1
+    assert steps + 1 == 12  # 1 h of 5-min intervals
 
 
 def test_reward_is_the_sum_of_its_terms_and_cost_is_nonnegative() -> None:

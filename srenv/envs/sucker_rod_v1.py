@@ -14,6 +14,8 @@ Constructor
 |---|---|---|
 | ``scenario`` | ``"train"`` | ``"train"`` / ``"test"``: the split's wells (200 / 50); or a shipped well name / YAML path |
 | ``observation`` | ``"field"`` | ``"field"`` (what a controller measures) or ``"privileged"`` (adds the hidden truth) |
+| ``episode_hours`` | ``12.0`` (spec) | horizon in hours of well time (``task.episode_hours``); ``None`` keeps the config's |
+| ``interval_s`` | ``300.0`` (spec) | control interval in s of well time (``task.interval_s``); ``None`` keeps the config's |
 | ``render_mode`` | ``None`` | ``"rgb_array"`` or ``"human"`` (surface and pump cards of the last stroke) |
 | ``overrides`` | ``None`` | ``{"key.path": value}`` applied to every well's config (e.g. ``economics.oil_price_usd_m3``) |
 | ``**kwargs`` | | further overrides as ``section__field=value`` (e.g. ``task__interval_s=600``) |
@@ -126,7 +128,8 @@ class SuckerRodV1Env(gym.Env):
     metadata: ClassVar[dict[str, Any]] = {"render_modes": ["rgb_array", "human"], "render_fps": 2}
 
     def __init__(self, scenario: str = "train", observation: str = "field", render_mode: str | None = None,
-                 overrides: dict | None = None, **kwargs: Any) -> None:
+                 overrides: dict | None = None, episode_hours: float | None = None, interval_s: float | None = None,
+                 **kwargs: Any) -> None:
         if observation not in OBSERVATIONS:
             raise ConfigError("observation", observation, "one of " + ", ".join(OBSERVATIONS))
         if render_mode is not None and render_mode not in self.metadata["render_modes"]:
@@ -136,6 +139,10 @@ class SuckerRodV1Env(gym.Env):
         self.render_mode = render_mode
         self.overrides = dict(overrides or {})
         self.overrides.update(_overrides_from_kwargs(kwargs))
+        if episode_hours is not None:
+            self.overrides["task.episode_hours"] = episode_hours
+        if interval_s is not None:
+            self.overrides["task.interval_s"] = interval_s
         self.split = self.scenario if self.scenario in wf.SPLITS else None
         self._fixed: wf.WellSpec | None = None
         if self.split is None:
