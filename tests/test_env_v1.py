@@ -272,3 +272,28 @@ def test_controller_fillage_sees_pump_off_and_the_gibbs_diagnostic_agrees() -> N
     full, off, true = readings["pump_card"]
     assert full > 0.9 and off < 0.5 and true < 0.5
     assert abs(readings["diagnose"][1] - off) < 0.05
+
+
+def test_pickles_deep_copies_and_runs_in_subprocvecenv() -> None:
+    import copy
+    import pickle
+
+    from stable_baselines3.common.env_util import make_vec_env
+    from stable_baselines3.common.vec_env import SubprocVecEnv
+
+    env = SuckerRodV1Env(scenario="train")
+    env.reset(seed=8)
+    twin = pickle.loads(pickle.dumps(env))
+    clone = copy.deepcopy(env)
+    a = np.array([0.3, 0.2], np.float32)
+    r = [e.step(a)[1] for e in (env, twin, clone)]
+    assert r[0] == r[1] == r[2]  # the same state continues identically in every copy
+    venv = make_vec_env("srenv:srenv/SuckerRod-v1", n_envs=2, seed=0, vec_env_cls=SubprocVecEnv,
+                        vec_env_kwargs={"start_method": "spawn"})
+    try:
+        obs = venv.reset()
+        obs, rew, _, infos = venv.step(np.zeros((2, 2), np.float32))
+        assert obs.shape == (2, len(FIELD_OBS_NAMES)) and np.all(np.isfinite(rew))
+        assert {i["well_id"] for i in infos} <= {f"train-{k:03d}" for k in range(wf.N_TRAIN)}
+    finally:
+        venv.close()
