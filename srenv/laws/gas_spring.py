@@ -25,7 +25,7 @@ GAS_FIELDS = [("gas_mode", "i8"), ("gas_on", "i8"), ("u0_m", "f8"), ("gas_m3", "
               ("lin_dk", "f8"), ("lin_shift_n", "f8"), ("u_tilde_m", "f8")]
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def gas_active(params):
     """With enough gas in the chamber (its volume at p_in exceeds its volume at p_d by more than a small
     plunger travel) the chamber pressure is a spring on the plunger; less gas: the rigid valve law.

@@ -58,11 +58,10 @@ def slope(side: SideForce, node_force_n: np.ndarray, params: np.ndarray) -> np.n
     return (1.0 - p["ratio"]) * f / p["v0_m_s"]
 
 
-@njit(cache=True)
-def bounds(side, nforce, lo, hi, ns, fric_s):
-    """The interval [-F_i, F_i] on the rod nodes (all but the last) from the axial forces `nforce`;
-    F_i is kept in fric_s for the concave part."""
-    axial, weight, turn = side
+@njit(cache=True, inline="always")
+def bounds(axial, weight, turn, nforce, lo, hi, ns, fric_s):
+    """The interval [-F_i, F_i] on the rod nodes (all but the last) from the axial forces `nforce` and the
+    SideForce coefficients; F_i is kept in fric_s for the concave part."""
     n = lo.shape[0]
     for i in range(n - 1):
         nn = nforce[i]
@@ -76,7 +75,7 @@ def bounds(side, nforce, lo, hi, ns, fric_s):
     fric_s[n - 1] = 0.0
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def concave_shift(params, v, fric_s, shift):
     """j2'(v) on the rod nodes (velocity-weakening law only; the kernel zeroed `shift`)."""
     p = params[0]

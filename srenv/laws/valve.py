@@ -43,7 +43,7 @@ def slope(law: ValveLaw) -> float:
     return law.drop_n / law.v0_m_s if law.drop_n > 0 else 0.0
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def bounds(params, ub, lo, hi, ns):
     """The pump node's interval at plunger position ub (the last of lo, hi, ns): the valve law, collapsed
     to -P-_eq in a fluid-pound void, or the plunger friction alone while the gas spring is on."""
@@ -66,7 +66,7 @@ def bounds(params, ub, lo, hi, ns):
     ns[n - 1] = phi > plo
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def concave_shift(params, v, shift):
     """j2'(v_B) of the velocity-weakening upstroke law (not in a void, where the plunger meets no liquid)."""
     p = params[0]
