@@ -14,7 +14,7 @@ with F'(V) = -(C0 - C) c_v exp(-c_v V) < 0: the friction slope is a negative dam
     v_H = ln(c_v (C0 - C) / b) / c_v       (none if c_v (C0 - C) <= b: stable at every V).
 
 :class:`SpringBlock` integrates this system with the SAME compiled step machinery as the rod
-(:func:`srenv.kernel.advance` on a one-node model: the block is the "pump" node carrying the nonmonotone
+(:func:`srenv.kernel.advance`, built by :func:`srenv.kernel_layout.build`, on a one-node model: the block is the "pump" node carrying the nonmonotone
 law of paper eq. 32, the spring is the single element to the prescribed top). The trapezoidal Newmark
 rule (beta = 1/4, gamma = 1/2) maps the continuous stability boundary Re(lambda) = 0 onto |z| = 1
 exactly, so with converged DC iterations the simulated threshold equals v_H up to the resolution of the
@@ -39,6 +39,10 @@ import numpy as np
 from scipy.linalg import eigvals
 
 from . import kernel as K
+from . import kernel_layout as L
+from .laws import rod_friction
+from .laws import valve as valve_law_record
+from .pump import ValveLaw
 
 if TYPE_CHECKING:
     from .simulator import Simulator
@@ -82,57 +86,44 @@ class SpringBlock:
         """Start in steady sliding at V with the block's velocity kicked by ``perturbation_m_s``; return
         (t_s, upward block velocity in m/s) at the end of each step, computed by :func:`kernel.advance`."""
         n_steps = max(1, math.ceil(duration_s / time_step_s - 1e-9))
-        dt, beta, gamma = time_step_s, 0.25, 0.5
         m, k, b = self.mass_kg, self.stiffness_n_m, self.damping_n_s_m
         v_up = pull_velocity_m_s
         # kernel convention: positive DOWN; the top (point A) moves up at V, the block follows
         force = self.friction_n(v_up) + b * v_up  # steady spring force: friction plus dashpot
-        u = np.array([force / k])                 # spring stretched by its steady force (top at u_A = 0)
         v = np.array([-v_up - perturbation_m_s])
-        a = np.zeros(1)
-        uav = np.array([0.0, -v_up, 0.0, 0.0])
-        va_t = np.full(n_steps, -v_up)
-        par = np.zeros(K.N_PAR)
-        par[K.P_DT], par[K.P_BETA], par[K.P_GAMMA] = dt, beta, gamma
-        par[K.P_TOLV], par[K.P_TOLL], par[K.P_DCTOL] = _TOL_V_M_S, _TOL_LAMBDA, dc_tolerance_m_s
-        # friction interval [-C0, C0] (lam = lo while moving up); weakening only on the upward branch,
-        # which is the only one visited near steady sliding
-        par[K.P_PUMP_LO], par[K.P_PUMP_HI] = -self.static_force_n, self.static_force_n
-        par[K.P_PUMP_DROP] = self.static_force_n - self.kinetic_force_n
-        par[K.P_PUMP_V0] = self.reference_velocity_m_s
-        par[K.P_KC], par[K.P_EA0] = -k, k  # one element of stiffness k between top and block
-        ist = np.zeros(K.N_IST, dtype=np.int64)
-        ist[K.I_MAXCORR], ist[K.I_DCMAX] = 8, dc_max_iterations
-        ist[K.I_NONSMOOTH], ist[K.I_PUMP_NONMONO], ist[K.I_RECORD] = 1, 1, 1
-        ist[K.I_PLDIR] = -1  # already moving up: no start "event"
-        kd, ko, md, mo, cd = np.array([k]), np.zeros(0), np.array([m]), np.zeros(0), np.array([b])
-        c1, c2 = 1.0 / (gamma * dt), beta * dt / gamma
-        ksd = c1 * md + cd + c2 * kd
-        status = np.array([-1], dtype=np.int64)
-        ns, stuck = np.ones(1, dtype=np.bool_), np.zeros(1, dtype=np.bool_)
-        lo, hi, lam, bb, b0, shift, vk, rhs, cp, dp, nforce, fric_s = (np.zeros(1) for _ in range(12))
-        wv, wb, wlo, whi = (np.zeros(1) for _ in range(4))
-        prev_lam, prev_v = np.array([-self.friction_n(v_up)]), v.copy()
-        prev_stuck, stick = np.zeros(1, dtype=np.bool_), np.zeros(1, dtype=np.int64)
-        rec = np.empty((K.N_REC, n_steps))
-        energy, emax, emin = np.zeros(K.N_ENERGY), np.full(1, -np.inf), np.full(1, np.inf)
-        zeros = np.zeros(1)
+        state = L.State(u=np.array([force / k]),  # spring stretched by its steady force (top at u_A = 0)
+                        v=v, a=np.zeros(1), top=np.array([0.0, -v_up, 0.0, 0.0]),
+                        status=np.array([-1], dtype=np.int64), prev_lam=np.array([-self.friction_n(v_up)]),
+                        prev_v=v.copy(), prev_stuck=np.zeros(1, dtype=np.bool_))
+        # the block is the "pump" node with the nonmonotone law: friction interval [-C0, C0] (lam = lo while
+        # moving up); weakening only on the upward branch, which is the only one visited near steady sliding
+        valve = valve_law_record.make(ValveLaw(self.static_force_n, -self.static_force_n,
+                                               self.static_force_n - self.kinetic_force_n,
+                                               self.reference_velocity_m_s))
+        valve["nonmonotone"] = 1  # DC iterations even without weakening (as the rod's kernel runs them)
+        # the whole "string": a massless top joined to the block by one element of stiffness k
+        st = L.build(dt_s=time_step_s, beta=0.25, gamma=0.5, stiffness=(np.array([k, k]), np.array([-k])),
+                     mass=(np.array([0.0, m]), np.zeros(1)), damping=np.array([0.0, b]), load_n=np.zeros(2),
+                     ea_len_n_m=np.array([k]), side=rod_friction.side_force(0.0, *np.zeros((5, 2))),
+                     rod_friction=rod_friction.make(1.0, 1.0, 1.0, False), valve=valve, state=state,
+                     scratch=L.work(1), energy=np.zeros(L.N_ENERGY), n_steps=n_steps, record=True,
+                     max_corrections=8, dc_max_iterations=dc_max_iterations, dc_tolerance_m_s=dc_tolerance_m_s,
+                     tol_v_m_s=_TOL_V_M_S, tol_lambda=_TOL_LAMBDA, plunger_dir=-1)  # moving up: no start event
+        ksd, w, va_t = st.model.ksd, st.work, np.full(n_steps, -v_up)
         while True:
-            code = K.advance(par, ist, u, v, a, uav, va_t, 0.0, ksd, ko, kd, ko, md, mo, cd, zeros,
-                             np.array([k]), zeros, zeros, zeros, status, lo, hi, ns, lam, bb, b0, shift, vk,
-                             rhs, stuck, cp, dp, nforce, fric_s, wv, wb, wlo, whi, prev_lam, prev_v,
-                             prev_stuck, stick, rec, energy, emax, emin, n_steps)
-            if code == K.DONE:
+            code = K.run(st, va_t, 0.0, n_steps)
+            if code == L.DONE:
                 break
-            if code == K.NEED_QP:
+            if code == L.NEED_QP:
                 # the one-node box QP min 1/2 k* v^2 - b v + max(lo v, hi v) has a closed form
                 # (soft threshold), so no solver is needed; the kernel resumes with it
-                wv[0] = (wb[0] - whi[0]) / ksd[0] if wb[0] > whi[0] else (
-                    (wb[0] - wlo[0]) / ksd[0] if wb[0] < wlo[0] else 0.0)
-                status[0] = 1 if wv[0] > 0 else (-1 if wv[0] < 0 else 0)
-                ist[K.I_HAVEQP] = 1
+                wb, wlo, whi = w.wb[0], w.wlo[0], w.whi[0]
+                w.wv[0] = (wb - whi) / ksd[0] if wb > whi else ((wb - wlo) / ksd[0] if wb < wlo else 0.0)
+                state.status[0] = 1 if w.wv[0] > 0 else (-1 if w.wv[0] < 0 else 0)
+                st.progress["have_qp"] = 1
             # EVENT (the block reversed): nothing to update, keep stepping
-        return rec[K.R_T].copy(), rec[K.R_VB].copy()  # recorded upward positive
+        rec = st.out.rec
+        return rec[L.R_T].copy(), rec[L.R_VB].copy()  # recorded upward positive
 
 
 def oscillation_growth(velocity_m_s: np.ndarray, pull_velocity_m_s: float, window_steps: int) -> float:

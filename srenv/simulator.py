@@ -11,15 +11,19 @@ Typical use::
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
 
 import numpy as np
 
+from . import convexity
 from . import kernel as K
+from . import kernel_layout as L
 from .config import ConfigError, WellConfig, check_dense_size
 from .fluid import tubing_pressure_pa
 from .inflow import Annulus
-from .pump import GasChamber, ValveLaw, plunger_area_m2, valve_law
+from .laws import rod_friction
+from .laws import valve as valve_law_record
+from .pump import GasChamber, ValveLaw, valve_law
+from .pump_cycle import GAS_MIN_DELAY_FRACTION, PumpCycle  # noqa: F401 - GAS_MIN_DELAY_FRACTION: public
 from .rod import (
     GRAVITY_M_S2,
     build_mesh,
@@ -29,47 +33,13 @@ from .rod import (
     solve_tridiagonal,
     stiffness,
 )
+from .run_result import TRACE_COLUMNS, RunResult, concat_traces, trace_from_record  # noqa: F401 - public
 from .step_qp import StepQP
 from .surface import SurfaceMotion
 from .survey import Survey
 
-# gas whose compression from the intake to the discharge pressure spans less than this fraction of the stroke
-# leaves the valve law rigid: a spring far stiffer than the rod, whose transfer would span a step or two
-GAS_MIN_DELAY_FRACTION = 0.01
 
-TRACE_COLUMNS = ("t_s", "polished_rod_position_m", "polished_rod_velocity_m_s", "polished_rod_load_n",
-                 "pump_position_m", "pump_velocity_m_s", "pump_load_n", "step_path")
-
-
-@dataclass
-class RunResult:
-    """One stroke (or a duration run): counters, events and, if recorded, the per-step trace."""
-
-    n_steps: int
-    duration_s: float
-    spm: float
-    stroke_length_m: float
-    certified_steps: int
-    corrected_steps: int
-    qp_steps: int
-    qp_calls: int
-    dc_iterations: int
-    fillage: float
-    pumped_m3: float  # liquid lifted by the plunger in this run (fillage x upstroke x plunger area, summed)
-    intake_pressure_pa: float
-    rod_stick_episodes: np.ndarray
-    element_force_max_eq_n: np.ndarray
-    element_force_min_eq_n: np.ndarray
-    energy_j: dict
-    trace: dict | None = None
-    events: list = field(default_factory=list)
-
-    @property
-    def solver_calls(self) -> int:
-        return self.qp_calls
-
-
-class Simulator:
+class Simulator(PumpCycle):
     """Exact nonsmooth FE sucker-rod string (design §2-§3)."""
 
     def __init__(self, cfg: WellConfig, *, always_qp: bool | None = None, qp_solver: str | None = None,
@@ -114,12 +84,9 @@ class Simulator:
         rho_node = np.r_[rho_rod, rho_rod[-1]]
         incl = self.survey.inclination(x)
         w_b = (rho_node - cfg.fluid.density_kg_m3) * GRAVITY_M_S2 * area_node
-        mu = cfg.friction.coefficient
-        self._fa = (mu * trib * self.survey.build_rate(x))[1:].copy()
-        self._fw = (mu * trib * w_b * np.sin(incl))[1:].copy()
         turn = self.survey.turn_rate(x) if cfg.survey.three_d else np.zeros_like(x)
-        self._fc = (mu * trib * np.sin(incl) * turn)[1:].copy()
-        self._fa[-1] = self._fw[-1] = self._fc[-1] = 0.0  # the pump node carries the valve law only
+        self.side_force = rod_friction.side_force(cfg.friction.coefficient, trib, self.survey.build_rate(x), w_b,
+                                                  incl, turn)
         self._ea_len = mesh.ea_n / mesh.length_m
         # pressures and the valve law
         tvd = self.survey.tvd(x)
@@ -151,76 +118,34 @@ class Simulator:
 
     def _kstar(self, dt: float) -> tuple[np.ndarray, np.ndarray]:
         s = self.cfg.simulation
-        (kd, ko), (md, mo), cd = self._k, self._m, self._c
-        c1, c2 = 1.0 / (s.newmark_gamma * dt), s.newmark_beta * dt / s.newmark_gamma
-        return (c1 * md + cd + c2 * kd)[1:].copy(), (c1 * mo + c2 * ko)[1:].copy()
+        return L.kstar(self._k, self._m, self._c, dt, s.newmark_beta, s.newmark_gamma)
+
+    def _friction_record(self) -> np.ndarray:
+        fr = self.cfg.friction
+        return rod_friction.make(fr.coefficient, fr.kinetic_coefficient, fr.reference_velocity_m_s,
+                                 fr.law == "nonmonotone")
 
     def _check_convexity(self, dt: float | None = None) -> None:
-        """Warn when a nonmonotone law makes the step problem nonconvex (design §2).
+        """Warn or fail when a nonmonotone law makes the step problem nonconvex (srenv.convexity).
 
-        With j = j1 - j2 the step objective 1/2 v'K*v - b'v + j1(v) - j2(v) is convex iff K* - diag(s) is
-        positive definite, s_i = sup j2_i'' the steepest negative slope of node i's law: (P0 - P_inf)/v0 at
-        the pump, (mu_s - mu_k) q_n l_i / v0 on the rod. K* is tridiagonal, so its LDL' pivots decide it;
-        for the pump alone the last pivot is the condensed stiffness 1/(K*^-1)_BB. The rod's q_n depends on
-        the axial force, estimated here from the static string with the plunger at P+ and at P0 (dynamic
-        loads can raise it, so this is an estimate).
-
-        Violation is an error by default (``simulation.nonconvex_step: error``) and a warning with
-        ``nonconvex_step: warn``, which runs anyway: each DC sub-problem (K* plus the convex j1) stays strictly
-        convex, and the iterations lower the step objective monotonically to a stationary point, i.e. a
-        solution of the step's hemivariational inequality. What is lost is uniqueness, so the result may
-        depend on the iteration start (v_n) and on dt. The message names the time step that restores
-        convexity (K* grows like M/(gamma dt)).
-        """
-        import warnings
-
+        The slopes are the laws' own (laws.valve.slope, laws.rod_friction.slope); the rod's side force
+        depends on the axial force, estimated here from the static string with the plunger at P+ and at P0
+        (dynamic loads can raise it, so this is an estimate)."""
         dt = dt or self.cfg.simulation.time_step_s
-        cfg = self.cfg
+        law = valve_law(self.cfg.pump, self.p_pump_pa, self.area_bottom_m2)
         slope = np.zeros(self.n_free)
-        law = valve_law(cfg.pump, self.p_pump_pa, self.area_bottom_m2)
-        if law.drop_n > 0:
-            slope[-1] = law.drop_n / law.v0_m_s
-        fr = cfg.friction
-        if fr.law == "nonmonotone" and fr.coefficient > fr.kinetic_coefficient:
+        slope[-1] = valve_law_record.slope(law)
+        fric = self._friction_record()
+        if fric["nonmonotone"][0]:
             weight = self._f_all[1:]
-            side = np.zeros(self.n_free)
+            rod = np.zeros(self.n_free)
             for plunger_eq_n in (law.down_eq_n, law.up_eq_n):
                 # static hanging string: element force = plunger load + weight of the nodes below it
                 elem = plunger_eq_n + np.cumsum(weight[::-1])[::-1]
                 node = np.r_[0.5 * (elem[:-1] + elem[1:]), elem[-1]]
-                side = np.maximum(side, np.hypot(self._fw - self._fa * node, self._fc * node))
-            weakening = 1.0 - fr.kinetic_coefficient / fr.coefficient
-            slope[:-1] += weakening * side[:-1] / fr.reference_velocity_m_s
-        if not np.any(slope > 0):
-            return
-
-        def convex(step_s: float) -> bool:
-            diag, off = self._kstar(step_s)
-            pivot = diag[0] - slope[0]
-            for i in range(1, len(diag)):
-                if pivot <= 0:
-                    return False
-                pivot = diag[i] - slope[i] - off[i - 1] ** 2 / pivot
-            return pivot > 0
-
-        if convex(dt):
-            return
-        lo_dt, hi_dt = 0.0, dt  # K*(dt) - diag(s) is positive definite for a small enough dt: bisect
-        for _ in range(60):
-            mid = 0.5 * (lo_dt + hi_dt)
-            lo_dt, hi_dt = (mid, hi_dt) if convex(mid) else (lo_dt, mid)
-        node_i = int(np.argmax(slope))
-        where = "the pump" if node_i == self.n_free - 1 else f"rod node {node_i + 1}"
-        why = (f"K* - diag(law slopes) is not positive definite; steepest slope {slope[node_i]:.4g} N*s/m at "
-               f"{where}")
-        if cfg.simulation.nonconvex_step == "error":
-            raise ConfigError("simulation.time_step_s", dt,
-                              f"a time step in s below {lo_dt:.3g} (the step problem is not convex: {why}; "
-                              "set simulation.nonconvex_step: warn to run the DC iterations anyway)")
-        warnings.warn(
-            f"simulation.time_step_s = {dt:g} s: the step problem is not convex ({why}). DC iterations "
-            f"still converge to a stationary point of each step, but it may not be unique. A time step "
-            f"below {lo_dt:.3g} s restores convexity.", UserWarning, stacklevel=4)
+                rod = np.maximum(rod, rod_friction.slope(self.side_force, node, fric))
+            slope[:-1] += rod[:-1]
+        convexity.check(slope, self._kstar, dt, self.cfg.simulation.nonconvex_step)
 
     # ------------------------------------------------------------------------------------------ state
     def reset(self, fluid_level_m: float | None = None) -> None:
@@ -254,11 +179,9 @@ class Simulator:
         self._rising_s = None
         self._liquid_stroke_m = np.inf
         if self.annulus is not None:
-            plan_par = np.zeros(K.N_PAR)
-            plan_ist = np.zeros(K.N_IST, dtype=np.int64)
-            self._plan_upstroke(float(self.u[-1]), 0.0, 60.0 / self.surface.default_spm(self.cfg.surface.spm),
-                                plan_ist, plan_par)
-            self.void, self.void_until = int(plan_ist[K.I_VOID]), float(plan_par[K.P_VOID_UNTIL])
+            self.void = 1
+            self.void_until = self._plan_upstroke(
+                float(self.u[-1]), 0.0, 60.0 / self.surface.default_spm(self.cfg.surface.spm))
         # gas in the chamber: the first upstroke re-expands what the clearance holds at the bottom
         # (on, reference plunger position, gas volume and pressure there, liquid volume) of the chamber; the
         # kernel re-references it when a valve opens (kernel.gas_valves)
@@ -268,9 +191,9 @@ class Simulator:
         elif self.tubing_stiffness_n_m > 0:  # the plunger holds P+ at rest: the tubing carries the fluid load
             self._gas[:] = (1.0, float(self.u[-1]), 0.0, -self.law.down_eq_n, 0.0)
         self.fillage = 1.0
-        self.energy = np.zeros(K.N_ENERGY)
+        self.energy = np.zeros(L.N_ENERGY)
         self.e0 = self.mechanical_energy_j()
-        self._work = _Work(n)
+        self._work = L.work(n)
 
     def _start_top(self, v_m_s: float, a_m_s2: float) -> None:
         """Set the prescribed top's velocity and acceleration (start of a stroke, see
@@ -285,16 +208,6 @@ class Simulator:
         self.uav[1], self.uav[2] = v_m_s, a_m_s2
         n0 = self._ea_len[0] * (self.u[0] - self.uav[0])
         self.uav[3] = n0 + self._f_all[0] - md[0] * a_m_s2 - mo[0] * self.a[0] - cd[0] * v_m_s
-
-    def _intake_pa(self) -> float:
-        return self.annulus.intake_pressure_pa() if self.annulus is not None else self.cfg.pump.intake_pressure_pa
-
-    def _gas_start(self) -> None:
-        """The chamber at the bottom of the stroke after reset: the clearance holds the compressed mixture
-        (gas at p_d); from here the kernel follows it (kernel.gas_valves)."""
-        p_in, p_d = self._intake_pa(), self.p_pump_pa + self.cfg.pump.discharge_overpressure_pa
-        vg = self.gas.clearance_gas_m3(p_in, p_d)
-        self._gas[:] = (1.0, float(self.u[-1]), vg, p_d, self.gas.clearance_m3 - vg)
 
     def mechanical_energy_j(self) -> float:
         """Kinetic + strain energy of the whole string (top node included)."""
@@ -313,54 +226,12 @@ class Simulator:
         """Energy terms accumulated since reset (J); `residual_j` closes to round-off for beta=1/4, gamma=1/2."""
         e = self.energy
         stored = self.mechanical_energy_j() - self.e0
-        supplied = e[K.E_TOP] + e[K.E_GRAV] + e[K.E_REACT] - e[K.E_VISC]
-        return {"polished_rod_work_j": float(e[K.E_TOP]), "gravity_work_j": float(e[K.E_GRAV]),
-                "friction_and_pump_work_j": float(e[K.E_REACT]), "viscous_dissipation_j": float(e[K.E_VISC]),
+        supplied = e[L.E_TOP] + e[L.E_GRAV] + e[L.E_REACT] - e[L.E_VISC]
+        return {"polished_rod_work_j": float(e[L.E_TOP]), "gravity_work_j": float(e[L.E_GRAV]),
+                "friction_and_pump_work_j": float(e[L.E_REACT]), "viscous_dissipation_j": float(e[L.E_VISC]),
                 "stored_energy_change_j": stored, "residual_j": float(stored - supplied)}
 
     # ------------------------------------------------------------------------------------------ running
-    def _params(self, dt: float) -> tuple[np.ndarray, np.ndarray]:
-        cfg, s = self.cfg, self.cfg.simulation
-        par = np.zeros(K.N_PAR)
-        par[K.P_DT], par[K.P_BETA], par[K.P_GAMMA] = dt, s.newmark_beta, s.newmark_gamma
-        par[K.P_TOLV], par[K.P_TOLL], par[K.P_DCTOL] = 1e-13, 1e-12, s.dc_tolerance_m_s
-        law = self.law
-        par[K.P_PUMP_LO], par[K.P_PUMP_HI] = -law.up_eq_n, -law.down_eq_n
-        par[K.P_PUMP_DROP], par[K.P_PUMP_V0] = law.drop_n, law.v0_m_s
-        fr = cfg.friction
-        par[K.P_FRIC_RATIO] = fr.kinetic_coefficient / fr.coefficient if fr.coefficient > 0 else 1.0
-        par[K.P_FRIC_V0] = fr.reference_velocity_m_s
-        (_, ko), (md, mo), cd = self._k, self._m, self._c
-        par[K.P_MA], par[K.P_MOA], par[K.P_CA], par[K.P_FA] = md[0], mo[0], cd[0], self._f_all[0]
-        par[K.P_KC], par[K.P_MC] = ko[0], mo[0]
-        par[K.P_PB] = self.p_pump_pa * self.area_bottom_m2
-        par[K.P_PA] = self.p_top_pa * self.area_top_m2
-        par[K.P_VOID_UNTIL] = self.void_until
-        par[K.P_EA0] = self._ea_len[0]
-        par[K.P_UBMAX], par[K.P_UBMIN] = self._ub_max, self._ub_min
-        ist = np.zeros(K.N_IST, dtype=np.int64)
-        ist[K.I_MAXCORR], ist[K.I_DCMAX] = s.max_corrections, s.dc_max_iterations
-        ist[K.I_ALWAYSQP] = int(self.always_qp)
-        ist[K.I_NONSMOOTH] = 0 if self.linear_reference else 1
-        ist[K.I_PLDIR], ist[K.I_VOID] = self.pl_dir, self.void
-        ist[K.I_PUMP_NONMONO] = int(law.drop_n > 0)
-        ist[K.I_FRIC_NONMONO] = int(fr.law == "nonmonotone" and fr.coefficient > fr.kinetic_coefficient)
-        if self.gas is not None:
-            ist[K.I_GAS] = int(self._gas[0])
-            par[K.P_GAS_U0], par[K.P_GAS_V0], par[K.P_GAS_P0], par[K.P_GAS_LIQ] = self._gas[1:5]
-            par[K.P_GAS_K], par[K.P_GAS_APL] = self.gas.exponent, self.gas.area_m2
-            par[K.P_GAS_PIN] = self._intake_pa()
-            par[K.P_GAS_PHI] = self.gas.fraction(par[K.P_GAS_PIN])
-            par[K.P_GAS_PD] = self.p_pump_pa + cfg.pump.discharge_overpressure_pa
-            par[K.P_GAS_POUT], par[K.P_GAS_FRIC] = self.p_pump_pa, cfg.pump.plunger_friction_n
-            par[K.P_GAS_VMIN] = self.gas.area_m2 * GAS_MIN_DELAY_FRACTION * self.surface.stroke_length_m(
-                cfg.surface.stroke_length_m)
-        elif self.tubing_stiffness_n_m > 0:  # kernel mode 2: a plunger area of 0 marks the tubing spring
-            ist[K.I_GAS] = 2
-            par[K.P_GAS_U0], par[K.P_GAS_P0] = self._gas[1], self._gas[3]
-            par[K.P_GAS_K], par[K.P_GAS_APL] = self.tubing_stiffness_n_m, 0.0
-        return par, ist
-
     def run_stroke(self, spm: float | None = None, stroke_length_m: float | None = None,
                    record: bool = True) -> RunResult:
         """One full stroke starting at the bottom, at the given (or configured) SPM and stroke length."""
@@ -397,62 +268,66 @@ class Simulator:
                             self.uav[2] if start_acceleration_m_s2 is None else float(start_acceleration_m_s2))
         return self._run(np.ascontiguousarray(top_velocity_m_s, dtype=float), float(dt), record, 0.0, 0.0)
 
+    def _stepper(self, dt: float, n_steps: int, record: bool) -> L.Stepper:
+        """The kernel's arguments for a run (kernel_layout.build, the builder every caller uses)."""
+        s = self.cfg.simulation
+        state = L.State(self.u, self.v, self.a, self.uav, self.status, self.prev_lam, self.prev_v, self.prev_stuck)
+        return L.build(
+            dt_s=dt, beta=s.newmark_beta, gamma=s.newmark_gamma, stiffness=self._k, mass=self._m,
+            damping=self._c, load_n=self._f_all, ea_len_n_m=self._ea_len, side=self.side_force,
+            rod_friction=self._friction_record(), valve=self._valve_record(), state=state, scratch=self._work,
+            energy=self.energy, n_steps=n_steps, record=record, max_corrections=s.max_corrections,
+            dc_max_iterations=s.dc_max_iterations, dc_tolerance_m_s=s.dc_tolerance_m_s,
+            always_qp=self.always_qp, nonsmooth=not self.linear_reference,
+            pump_pressure_force_n=self.p_pump_pa * self.area_bottom_m2,
+            top_pressure_force_n=self.p_top_pa * self.area_top_m2, plunger_dir=self.pl_dir,
+            ub_extremes_m=(self._ub_max, self._ub_min))
+
     def _run(self, va: np.ndarray, dt: float, record: bool, spm: float, stroke: float) -> RunResult:
-        w = self._work
-        n = self.n_free
         n_steps = len(va)
-        ksd, kso = self._kstar(dt)
-        (kd, ko), (md, mo) = self._k, self._m
-        kd_f, ko_f, md_f, mo_f, cd_f = kd[1:], ko[1:], md[1:], mo[1:], self._c[1:]
-        f_f = self._f_all[1:]
-        par, ist = self._params(dt)
-        ist[K.I_RECORD] = int(record)
-        rec = np.empty((K.N_REC, n_steps if record else 0))
-        stick = np.zeros(n, dtype=np.int64)
-        emax = np.full(n, -np.inf)
-        emin = np.full(n, np.inf)
+        st = self._stepper(dt, n_steps, record)
+        valve, progress, counters = st.valve, st.progress, st.counters
         qp_calls0 = self.qp.stats.calls
         events = []
         t0 = self.time_s
         fillage = self.fillage
         self._pumped_m3 = 0.0
         while True:
-            code = K.advance(par, ist, self.u, self.v, self.a, self.uav, va, t0,
-                             ksd, kso, kd_f, ko_f, md_f, mo_f, cd_f, f_f, self._ea_len, self._fa, self._fw,
-                             self._fc, self.status, w.lo, w.hi, w.ns, w.lam, w.b, w.b0, w.shift, w.vk, w.rhs,
-                             w.stuck, w.cp, w.dp, w.nforce, w.fric_s, w.wv, w.wb, w.wlo, w.whi,
-                             self.prev_lam, self.prev_v, self.prev_stuck, stick, rec, self.energy,
-                             emax, emin, n_steps)
-            if code == K.DONE:
+            code = K.run(st, va, t0, n_steps)
+            if code == L.DONE:
                 break
-            step = int(ist[K.I_STEP])
-            if code == K.NEED_QP:
-                self._solve_qp(ksd, kso, dt, par, ist, step, t0 + (step + 1) * dt)
+            step = int(progress["step"][0])
+            if code == L.NEED_QP:
+                self._solve_qp(st, dt, step, t0 + (step + 1) * dt)
             else:
-                fillage = self._on_event(int(ist[K.I_EVENT]), par, ist, t0 + step * dt, events, fillage, stroke,
-                                         60.0 / spm if spm > 0 else 0.0)
+                fillage = self._on_event(int(progress["event"][0]), valve, progress, t0 + step * dt, events,
+                                         fillage, stroke, 60.0 / spm if spm > 0 else 0.0)
         self._at_rest = False
-        self.pl_dir, self.void = int(ist[K.I_PLDIR]), int(ist[K.I_VOID])
-        self._ub_max, self._ub_min = float(par[K.P_UBMAX]), float(par[K.P_UBMIN])
-        self.void_until = float(par[K.P_VOID_UNTIL])
+        p, v, cnt = progress[0], valve[0], counters[0]
+        self.pl_dir, self.void = int(p["plunger_dir"]), int(v["void"])
+        self._ub_max, self._ub_min = float(p["ub_max_m"]), float(p["ub_min_m"])
+        self.void_until = float(v["void_until_m"])
         if self.gas is not None or self.tubing_stiffness_n_m > 0:  # the kernel moved the reference on
-            self._gas[1:5] = par[K.P_GAS_U0], par[K.P_GAS_V0], par[K.P_GAS_P0], par[K.P_GAS_LIQ]
+            self._gas[1:5] = v["u0_m"], v["gas_m3"], v["p0"], v["liquid_m3"]
         self.time_s = t0 + n_steps * dt
-        trace = self._trace(rec[:, : ist[K.I_NREC]]) if record else None
+        out = st.out
+        trace = trace_from_record(out.rec[:, : cnt["recorded"]], self.cfg.surface.stuffing_box_friction_n) \
+            if record else None
         self.fillage = fillage
         return RunResult(
             n_steps=n_steps, duration_s=n_steps * dt, spm=spm, stroke_length_m=stroke,
-            certified_steps=int(ist[K.I_NCERT]), corrected_steps=int(ist[K.I_NCORR]),
-            qp_steps=int(ist[K.I_NQP]), qp_calls=self.qp.stats.calls - qp_calls0,
-            dc_iterations=int(ist[K.I_NDC]), fillage=fillage, pumped_m3=self._pumped_m3,
+            certified_steps=int(cnt["certified"]), corrected_steps=int(cnt["corrected"]),
+            qp_steps=int(cnt["qp"]), qp_calls=self.qp.stats.calls - qp_calls0,
+            dc_iterations=int(cnt["dc_iterations"]), fillage=fillage, pumped_m3=self._pumped_m3,
             intake_pressure_pa=(self.annulus.intake_pressure_pa() if self.annulus else
                                 self.cfg.pump.intake_pressure_pa),
-            rod_stick_episodes=stick[:-1].copy(), element_force_max_eq_n=emax, element_force_min_eq_n=emin,
-            energy_j=self.energy_balance(), trace=trace, events=events)
+            rod_stick_episodes=out.stick[:-1].copy(), element_force_max_eq_n=out.emax,
+            element_force_min_eq_n=out.emin, energy_j=self.energy_balance(), trace=trace, events=events)
 
-    def _solve_qp(self, ksd, kso, dt, par, ist, step, time_s) -> None:
-        w = self._work
-        dk = float(par[K.P_GAS_DK])
+    def _solve_qp(self, st: L.Stepper, dt: float, step: int, time_s: float) -> None:
+        w, c = st.work, st.const[0]
+        ksd, kso = st.model.ksd, st.model.kso
+        dk = float(st.valve["lin_dk"][0])
         if dk == 0.0:
             inv = self.qp.inverse(ksd, kso, dt)
         else:  # the kernel added the gas spring dk to K*_BB (ksd holds it): Sherman-Morrison on the cached K*^-1
@@ -467,142 +342,15 @@ class Simulator:
         ok = -1
         if self.polish:
             ok = K.solve_pattern(ksd, kso, w.wb, w.wlo, w.whi, w.ns, status, v, w.lam, w.rhs, w.stuck,
-                                 w.cp, w.dp, int(ist[K.I_MAXCORR]), par[K.P_TOLV], par[K.P_TOLL])
+                                 w.cp, w.dp, int(c["max_corrections"]), float(c["tol_v_m_s"]),
+                                 float(c["tol_lambda"]))
         if ok >= 0:
             self.qp.stats.polished += 1
             w.wv[:] = v
         else:
             w.wv[:] = v_raw
         self.status[:] = status
-        ist[K.I_HAVEQP] = 1
-
-    def _plan_upstroke(self, u_bottom_m: float, time_s: float, period_s: float, ist, par) -> None:
-        """At the bottom: the liquid the coming upstroke can draw (annulus + inflow during the upstroke)
-        fixes the liquid level in the barrel; above it the plunger meets no liquid (fluid pound)."""
-        if self.annulus is None:
-            return
-        self.annulus.accumulate(time_s)
-        # the standing valve is open while the plunger rises: the last upstroke's measured duration (the plunger
-        # rests at both ends, so it is shorter than half the period), half the period before there is one
-        rising_s = getattr(self, "_rising_s", None)
-        rising_s = 0.5 * period_s if rising_s is None or rising_s > period_s else rising_s
-        available_m3 = self.annulus.volume_m3 + self.annulus.inflow_m3_s() * rising_s
-        self._liquid_stroke_m = available_m3 / plunger_area_m2(self.cfg.pump)
-        par[K.P_VOID_UNTIL] = u_bottom_m - self._liquid_stroke_m
-        ist[K.I_VOID] = 1
-
-    def _on_event(self, direction: int, par, ist, time_s: float, events: list, fillage: float,
-                  stroke_m: float, period_s: float) -> float:
-        """A plunger reversal. Short reversals inside a stroke (stick-slip chatter, the bounce when a pounding
-        plunger meets liquid) are not valve cycles: a reversal counts only after a travel of a quarter of the
-        surface stroke, and the stroke is measured between position extremes, not reversal points."""
-        ub = float(self.u[-1])
-        min_travel = 0.25 * stroke_m
-        if direction > 0 and self._pump_phase == "up":  # top: the barrel holds what the upstroke drew
-            upstroke = float(par[K.P_UBMAX]) - float(par[K.P_UBMIN])  # since the last accepted top
-            if upstroke <= min_travel:
-                return fillage
-            self._top_ub = float(par[K.P_UBMIN])
-            self._rising_s = time_s - self._t_bottom
-            liquid_m = upstroke
-            if self.gas is not None:  # the gas takes its share of the displacement
-                liquid_m = upstroke * self.gas.liquid_fraction(
-                    self._intake_pa(), self.p_pump_pa + self.cfg.pump.discharge_overpressure_pa, upstroke)
-                fillage = liquid_m / upstroke
-            if self.tubing_stiffness_n_m > 0:  # the barrel rose with the plunger while the load transferred
-                stretch = (self.law.up_eq_n - self.law.down_eq_n) / self.tubing_stiffness_n_m
-                liquid_m = min(liquid_m, max(upstroke - stretch, 0.0))
-            if self.annulus is not None:
-                liquid_m = min(self._liquid_stroke_m, liquid_m)
-                # book what the annulus actually gave: the plan at the bottom predicted the inflow of the
-                # upstroke, and the pump cannot lift liquid the annulus does not hold (mass conservation)
-                liquid_m *= self.annulus.take(plunger_area_m2(self.cfg.pump) * liquid_m, time_s)
-                fillage = liquid_m / upstroke
-            self._pumped_m3 += plunger_area_m2(self.cfg.pump) * liquid_m
-            self._pump_phase = "down"
-            par[K.P_UBMAX] = ub
-            events.append(("top", time_s, ub, fillage))
-        elif direction < 0 and self._pump_phase == "down":  # bottom: intake pressure sets the next P-
-            # travel from the highest point since the top was accepted (P_UBMIN is not reset there: a top
-            # accepted early, e.g. a mid-upstroke bounce on gas, must not hide the rest of the upstroke)
-            if float(par[K.P_UBMAX]) - min(self._top_ub, float(par[K.P_UBMIN])) <= min_travel:
-                return fillage
-            if self.annulus is not None:
-                self.law = self._valve()
-                par[K.P_PUMP_LO] = -self.law.up_eq_n
-                self._plan_upstroke(float(par[K.P_UBMAX]), time_s, period_s, ist, par)
-            if self.gas is not None:  # the intake pressure of the coming upstroke (inflow model)
-                par[K.P_GAS_PIN] = self._intake_pa()
-                par[K.P_GAS_PHI] = self.gas.fraction(par[K.P_GAS_PIN])
-            self._pump_phase = "up"
-            self._t_bottom = time_s
-            par[K.P_UBMIN] = ub
-            events.append(("bottom", time_s, ub, fillage))
-        return fillage
-
-    def _trace(self, rec: np.ndarray) -> dict:
-        prl = rec[K.R_PRL]
-        f_sb = self.cfg.surface.stuffing_box_friction_n
-        if f_sb > 0:  # the stuffing box resists the polished rod: the dynamometer reads it, the rod does not
-            prl = prl + f_sb * np.sign(rec[K.R_VA])
-        return {
-            "t_s": rec[K.R_T],  # views into the record: no copies per stroke
-            "polished_rod_position_m": rec[K.R_UA],
-            "polished_rod_velocity_m_s": rec[K.R_VA],
-            "polished_rod_load_n": prl,
-            "pump_position_m": rec[K.R_UB],
-            "pump_velocity_m_s": rec[K.R_VB],
-            "pump_load_n": rec[K.R_PUMP],
-            "step_path": rec[K.R_PATH],
-        }
+        st.progress["have_qp"] = 1
 
     def run_strokes(self, n: int, record: bool = True, **kw) -> list[RunResult]:
         return [self.run_stroke(record=record, **kw) for _ in range(n)]
-
-    # ------------------------------------------------------------------------------------------ idle time
-    # The v1 env stops the unit between strokes (intermittent pumping) and fast-forwards quasi-steady
-    # strokes; these keep the annulus, the clock and the fluid-pound plan consistent when it does.
-    def stop_at_bottom(self) -> None:
-        """The unit stops at the bottom of a stroke: the string settles to its static state (plunger at rest
-        holding P+); the annulus contents and the clock are kept."""
-        t = self.time_s
-        if self.annulus is not None:
-            self.annulus.accumulate(t)  # the inflow since the stroke's last valve event
-        vol = self.annulus.volume_m3 if self.annulus is not None else 0.0
-        self.reset(self.annulus.level_m if self.annulus is not None else None)
-        self.time_s = t
-        self._t_bottom = t
-        if self.annulus is not None:
-            self.annulus.volume_m3 = vol
-            self.annulus.last_time_s = t
-
-    def idle(self, duration_s: float) -> None:
-        """Let `duration_s` pass with the unit stopped: the annulus refills, no rod dynamics."""
-        self.time_s += max(float(duration_s), 0.0)
-        if self.annulus is not None:
-            self.annulus.accumulate(self.time_s)
-
-    def replan_upstroke(self, period_s: float) -> None:
-        """Re-plan the coming upstroke's liquid (fluid pound) after the annulus changed outside a stroke."""
-        if self.annulus is None or self._pump_phase != "up":
-            return
-        plan_par = np.zeros(K.N_PAR)
-        plan_ist = np.zeros(K.N_IST, dtype=np.int64)
-        self._plan_upstroke(self._ub_max, self.time_s, period_s, plan_ist, plan_par)
-        self.void, self.void_until = int(plan_ist[K.I_VOID]), float(plan_par[K.P_VOID_UNTIL])
-
-
-class _Work:
-    """Scratch arrays of the kernel, allocated once per simulator (no per-step allocation)."""
-
-    def __init__(self, n: int) -> None:
-        for name in ("lo", "hi", "lam", "b", "b0", "shift", "vk", "rhs", "cp", "dp", "nforce", "fric_s",
-                     "wv", "wb", "wlo", "whi"):
-            setattr(self, name, np.zeros(n))
-        self.ns = np.zeros(n, dtype=np.bool_)
-        self.stuck = np.zeros(n, dtype=np.bool_)
-
-
-def concat_traces(results: list[RunResult]) -> dict:
-    traces = [r.trace for r in results if r.trace is not None]
-    return {k: np.concatenate([t[k] for t in traces]) for k in TRACE_COLUMNS} if traces else {}

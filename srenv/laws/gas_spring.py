@@ -1,0 +1,126 @@
+"""Gas in the pump chamber (srenv.pump.GasChamber) or unanchored tubing as a spring on the plunger.
+
+Mode 1 (gas): the plunger reaction is (p_c - p_out) A_pl with the chamber pressure p_c = p0 (V0 / V)^k,
+V = V0 - A_pl (u_B - u0), held between the intake and discharge pressures by the valves; while it is on the
+valve law keeps only the plunger friction as its interval. Mode 2 (unanchored tubing, a plunger area of 0):
+while the plunger is stuck in its barrel the load transfer stretches the tubing (stiffness k_t = E A_t / L,
+in the ``k`` field), centre = c0 + k_t (u_B - u0) between the valve law's bounds. The spring is taken
+implicitly: linearised at the latest iterate's position inside the DC loop (``linearise``), its stiffness
+added to K*_BB and its force moved into b.
+"""
+
+from __future__ import annotations
+
+from numba import njit
+
+# fields of the valve law's record (srenv.laws.valve.PARAMS) that belong to the spring: the mode (0 none,
+# 1 gas, 2 tubing), whether it carries the plunger this step, the chamber state (reference plunger position,
+# gas volume and pressure there - tubing: its centre force -, liquid volume), the exponent (tubing: its
+# stiffness), the valve pressures, the plunger area, the pressure above the plunger, the plunger friction,
+# the intake gas fraction, A_pl x the smallest valve delay the spring resolves, and the current
+# linearisation (c2 x stiffness in K*_BB, force moved into b, this step's u-tilde_B)
+GAS_FIELDS = [("gas_mode", "i8"), ("gas_on", "i8"), ("u0_m", "f8"), ("gas_m3", "f8"), ("p0", "f8"),
+              ("liquid_m3", "f8"), ("k", "f8"), ("p_in_pa", "f8"), ("p_d_pa", "f8"), ("area_m2", "f8"),
+              ("p_out_pa", "f8"), ("gas_friction_n", "f8"), ("phi", "f8"), ("v_min_m3", "f8"),
+              ("lin_dk", "f8"), ("lin_shift_n", "f8"), ("u_tilde_m", "f8")]
+
+
+@njit(cache=True, inline="always")
+def gas_active(params):
+    """With enough gas in the chamber (its volume at p_in exceeds its volume at p_d by more than a small
+    plunger travel) the chamber pressure is a spring on the plunger; less gas: the rigid valve law.
+    Unanchored tubing: its stretch always carries the load transfer."""
+    p = params[0]
+    if p.gas_mode == 2:
+        return True
+    if p.gas_mode == 1 and p.gas_m3 > 0.0:
+        ik = 1.0 / p.k
+        v_in = p.gas_m3 * (p.p0 / p.p_in_pa) ** ik
+        return v_in - p.gas_m3 * (p.p0 / p.p_d_pa) ** ik >= p.v_min_m3
+    return False
+
+
+@njit(cache=True)
+def spring(params, ub):
+    """(centre, stiffness) of the plunger reaction at plunger position ub: (p_c - p_out) A_pl and
+    d(centre)/du_B = A_pl^2 k p_c / V between the valve pressures, 0 outside (module docstring)."""
+    p = params[0]
+    if p.area_m2 == 0.0:
+        return tubing_spring(params, ub)
+    a = p.area_m2
+    vg = p.gas_m3 - a * (ub - p.u0_m)
+    pc = p.p_d_pa
+    k = 0.0
+    if vg > 0.0:
+        pc = p.p0 * (p.gas_m3 / vg) ** p.k
+        if pc <= p.p_in_pa:
+            pc = p.p_in_pa
+        elif pc >= p.p_d_pa:
+            pc = p.p_d_pa
+        else:
+            k = a * a * p.k * pc / vg
+    return (pc - p.p_out_pa) * a, k
+
+
+@njit(cache=True)
+def tubing_spring(params, ub):
+    """Unanchored tubing: centre = c0 + k_t (u_B - u0) between the valve law's bounds [lo_n, hi_n]."""
+    p = params[0]
+    c = p.p0 + p.k * (ub - p.u0_m)
+    if c <= p.lo_n:
+        return p.lo_n, 0.0
+    if c >= p.hi_n:
+        return p.hi_n, 0.0
+    return c, p.k
+
+
+@njit(cache=True)
+def valves(params, ub):
+    """After a step: a valve that opened changes what the chamber holds; the state is re-referenced at the
+    plunger's new position. Below p_in the standing valve is open and the chamber draws intake mixture
+    (gas fraction phi at p_in); above p_d the travelling valve is open and the chamber expels its own
+    mixture (gas and liquid in the proportion it holds at p_d). Both valves closed: nothing changes."""
+    p = params[0]
+    if p.area_m2 == 0.0:  # unanchored tubing: the plunger slid in its barrel, the spring re-references
+        c = p.p0 + p.k * (ub - p.u0_m)
+        if c <= p.lo_n or c >= p.hi_n:
+            p.p0 = min(max(c, p.lo_n), p.hi_n)
+            p.u0_m = ub
+        return
+    a = p.area_m2
+    k = p.k
+    v0 = p.gas_m3
+    p0 = p.p0
+    vg = v0 - a * (ub - p.u0_m)
+    phi = p.phi
+    if vg > 0.0 and (v0 <= 0.0 or p0 * (v0 / vg) ** k < p.p_in_pa):
+        v_open = v0 * (p0 / p.p_in_pa) ** (1.0 / k) if v0 > 0.0 else 0.0
+        p.gas_m3 = v_open + phi * (vg - v_open)
+        p.liquid_m3 += (1.0 - phi) * (vg - v_open)
+        p.p0 = p.p_in_pa
+        p.u0_m = ub
+    elif v0 > 0.0 and (vg <= 0.0 or p0 * (v0 / vg) ** k > p.p_d_pa):
+        v_open = v0 * (p0 / p.p_d_pa) ** (1.0 / k)
+        out = v_open - vg
+        f = v_open / (v_open + p.liquid_m3)
+        p.gas_m3 = max(v_open - f * out, 0.0)
+        p.liquid_m3 = max(p.liquid_m3 - (1.0 - f) * out, 0.0)
+        p.p0 = p.p_d_pa
+        p.u0_m = ub
+    elif v0 <= 0.0 and vg <= 0.0:
+        p.u0_m = ub  # liquid-full chamber moving down: the travelling valve is open
+
+
+@njit(cache=True)
+def linearise(params, ksd, b0, c2, u_lin):
+    """Linearise the spring at plunger position u_lin and move it into the step problem: K*_BB gains
+    c2 k_g, b_B loses centre + k_g (u-tilde_B - u_lin) (undoing the previous linearisation first)."""
+    p = params[0]
+    n = ksd.shape[0]
+    ksd[n - 1] -= p.lin_dk
+    b0[n - 1] += p.lin_shift_n
+    centre, kg = spring(params, u_lin)
+    p.lin_dk = c2 * kg
+    p.lin_shift_n = centre + kg * (p.u_tilde_m - u_lin)
+    ksd[n - 1] += p.lin_dk
+    b0[n - 1] -= p.lin_shift_n
