@@ -133,6 +133,11 @@ def load_benchmark_config(path: str | Path, quick: bool = False) -> dict[str, An
         run["seeds"] = _seeds(run.get("seeds", [0, 1, 2]), f"agents.runs.{algo}.seeds")
         tc = load_train_config(run["config"])  # checks the YAML now, not after the tuning
         refuse_test_split(tc.env_kwargs.get("scenario", "train"), "train")
+        res = run.get("residual")
+        if res is not None and (not isinstance(res, dict) or res.get("base", "best_tuned") not in
+                                ("best_tuned", "best_constant", "pump_off", "fillage_pi")):
+            raise BenchmarkConfigError(f"benchmark config: agents.runs.{algo}.residual = {res!r}: expected "
+                                       "{base: best_tuned | best_constant | pump_off | fillage_pi, scale: S}")
     return cfg
 
 
@@ -549,8 +554,10 @@ def run_benchmark(cfg: dict[str, Any], out_dir: str | Path, quick: bool = False,
             # ---- agents: train every (algo, seed), then export
             t1 = time.perf_counter()
             runs = cfg["agents"]["runs"]
+            residuals = {a: residual_spec(r, tuned) for a, r in runs.items()}
             jobs = [{"algo": a, "seed": s, "config": r["config"], "out": str(workdir / f"{a}_seed{s}"),
-                     "overrides": r.get("overrides", {})} for a, r in runs.items() for s in r["seeds"]]
+                     "overrides": {**r.get("overrides", {}), **residual_overrides(residuals[a], r, cfg)}}
+                    for a, r in runs.items() for s in r["seeds"]]
             bar = _Progress(len(jobs), "training")
             summaries = runner.map(jobs, progress=bar, fn=train_job) if jobs else []
             bar.close()
@@ -558,6 +565,8 @@ def run_benchmark(cfg: dict[str, Any], out_dir: str | Path, quick: bool = False,
             agent_specs: dict[str, list[dict[str, Any]]] = {}
             for job, summ in zip(jobs, summaries):
                 spec = export_model(summ, models_dir / f"{job['algo']}_v1_seed{job['seed']}.zip")
+                if residuals[job["algo"]]:
+                    spec["residual"] = residuals[job["algo"]]
                 spec["train_summary"] = {k: summ[k] for k in ("num_timesteps", "wall_time_s", "seed",
                                                               "best_eval_mean_reward")}
                 agent_specs.setdefault(job["algo"], []).append(spec)
@@ -633,8 +642,9 @@ def run_benchmark(cfg: dict[str, Any], out_dir: str | Path, quick: bool = False,
         shutil.copyfile(specs[pick]["path"], shipped)
         if specs[pick].get("obs_norm"):
             shutil.copyfile(specs[pick]["obs_norm"], shipped.with_name(f"{a}_v1_obs_norm.npz"))
-        policies[a] = {"kind": "agent", "selection": how, "models": [_rel(sp["path"], out) for sp in specs],
-                       "episodes": eps}
+        policies[a] = {"kind": "agent", "algo": _algo_of(runs[a]), "selection": how,
+                       "residual_on": specs[0].get("residual"),
+                       "models": [_rel(sp["path"], out) for sp in specs], "episodes": eps}
         training["runs"][a] = {
             "config": runs[a]["config"], "seeds": runs[a]["seeds"], "shipped_model": _rel(str(shipped), out),
             "shipped_seed": specs[pick]["train_summary"]["seed"],
@@ -682,8 +692,42 @@ def run_benchmark(cfg: dict[str, Any], out_dir: str | Path, quick: bool = False,
     return report
 
 
+def _algo_of(run: dict[str, Any]) -> str:
+    from .train import load_train_config
+
+    return load_train_config(run["config"]).algo
+
+
 def _policy_part(spec: dict[str, Any]) -> dict[str, Any]:
-    return {k: spec[k] for k in ("kind", "path", "obs_norm")}
+    return {k: spec[k] for k in ("kind", "path", "obs_norm", "residual") if k in spec}
+
+
+def residual_spec(run: dict[str, Any], tuned: dict[str, Any]) -> dict[str, Any] | None:
+    """``{base, params, scale}`` of a residual agent run (``residual: {base: NAME | best_tuned, scale}``):
+    the base is a tuned field baseline; ``best_tuned`` = the best tuning score (training wells)."""
+    res = run.get("residual")
+    if not res:
+        return None
+    base = res.get("base", "best_tuned")
+    if base == "best_tuned":
+        base = max(("best_constant", "pump_off", "fillage_pi"), key=lambda n: tuned[n]["score"])
+    if base not in ("best_constant", "pump_off", "fillage_pi"):
+        raise BenchmarkConfigError(f"residual base = {base!r}: expected best_constant, pump_off, fillage_pi "
+                                   "or best_tuned")
+    return {"base": base, "params": tuned[base]["params"], "scale": float(res.get("scale", 0.3))}
+
+
+def residual_overrides(res: dict[str, Any] | None, run: dict[str, Any], cfg: dict[str, Any]) -> dict[str, Any]:
+    """Training-YAML overrides that put a residual run on :class:`agents.residual_v1.ResidualEnv`."""
+    if not res:
+        return {}
+    from .residual_v1 import ENV_ID
+    from .train import load_train_config
+
+    tc = load_train_config(run["config"])
+    return {"env_id": f"agents.residual_v1:{ENV_ID}",
+            "env_kwargs": {**tc.env_kwargs, "inner_env_id": tc.env_id, "base": res["base"],
+                           "base_params": res["params"], "scale": res["scale"]}}
 
 
 def _rel(path: str, root: Path) -> str:

@@ -200,7 +200,9 @@ def _quick_cfg(tmp_path: Path) -> dict:
                       "oracle": {"steps": [0.3], "horizon": 1}},
         "agents": {"selection": "mean",
                    "runs": {"ppo": {"config": str(tmp_path / "ppo.yaml"), "seeds": [0, 1]},
-                            "sac": {"config": str(tmp_path / "sac.yaml"), "seeds": [0]}}},
+                            "sac": {"config": str(tmp_path / "sac.yaml"), "seeds": [0]},
+                            "ppo_residual": {"config": str(tmp_path / "ppo.yaml"), "seeds": [0],
+                                             "residual": {"base": "best_tuned", "scale": 0.3}}}},
         "quick": {"test": {"seeds": {"start": 1000, "count": 4}}},
     }
 
@@ -219,8 +221,12 @@ def test_quick_benchmark_writes_the_schema_on_disjoint_splits_same_episodes(tmp_
     assert last["test_episodes"] == 4  # the quick block applied
     d = json.loads((out / "benchmark.json").read_text())
     P = d["policies"]
-    assert set(P) == {"installed", "best_constant", "pump_off", "fillage_pi", "oracle", "ppo", "sac"}
-    assert {P[n]["kind"] for n in ("ppo", "sac")} == {"agent"}
+    assert set(P) == {"installed", "best_constant", "pump_off", "fillage_pi", "oracle", "ppo", "sac",
+                      "ppo_residual"}
+    assert {P[n]["kind"] for n in ("ppo", "sac", "ppo_residual")} == {"agent"}
+    tuned = d["tuned"]
+    best_tuned = max(("best_constant", "pump_off", "fillage_pi"), key=lambda n: tuned[n]["score"])
+    assert P["ppo_residual"]["residual_on"]["base"] == best_tuned
     ref = None
     for name, p in P.items():
         keys = [(e["well_id"], e["seed"]) for e in p["episodes"]]
@@ -251,3 +257,32 @@ def test_quick_benchmark_writes_the_schema_on_disjoint_splits_same_episodes(tmp_
     assert (out / "figures" / "benchmark_v1.png").stat().st_size > 10_000
     assert (out / "models" / "ppo_v1.zip").is_file() and (out / "models" / "ppo_v1_obs_norm.npz").is_file()
     assert not list(out.rglob("*.tmp*"))
+
+
+def test_residual_agent_with_zero_correction_is_its_baseline() -> None:
+    """Training wrapper and evaluation policy compose the same way: r = 0 reproduces the baseline exactly."""
+    from agents.residual_v1 import ResidualAgentPolicy, ResidualEnv
+
+    params = {"threshold": 0.85, "idle_time_s": 600, "a_spm": 0.8, "a_stroke": 1.0}
+
+    class Zero:
+        def predict(self, obs, state=None, episode_start=None, deterministic=True):
+            assert obs.shape[-1] == len(NAMES) + 2  # the baseline's action is part of what it sees
+            return np.zeros(2, np.float32), state
+
+    env = make_env(FAKE, scenario="train")
+    base = run_episode(env, PumpOffPolicy(NAMES, **params), seed=4)
+    res = run_episode(env, ResidualAgentPolicy(Zero(), "pump_off", params, 0.3), seed=4)
+    assert res["reward"] == pytest.approx(base["reward"]) and base["mean_duty"] < 1.0  # it did pump off
+    wrapped = ResidualEnv(make_env(FAKE, scenario="train"), "pump_off", params, 0.3)
+    obs, _ = wrapped.reset(seed=4)
+    total, done = 0.0, False
+    while not done:
+        obs, r, term, trunc, _ = wrapped.step(np.zeros(2, np.float32))
+        total, done = total + r, term or trunc
+    assert total == pytest.approx(base["reward"])
+    # a full-scale residual moves the action off the baseline
+    obs, _ = wrapped.reset(seed=4)
+    b = obs[-2:]
+    wrapped.step(np.ones(2, np.float32))
+    assert wrapped.env.unwrapped.last_a0 == pytest.approx(min(1.0, b[0] + 0.3), abs=1e-6)
