@@ -39,7 +39,7 @@ from typing import Any
 import numpy as np
 import yaml
 
-from .baselines_v1 import BASELINE_NAMES
+from .baselines_v1 import BASELINE_NAMES, interval_s_of
 from .rollout_v1 import ENV_ID_V1, ObsNormalizer, Runner, episode_jobs
 from .tuning import Evaluator, TuningSet, coordinate_search, refuse_test_split, search_best_constant
 
@@ -365,7 +365,7 @@ def write_markdown(report: dict[str, Any], path: Path, figure: str | None) -> No
     ]
     if figure:
         parts += [f"![benchmark]({figure})", ""]
-    parts += ["## Tuned baselines (training wells only)", ""]
+    parts += [PROTOCOL, "", "## Tuned baselines (training wells only)", ""]
     for n, t in tuned.items():
         parts.append(f"- `{n}`: {json.dumps(t.get('params'))}" + (f" (tuning score {t['score']:.1f})"
                                                                   if "score" in t else ""))
@@ -381,6 +381,46 @@ def write_markdown(report: dict[str, Any], path: Path, figure: str | None) -> No
             parts.append(f"| {a} | IQM over (seed, episode) | {_fmt(info['iqm_test_reward'])} | | | |")
     parts += ["", "Wall time (s): " + ", ".join(f"{k} {v:.0f}" for k, v in w.items()), ""]
     _atomic_write(path, "\n".join(parts))
+
+
+PROTOCOL = """## Protocol
+
+- **Episodes.** An episode is `reset(seed=S)` on a split: it draws well `S % n_wells` of that split and the
+  episode's inflow schedule from the seed. Every policy runs the very same test episodes
+  (`scenario="test"`, wells no tuning or training touched; the tuning code refuses that split), with
+  deterministic actions, so policies are compared by **paired** differences per episode.
+- **Reward.** Each control interval's reward is a rate in USD per hour of well time (revenue of the oil
+  lifted, the value of the change of liquid stored in the annulus, minus energy, rod fatigue, stick-slip,
+  peak-load, fluid-pound and VSD-ramp costs: `info["reward_*"]`); the episode return is their sum over
+  the intervals. The constraint cost `info["cost"]` is summed the same way and reported beside it.
+- **Baselines, field observation only** (`agents/baselines_v1.py`), parametrised in action coordinates
+  (fractions of each well's speed and stroke range), tuned on the training wells by `agents/tuning.py`:
+  `installed` - the well's configured SPM and stroke, constant; `best_constant` - one action for all
+  wells, from a grid over the whole action box plus a pattern search; `pump_off` - pump at a set point
+  until the card's fillage estimate falls below a threshold, idle a set time, restart (threshold, idle
+  time, pumping speed and stroke tuned by coordinate search); `fillage_pi` - VSD speed PI on the
+  fillage estimate, output over the whole speed range so it can go intermittent below the VSD minimum
+  (set-point, gains, stroke tuned).
+- **Oracle.** A perfect-model planner (`OraclePolicy`, mode `plan`): at the episode's start it
+  deep-copies the true environment - the hidden well, its annulus state, the inflow schedule and the
+  random stream - and simulates whole episodes on copies: every constant action of a grid over the
+  whole box, then a piecewise-constant schedule (a few segments of the horizon, so it can follow the
+  inflow step) refined by coordinate search, and the closed-loop trajectories of the tuned `installed`,
+  `pump_off` and `fillage_pi`. It plays the best, open loop; the model is exact, so it gets what it
+  planned. It is a *fair top of the score*: it knows everything a field controller cannot (level,
+  inflow schedule, parameters), is at least as good as every constant of its grid and every field
+  baseline on every episode by construction, and its compute is bounded and stated (model steps per
+  episode in the JSON, `model_steps`). It is not a proven optimum (a schedule of a few segments, local
+  search): a learned closed-loop policy may exceed 1.
+- **Normalised score** = (mean return - installed) / (oracle - installed) on the test episodes.
+- **Agents** (PPO, SAC from Stable-Baselines3, `configs/train/*_v1.yaml`) train on the training split
+  only, from several seeds. Unless the run says otherwise, an agent's test episode reward is the mean
+  over its seeds' models (the training procedure, not a lucky seed); the shipped single model
+  `models/<name>_v1.zip` is the seed best on the validation episodes (training wells). A `*_residual`
+  agent acts as `clip(b + scale * r)`: the tuned baseline's action `b` plus the network's learned
+  correction `r` (residual policy learning; it sees `b`), trained the same way.
+- **Statistics.** Mean return with a normal 95 % interval; paired differences with their 95 %
+  interval over the test episodes (`*` = above zero); the IQM over (training seed, episode)."""
 
 
 def _runs_text(training: dict[str, Any]) -> str:
@@ -518,7 +558,11 @@ def tune_baselines(cfg: dict[str, Any], runner: Runner, log: Any) -> tuple[dict[
     bar.close()
     oc = dict(bl.get("oracle", {}))
     anchors = [[best_a["a_spm"], best_a["a_stroke"]]] if oc.pop("anchor_best_constant", True) else []
-    tuned["oracle"] = {"params": {**oc, "anchors": anchors}}
+    # the planner also simulates the tuned field baselines' own trajectories: it is at least as good as
+    # each of them on every episode, by construction
+    given = [[n, tuned[n]["params"]] for n in ("installed", "pump_off", "fillage_pi")] \
+        if oc.pop("include_baselines", True) else []
+    tuned["oracle"] = {"params": {**oc, "anchors": anchors, "policies": given}}
     wells = sorted(set(_well_ids(tset)))
     log(f"tuning: {ev.episodes_run} episodes in {time.perf_counter() - t0:.0f} s; " + "; ".join(
         f"{n} {json.dumps(t['params'])}" for n, t in tuned.items() if n != "installed"))
@@ -743,7 +787,7 @@ def _interval_s(env_id: str, kwargs: dict[str, Any], seed: int) -> float:
     env = make_env(env_id, **kwargs)
     try:
         env.reset(seed=seed)
-        return float(env.unwrapped.cfg.control.interval_s)
+        return interval_s_of(env)
     finally:
         env.close()
 

@@ -140,8 +140,9 @@ def run_episode(env: Any, policy: Any, seed: int, trace: bool = False) -> dict[s
     rec.update(sorted(sums.items()))
     rec.update({f"mean_{k}": float(np.mean(v)) for k, v in means.items() if v})
     rec["failure"] = str(failure) if failure else None
-    if hasattr(policy, "sim_steps"):
+    if hasattr(policy, "sim_steps"):  # the oracle: its compute, and which plan it played
         rec["model_steps"] = int(policy.sim_steps)
+        rec["plan_source"] = getattr(policy, "plan_source", "")
     if trace:
         rec["trace"] = tr
     return rec

@@ -33,9 +33,10 @@ class FakeWell:
 def _well(split: str, number: int) -> FakeWell:
     rng = np.random.default_rng((0 if split == "train" else 1) * 1000 + number)
     control = SimpleNamespace(spm_min=3.0, spm_max=float(rng.uniform(8, 12)), stroke_min_m=1.0,
-                              stroke_max_m=float(rng.uniform(2.0, 3.0)), interval_s=300.0, episode_hours=4.0)
+                              stroke_max_m=float(rng.uniform(2.0, 3.0)))
+    task = SimpleNamespace(interval_s=300.0, episode_hours=4.0)
     surface = SimpleNamespace(spm=float(rng.uniform(4, 8)), stroke_length_m=1.5)
-    cfg = SimpleNamespace(control=control, surface=surface, reward=SimpleNamespace(pprl_rating_n=1e5))
+    cfg = SimpleNamespace(control=control, task=task, surface=surface)
     hidden = {"inflow_m3_day": float(rng.uniform(10, 40)), "k_m3_day": float(rng.uniform(1.5, 3.0))}
     return FakeWell(f"{split}-{number:03d}", cfg, hidden)
 
@@ -62,8 +63,8 @@ class FakeSuckerRodV1(gym.Env):
         self.well = _well(self.scenario, number)
         self.cfg = self.well.cfg
         self.time_s, self.k = 0.0, 0
-        self.horizon = int(self.cfg.control.episode_hours * 3600 / self.cfg.control.interval_s)
-        self._t_step = float(self.np_random.uniform(0.3, 0.7)) * self.horizon * self.cfg.control.interval_s
+        self.horizon = int(self.cfg.task.episode_hours * 3600 / self.cfg.task.interval_s)
+        self._t_step = float(self.np_random.uniform(0.3, 0.7)) * self.horizon * self.cfg.task.interval_s
         self._step_to = float(self.np_random.uniform(0.5, 1.5))
         self.stored_m3, self.fill, self.last_a0 = 2.0, 1.0, 0.0
         self._last = {"spm": 0.0, "avg": 0.0, "stroke": 1.5, "duty": 0.0, "idle": 0.0}
@@ -81,12 +82,12 @@ class FakeSuckerRodV1(gym.Env):
         return o
 
     def step(self, action):
-        c, h = self.cfg.control, self.well.hidden
+        c, h, task = self.cfg.control, self.well.hidden, self.cfg.task
         a = np.clip(np.asarray(action, np.float64), -1, 1)
         avg = 0.5 * (a[0] + 1) * c.spm_max
         stroke = c.stroke_min_m + 0.5 * (a[1] + 1) * (c.stroke_max_m - c.stroke_min_m)
         spm, duty = (avg, 1.0) if avg >= c.spm_min else (c.spm_min, avg / c.spm_min)
-        dt_day = c.interval_s / 86400
+        dt_day = task.interval_s / 86400
         q_in = h["inflow_m3_day"] * self.inflow_multiplier(self.time_s) * max(0.0, 1 - self.stored_m3 / 20)
         cap = h["k_m3_day"] * spm * stroke * duty * dt_day
         avail = self.stored_m3 + q_in * dt_day
@@ -95,16 +96,16 @@ class FakeSuckerRodV1(gym.Env):
         self.stored_m3 = avail - lifted
         if duty > 0:
             self.fill = lifted / cap if cap > 0 else 1.0
-        hours = c.interval_s / 3600
+        hours = task.interval_s / 3600
         terms = {"reward_revenue": 60.0 * lifted / dt_day / 24, "reward_inventory": 20.0 * (self.stored_m3 - prev) / hours,
                  "reward_energy": -0.4 * spm * stroke * duty, "reward_pound": -3.0 * (1 - self.fill) * spm * duty,
                  "reward_ramp": -2.0 * abs(a[0] - self.last_a0)}
         self.last_a0 = a[0]
         reward = float(sum(terms.values()))
-        self.time_s += c.interval_s
+        self.time_s += task.interval_s
         self.k += 1
         self._last = {"spm": spm if duty > 0 else 0.0, "avg": avg, "stroke": stroke, "duty": duty,
-                          "idle": 0.0 if duty > 0 else self._last["idle"] + c.interval_s}
+                          "idle": 0.0 if duty > 0 else self._last["idle"] + task.interval_s}
         info = {"well_id": self.well.well_id, **terms, "cost": 0.1 * (1 - self.fill) * duty,
                 "cost_pound": 0.1 * (1 - self.fill) * duty, "spm": spm, "avg_spm": avg, "duty": duty,
                 "stroke_length_m": stroke, "fillage": self.fill, "fillage_est": self.fill,

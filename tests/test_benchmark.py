@@ -99,20 +99,28 @@ def test_fillage_pi_slows_on_low_fillage_speeds_up_on_high_and_goes_intermittent
     assert a[0, 0] > -0.95 and a[1, 0] < 1.0
 
 
-def test_oracle_is_at_least_as_good_as_its_candidates_one_step_ahead(env) -> None:
-    """Greedy perfect-model lookahead: its first action's reward is the best of the candidates'."""
+def test_oracle_lookahead_picks_the_best_candidate_one_step_ahead(env) -> None:
     obs, _ = env.reset(seed=5)
-    orc = OraclePolicy(steps=(0.3,), horizon=1, anchors=[(0.5, 0.5)])
+    orc = OraclePolicy(mode="lookahead", steps=(0.3,), horizon=1, anchors=[(0.5, 0.5)])
     orc.reset(env)
     cands = orc.candidates()
-    rewards = []
-    for c in cands:
-        m = copy.deepcopy(env.unwrapped)
-        rewards.append(m.step(c)[1])
+    rewards = [copy.deepcopy(env.unwrapped).step(c)[1] for c in cands]
     a, _ = orc.predict(obs)
-    r = env.step(a)[1]
-    assert r == pytest.approx(max(rewards))
+    assert env.step(a)[1] == pytest.approx(max(rewards))
     assert orc.sim_steps == len(cands)
+
+
+def test_oracle_plan_is_played_exactly_and_beats_its_candidates(env) -> None:
+    """The planner's simulated return is the realised one (perfect model), and it is at least the best
+    constant of its grid and each baseline it was given, on this very episode."""
+    po = {"threshold": 0.9, "idle_time_s": 600, "a_spm": 1.0, "a_stroke": 1.0}
+    orc = OraclePolicy(n_spm=3, n_stroke=2, segments=3, rounds=1, step=0.3, policies=[["pump_off", po]])
+    rec = run_episode(env, orc, seed=7)
+    assert rec["reward"] == pytest.approx(orc.planned_reward, rel=1e-9)
+    others = [run_episode(env, ConstantPolicy(a, b), 7)["reward"] for a in (-1, 0, 1) for b in (-1, 1)]
+    others.append(run_episode(env, PumpOffPolicy(NAMES, **po), 7)["reward"])
+    assert rec["reward"] >= max(others) - 1e-9
+    assert 0 < orc.sim_steps < 40 * rec["steps"]  # bounded: grid + refinement + one baseline
 
 
 # -------------------------------------------------------------------------------------------- tuning
@@ -197,7 +205,7 @@ def _quick_cfg(tmp_path: Path) -> dict:
                                    "space": {"threshold": [0.6, 0.9]}, "rounds": 1},
                       "fillage_pi": {"init": {"setpoint": 0.8, "kp": 0.5, "ki": 0.3, "a_stroke": 1.0},
                                      "space": {"ki": [0.1, 0.5]}, "rounds": 1},
-                      "oracle": {"steps": [0.3], "horizon": 1}},
+                      "oracle": {"n_spm": 3, "n_stroke": 2, "segments": 2, "rounds": 1}},
         "agents": {"selection": "mean",
                    "runs": {"ppo": {"config": str(tmp_path / "ppo.yaml"), "seeds": [0, 1]},
                             "sac": {"config": str(tmp_path / "sac.yaml"), "seeds": [0]},
