@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import copy
 import json
+import os
 import subprocess
 import sys
 from pathlib import Path
@@ -186,8 +187,9 @@ def test_mean_ci_is_the_normal_interval() -> None:
 
 
 # --------------------------------------------------------------------------------------- quick run
-def _quick_cfg(tmp_path: Path) -> dict:
-    train = {"env_id": FAKE, "env_kwargs": {"scenario": "train"}, "n_envs": 1, "vec_env": "dummy",
+def _quick_cfg(tmp_path: Path, env_id: str = FAKE, env_kwargs: dict | None = None) -> dict:
+    env_kwargs = env_kwargs or {}
+    train = {"env_id": env_id, "env_kwargs": {"scenario": "train", **env_kwargs}, "n_envs": 1, "vec_env": "dummy",
              "policy_kwargs": {"net_arch": [8, 8]}, "checkpoint_freq": 10**9, "eval_freq": 10**9,
              "n_eval_episodes": 1, "save_replay_buffer": False}
     (tmp_path / "ppo.yaml").write_text(yaml.safe_dump({**train, "algo": "ppo", "n_timesteps": 96,
@@ -196,7 +198,7 @@ def _quick_cfg(tmp_path: Path) -> dict:
     (tmp_path / "sac.yaml").write_text(yaml.safe_dump({**train, "algo": "sac", "n_timesteps": 60,
                                                        "learning_starts": 30, "batch_size": 16}))
     return {
-        "env_id": FAKE, "env_kwargs": {}, "workers": 2,
+        "env_id": env_id, "env_kwargs": env_kwargs, "workers": 2,
         "tuning": {"scenario": "train", "seeds": [0, 1, 2]},
         "validation": {"seeds": [500, 501]},
         "test": {"seeds": {"start": 1000, "count": 5}},
@@ -215,12 +217,29 @@ def _quick_cfg(tmp_path: Path) -> dict:
     }
 
 
-def test_quick_benchmark_writes_the_schema_on_disjoint_splits_same_episodes(tmp_path) -> None:
+def _has_v1() -> bool:
+    try:
+        import srenv.envs.sucker_rod_v1  # noqa: F401
+    except ImportError:
+        return False
+    return True
+
+
+@pytest.mark.parametrize("real", [False, pytest.param(True, marks=pytest.mark.skipif(
+    not _has_v1(), reason="srenv/SuckerRod-v1 not in this checkout"))], ids=["fake-env", "v1-env"])
+def test_quick_benchmark_writes_the_schema_on_disjoint_splits_same_episodes(tmp_path, real) -> None:
+    """``benchmark --quick`` end to end (the real v1 env with 1-hour episodes, or the fake one)."""
+    cfg = _quick_cfg(tmp_path, "srenv/SuckerRod-v1", {"task__episode_hours": 1.0}) if real else _quick_cfg(tmp_path)
     cfg_path = tmp_path / "bench.yaml"
-    cfg_path.write_text(yaml.safe_dump(_quick_cfg(tmp_path)))
+    cfg_path.write_text(yaml.safe_dump(cfg))
     out = tmp_path / "out"
     tests_dir = str(Path(__file__).resolve().parent)
-    env = {"PYTHONPATH": f"{REPO}:{tests_dir}", "PATH": "/usr/bin:/bin"}
+    import agents
+    import srenv
+
+    # the child imports agents and srenv from where this test did
+    roots = dict.fromkeys(str(Path(m.__file__).resolve().parent.parent) for m in (agents, srenv))
+    env = {"PYTHONPATH": os.pathsep.join([*roots, tests_dir]), "PATH": "/usr/bin:/bin"}
     proc = subprocess.run([sys.executable, "-m", "agents", "benchmark", str(cfg_path), "--quick",
                            "--out-dir", str(out)], check=False, capture_output=True, text=True, env=env, timeout=600,
                           cwd=tmp_path)
