@@ -213,6 +213,47 @@ class RewardConfig:
 
 
 @dataclass(frozen=True)
+class EconomicsConfig:
+    """Prices and costs of the v1 reward (USD; every term is a rate in USD per hour of well time)."""
+
+    oil_price_usd_m3: float = num(440.0, unit="USD/m^3", check="nonneg", doc="netback oil price (70 USD/bbl)")
+    water_handling_usd_m3: float = num(6.3, unit="USD/m^3", check="nonneg", doc="water lifting and disposal (1 USD/bbl)")
+    water_cut: float = num(0.5, unit="-", check="unit_interval", doc="water fraction of the produced liquid")
+    electricity_usd_kwh: float = num(0.12, unit="USD/kWh", check="nonneg")
+    motor_efficiency: float = num(0.8, unit="-", check="unit_interval", doc="electric input -> polished-rod work")
+    workover_usd: float = num(30000.0, unit="USD", check="nonneg", doc="cost of one rod-string failure (pulling job)")
+    fatigue_life_cycles: float = num(1.0e7, unit="cycles", doc="rod life at 100 % Goodman loading (API RP 11BR basis)")
+    fatigue_exponent: float = num(6.0, unit="-", doc="S-N exponent m: damage per cycle (G/100)^m / life")
+    stick_slip_usd_per_j: float = num(0.0002, unit="USD/J", check="nonneg",
+                                      doc="price of the elastic energy released by extra plunger stick-slip")
+    overload_usd_h: float = num(2000.0, unit="USD/h", check="nonneg",
+                                doc="cost rate at 100 % over a rating (quadratic in the excess)")
+    pound_usd_per_m2_s2: float = num(0.15, unit="USD/(m/s)^2", check="nonneg",
+                                     doc="per stroke, times the squared plunger speed when it meets the liquid")
+    ramp_usd_per_spm2: float = num(0.1, unit="USD/SPM^2", check="nonneg",
+                                   doc="VSD ramp: per change of the average SPM between intervals, squared")
+    failure_usd: float = num(30000.0, unit="USD", check="nonneg", doc="rod failure (ends the episode)")
+    pprl_rating_n: float = num(80000.0, unit="N", doc="unit structure rating")
+
+
+@dataclass(frozen=True)
+class TaskConfig:
+    """The v1 control task: control interval, horizon, inflow schedule, observation extras."""
+
+    interval_s: float = num(300.0, unit="s", doc="one env step of well time (idle or pumping)")
+    episode_hours: float = num(12.0, unit="h", doc="horizon; truncated after it")
+    exact_strokes_max: int = num(4, unit="strokes", doc="strokes simulated exactly per interval; the rest is "
+                                 "fast-forwarded quasi-steadily (annulus mass balance, last exact stroke's loads)")
+    fast_forward_fillage_tol: float = num(0.05, unit="-", check="unit_interval",
+                                          doc="re-simulate exactly when the fast-forwarded fillage drifts this much")
+    level_shot_interval_h: float = num(4.0, unit="h", doc="acoustic fluid-level shot every this many hours")
+    inflow_decline_per_day: float = num(0.05, unit="1/day", check="nonneg", doc="exponential inflow decline")
+    inflow_step_fraction: float = num(0.0, unit="-", check="any",
+                                      doc="fixed-well scenario: step of the inflow multiplier at mid-episode")
+    failure_goodman_pct: float = num(150.0, unit="%", doc="rod failure above this Goodman loading")
+
+
+@dataclass(frozen=True)
 class WellConfig:
     name: str = opt("well")
     description: str = opt("")
@@ -227,6 +268,8 @@ class WellConfig:
     simulation: SimulationConfig = field(default_factory=SimulationConfig)
     control: ControlConfig = field(default_factory=ControlConfig)
     reward: RewardConfig = field(default_factory=RewardConfig)
+    economics: EconomicsConfig = field(default_factory=EconomicsConfig)
+    task: TaskConfig = field(default_factory=TaskConfig)
 
     @property
     def rod_length_m(self) -> float:

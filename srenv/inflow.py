@@ -25,6 +25,7 @@ class Annulus:
         self._tvd = tvd
         d_c, d_t = cfg.casing_inner_diameter_mm * 1e-3, cfg.tubing_outer_diameter_mm * 1e-3
         self.area_m2 = math.pi / 4 * (d_c * d_c - d_t * d_t)
+        self.rate_multiplier = 1.0  # the reservoir's deliverability over time (v1's inflow schedule)
         self.reset(cfg.initial_fluid_level_m)
 
     def reset(self, level_m: float) -> None:
@@ -49,7 +50,7 @@ class Annulus:
         else:
             r = min(max(p_wf / p_r, 0.0), 1.0)
             q_day = self.cfg.max_rate_m3_day * (1 - 0.2 * r - 0.8 * r * r)
-        return q_day / SECONDS_PER_DAY
+        return self.rate_multiplier * q_day / SECONDS_PER_DAY
 
     def accumulate(self, time_s: float) -> None:
         dt = max(time_s - self.last_time_s, 0.0)

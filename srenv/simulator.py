@@ -454,6 +454,35 @@ class Simulator:
     def run_strokes(self, n: int, record: bool = True, **kw) -> list[RunResult]:
         return [self.run_stroke(record=record, **kw) for _ in range(n)]
 
+    # ------------------------------------------------------------------------------------------ idle time
+    # The v1 env stops the unit between strokes (intermittent pumping) and fast-forwards quasi-steady
+    # strokes; these keep the annulus, the clock and the fluid-pound plan consistent when it does.
+    def stop_at_bottom(self) -> None:
+        """The unit stops at the bottom of a stroke: the string settles to its static state (plunger at rest
+        holding P+); the annulus contents and the clock are kept."""
+        t = self.time_s
+        vol = self.annulus.volume_m3 if self.annulus is not None else 0.0
+        self.reset(self.annulus.level_m if self.annulus is not None else None)
+        self.time_s = t
+        if self.annulus is not None:
+            self.annulus.volume_m3 = vol
+            self.annulus.last_time_s = t
+
+    def idle(self, duration_s: float) -> None:
+        """Let `duration_s` pass with the unit stopped: the annulus refills, no rod dynamics."""
+        self.time_s += max(float(duration_s), 0.0)
+        if self.annulus is not None:
+            self.annulus.accumulate(self.time_s)
+
+    def replan_upstroke(self, period_s: float) -> None:
+        """Re-plan the coming upstroke's liquid (fluid pound) after the annulus changed outside a stroke."""
+        if self.annulus is None or self._pump_phase != "up":
+            return
+        plan_par = np.zeros(K.N_PAR)
+        plan_ist = np.zeros(K.N_IST, dtype=np.int64)
+        self._plan_upstroke(self._ub_max, self.time_s, period_s, plan_ist, plan_par)
+        self.void, self.void_until = int(plan_ist[K.I_VOID]), float(plan_par[K.P_VOID_UNTIL])
+
 
 class _Work:
     """Scratch arrays of the kernel, allocated once per simulator (no per-step allocation)."""
