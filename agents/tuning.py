@@ -33,7 +33,7 @@ def refuse_test_split(scenario: str, purpose: str = "tune") -> None:
         from srenv.well_family import check_split
     except ImportError:  # an env without the family module (the tests' fake): our guard alone
         check_split = None
-    if check_split is not None:
+    if check_split is not None and scenario in ("train", "test"):  # a fixed well name is no split
         check_split(scenario, purpose)
     if str(scenario).strip().lower() == "test":
         raise ValueError(f"{purpose}: scenario 'test' is the held-out test split; tuning and training "
