@@ -365,6 +365,7 @@ def write_markdown(report: dict[str, Any], path: Path, figure: str | None) -> No
     ]
     if figure:
         parts += [f"![benchmark]({figure})", ""]
+    parts += behaviour_table(report)
     parts += [PROTOCOL, "", "## Tuned baselines (training wells only)", ""]
     for n, t in tuned.items():
         parts.append(f"- `{n}`: {json.dumps(t.get('params'))}" + (f" (tuning score {t['score']:.1f})"
@@ -421,6 +422,33 @@ PROTOCOL = """## Protocol
   correction `r` (residual policy learning; it sees `b`), trained the same way.
 - **Statistics.** Mean return with a normal 95 % interval; paired differences with their 95 %
   interval over the test episodes (`*` = above zero); the IQM over (training seed, episode)."""
+
+
+_BEHAVIOUR = (("mean_avg_spm", "avg SPM", 2), ("mean_duty", "duty (-)", 2), ("mean_stroke_length_m", "stroke (m)", 2),
+              ("mean_production_m3_day", "liquid (m3/day)", 1), ("mean_fluid_level_m", "level (m)", 0),
+              ("reward_revenue", "revenue", 0), ("reward_stick_slip", "stick-slip", 0), ("reward_pound", "pound", 0),
+              ("reward_energy", "energy", 0), ("reward_ramp", "ramp", 0))
+
+
+def behaviour_table(report: dict[str, Any]) -> list[str]:
+    """How each policy runs the test wells: means over the test episodes (interval means, return terms)."""
+    s, pol = report["summary"], report["policies"]
+    lines = ["## What the policies do on the test wells", "",
+             ("Means over the test episodes: operating point (interval means) and the main reward terms "
+              "(episode sums, same units as the return)."), "",
+             "| policy | " + " | ".join(h for _, h, _ in _BEHAVIOUR) + " |", "|---" * (len(_BEHAVIOUR) + 1) + "|"]
+    for n in sorted(s, key=lambda n: -s[n]["mean_reward"]):
+        eps = pol[n]["episodes"]
+        cells = [_fmt(float(np.mean([e.get(k, math.nan) for e in eps])), nd) for k, _, nd in _BEHAVIOUR]
+        lines.append(f"| {n} | " + " | ".join(cells) + " |")
+    return [*lines, ""]
+
+
+def rerender(out_dir: str | Path) -> None:
+    """Rewrite ``OUT/benchmark.md`` from ``OUT/benchmark.json`` (no simulation; the figure is kept)."""
+    out = Path(out_dir)
+    report = json.loads((out / "benchmark.json").read_text())
+    write_markdown(report, out / "benchmark.md", "figures/benchmark_v1.png")
 
 
 def _runs_text(training: dict[str, Any]) -> str:
