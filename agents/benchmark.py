@@ -426,6 +426,7 @@ PROTOCOL = """## Protocol
 
 _BEHAVIOUR = (("mean_avg_spm", "avg SPM", 2), ("mean_duty", "duty (-)", 2), ("mean_stroke_length_m", "stroke (m)", 2),
               ("mean_production_m3_day", "liquid (m3/day)", 1), ("mean_fluid_level_m", "level (m)", 0),
+              ("mean_fillage", "fillage (true)", 2), ("mean_fillage_est", "fillage_est (card)", 2),
               ("reward_revenue", "revenue", 0), ("reward_stick_slip", "stick-slip", 0), ("reward_pound", "pound", 0),
               ("reward_energy", "energy", 0), ("reward_ramp", "ramp", 0))
 
@@ -441,7 +442,20 @@ def behaviour_table(report: dict[str, Any]) -> list[str]:
         eps = pol[n]["episodes"]
         cells = [_fmt(float(np.mean([e.get(k, math.nan) for e in eps])), nd) for k, _, nd in _BEHAVIOUR]
         lines.append(f"| {n} | " + " | ".join(cells) + " |")
+    gap = _fillage_gap(pol)
+    if gap is not None:
+        lines += ["", f"The field baselines act on `fillage_est`, the controller's estimate from the surface card; "
+                  f"over all policies' test episodes it differs from the true pump fillage by {gap:.2f} on average "
+                  "(episode means)" + (": where it stays near 1 while the pump is pounding, pump-off control and the "
+                                       "fillage PI cannot see the pump-off, while an agent reading the whole card can."
+                                       if gap > 0.1 else ".")]
     return [*lines, ""]
+
+
+def _fillage_gap(policies: dict[str, Any]) -> float | None:
+    d = [abs(e["mean_fillage"] - e["mean_fillage_est"]) for p in policies.values() for e in p["episodes"]
+         if "mean_fillage" in e and "mean_fillage_est" in e]
+    return float(np.mean(d)) if d else None
 
 
 def rerender(out_dir: str | Path) -> None:
