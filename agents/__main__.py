@@ -1,4 +1,4 @@
-"""``python -m agents train | evaluate | quickstart``.
+"""``python -m agents train | evaluate | quickstart | benchmark``.
 
 Each command prints a JSON summary as its last stdout line (progress and notes go to stderr; ``evaluate``
 with several policies prints a markdown comparison table before the JSON). Bad input prints one line
@@ -18,6 +18,7 @@ import yaml
 
 EXIT_BAD_INPUT = 2
 QUICK_CONFIG = Path(__file__).resolve().parent.parent / "configs" / "train" / "ppo_quick.yaml"
+QUICK_BENCHMARK = Path(__file__).resolve().parent.parent / "configs" / "benchmark" / "v1_quick.yaml"
 
 
 class _Parser(argparse.ArgumentParser):
@@ -95,12 +96,17 @@ def build_parser() -> argparse.ArgumentParser:
                        "evaluation reads without unpickling")
     c.add_argument("pickles", nargs="+", help="VecNormalize pickles you made yourself (they are unpickled)")
 
-    q = sub.add_parser("quickstart", help="train briefly, evaluate against both baselines, plot")
-    q.add_argument("--config", default=str(QUICK_CONFIG), help="training YAML (default ppo_quick.yaml)")
+    q = sub.add_parser("quickstart", help="the v1 benchmark on a small scale: tuned baselines vs PPO/SAC")
+    q.add_argument("--config", default=str(QUICK_BENCHMARK), help="benchmark YAML (default v1_quick.yaml)")
     q.add_argument("--out", default="runs/quickstart")
-    q.add_argument("--total-timesteps", type=_positive_int)
-    q.add_argument("--episodes", type=_positive_int, default=5)
-    q.add_argument("--seed", type=_nonneg_int, default=1000)
+    q.add_argument("--total-timesteps", type=_positive_int, help="override every agent run's n_timesteps")
+    q.add_argument("--episodes", type=_positive_int, help="override the number of test episodes")
+    q.add_argument("--seed", type=_nonneg_int, help="first test seed (episodes use S..S+N-1)")
+
+    b = sub.add_parser("benchmark", help="tune baselines, train PPO/SAC, test all on unseen wells (v1)")
+    b.add_argument("config", help="benchmark YAML, e.g. configs/benchmark/v1.yaml")
+    b.add_argument("--quick", action="store_true", help="apply the config's quick: block (minutes, for CI)")
+    b.add_argument("--out-dir", help="output directory (default docs, or runs/benchmark_quick with --quick)")
     return p
 
 
@@ -163,18 +169,15 @@ def cmd_convert_stats(args: argparse.Namespace) -> dict:
 
 
 def cmd_quickstart(args: argparse.Namespace) -> dict:
-    from .evaluate import evaluate
-    from .train import load_train_config, train
+    from .benchmark import quickstart
 
-    cfg = load_train_config(args.config)
-    print(f"quickstart: training {cfg.algo.upper()} from {args.config} into {args.out} ...", file=sys.stderr)
-    summary = train(cfg, args.out, total_timesteps=args.total_timesteps, progress_bar=sys.stdout.isatty())
-    plot = str(Path(args.out) / "comparison.png")
-    print(f"quickstart: evaluating on seeds {args.seed}..{args.seed + args.episodes - 1} ...", file=sys.stderr)
-    results = evaluate([summary["model"], "rocking", "fillage"], args.episodes, args.seed,
-                       env_kwargs=_eval_env_kwargs(cfg.env_kwargs), plot=plot)
-    report = report_evaluation(results, args.episodes, args.seed, "default")
-    return {**report, "plot": plot, "training": summary}
+    return quickstart(args.config, args.out, args.total_timesteps, args.episodes, args.seed)
+
+
+def cmd_benchmark(args: argparse.Namespace) -> dict:
+    from .benchmark import benchmark_main
+
+    return benchmark_main(args.config, args.quick, args.out_dir)
 
 
 def _eval_env_kwargs(train_env_kwargs: dict) -> dict:
@@ -189,7 +192,7 @@ def main(argv: list[str] | None = None) -> int:
     from .train import TrainConfigError
 
     commands = {"train": cmd_train, "evaluate": cmd_evaluate, "quickstart": cmd_quickstart,
-                "convert-stats": cmd_convert_stats}
+                "convert-stats": cmd_convert_stats, "benchmark": cmd_benchmark}
     try:
         result = commands[args.command](args)
     except (ConfigError, TrainConfigError, ValueError, FileNotFoundError) as exc:

@@ -62,13 +62,18 @@ def algorithms() -> dict[str, type]:
     return {"ppo": PPO, "sac": SAC, "a2c": A2C, "td3": TD3}
 
 
+RESIDUAL_ENV_ID = "agents.residual_v1:ResidualSuckerRod-v1"
+
+
 def allowed_env_ids() -> list[str]:
     """The Gymnasium ids srenv registers (``srenv/...``): the only ones a training YAML may name."""
     import gymnasium as gym
 
     import srenv  # noqa: F401  (registers its envs)
 
-    return sorted(k for k in gym.registry if k.startswith("srenv/") and ":" not in k)
+    # plus the benchmark's residual env, which this package registers itself (agents/residual_v1.py): a fixed id
+    # naming our own module, never a module chosen by the YAML
+    return sorted(k for k in gym.registry if k.startswith("srenv/") and ":" not in k) + [RESIDUAL_ENV_ID]
 
 
 class TrainConfigError(ValueError):

@@ -1,0 +1,113 @@
+"""Residual agents: a learned correction on top of a tuned baseline controller (residual policy learning).
+
+The agent's action ``r`` in [-1, 1]^2 moves the baseline's action ``b``: the env receives
+``clip(b + scale * r, -1, 1)``; the agent also sees ``b`` (two observation entries appended). With
+``r = 0`` it IS the baseline, so training starts from the tuned controller and learns only what improves
+on it. Training uses :class:`ResidualEnv` (registered as ``agents.residual_v1:ResidualSuckerRod-v1``, so
+SB3's vectorised envs build it in any process); evaluation drives the plain env with
+:class:`ResidualAgentPolicy`, which composes the same two parts in the same order.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import gymnasium as gym
+import numpy as np
+
+from .baselines_v1 import make_baseline, obs_names_of
+
+ENV_ID = "ResidualSuckerRod-v1"
+
+
+def compose(base_action: np.ndarray, residual: np.ndarray, scale: float) -> np.ndarray:
+    return np.clip(np.asarray(base_action, np.float32) + float(scale) * np.asarray(residual, np.float32),
+                   -1.0, 1.0).astype(np.float32)
+
+
+def augment(obs: np.ndarray, base_action: np.ndarray) -> np.ndarray:
+    return np.concatenate([np.asarray(obs, np.float32), np.asarray(base_action, np.float32)], axis=-1)
+
+
+class _Base:
+    """The baseline's action for one env, with its recurrent state and per-episode hook."""
+
+    def __init__(self, name: str, params: dict[str, Any], env: Any) -> None:
+        self.policy = make_baseline(name, params, obs_names_of(env))
+        self.state: Any = None
+        self.start = True
+
+    def reset(self, env: Any) -> None:
+        if hasattr(self.policy, "reset"):
+            self.policy.reset(env)
+        self.state, self.start = None, True
+
+    def act(self, obs: np.ndarray) -> np.ndarray:
+        a, self.state = self.policy.predict(obs, state=self.state, episode_start=np.array([self.start]))
+        self.start = False
+        return np.asarray(a, np.float32)
+
+
+class ResidualEnv(gym.Wrapper):
+    """``env`` driven by ``baseline + scale * agent action``; observation = env's + the baseline action."""
+
+    def __init__(self, env: gym.Env, base: str, base_params: dict[str, Any], scale: float = 0.3) -> None:
+        super().__init__(env)
+        if not 0.0 < scale <= 2.0:
+            raise ValueError(f"residual scale = {scale!r}: expected a number in (0, 2]")
+        if base == "oracle":
+            raise ValueError("residual base = oracle: expected a field baseline (it would see hidden state)")
+        self.scale = float(scale)
+        self.base = _Base(base, base_params, env)
+        low = np.concatenate([env.observation_space.low, -np.ones(2, np.float32)])
+        high = np.concatenate([env.observation_space.high, np.ones(2, np.float32)])
+        self.observation_space = gym.spaces.Box(low.astype(np.float32), high.astype(np.float32), dtype=np.float32)
+        self.action_space = gym.spaces.Box(-1.0, 1.0, (2,), np.float32)
+        self._b = np.zeros(2, np.float32)
+
+    def reset(self, **kwargs: Any) -> tuple[np.ndarray, dict]:
+        obs, info = self.env.reset(**kwargs)
+        self.base.reset(self.env)
+        self._b = self.base.act(obs)
+        return augment(obs, self._b), info
+
+    def step(self, action: np.ndarray) -> tuple[np.ndarray, float, bool, bool, dict]:
+        obs, r, term, trunc, info = self.env.step(compose(self._b, action, self.scale))
+        self._b = self.base.act(obs)
+        return augment(obs, self._b), r, term, trunc, info
+
+
+def make_residual_env(inner_env_id: str = "srenv/SuckerRod-v1", base: str = "fillage_pi",
+                      base_params: dict[str, Any] | None = None, scale: float = 0.3,
+                      **env_kwargs: Any) -> ResidualEnv:
+    from .rollout_v1 import make_env
+
+    return ResidualEnv(make_env(inner_env_id, **env_kwargs), base, base_params or {}, scale)
+
+
+class ResidualAgentPolicy:
+    """Evaluation twin of :class:`ResidualEnv`: baseline action + scale x the model's, on the plain env."""
+
+    def __init__(self, model_policy: Any, base: str, base_params: dict[str, Any], scale: float) -> None:
+        self.model, self.base_name, self.base_params, self.scale = model_policy, base, base_params, float(scale)
+        self.base: _Base | None = None
+
+    def reset(self, env: Any, index: int | None = None) -> None:
+        if index not in (None, 0):
+            raise ValueError("ResidualAgentPolicy drives one env")
+        self.base = _Base(self.base_name, self.base_params, env)
+        self.base.reset(env)
+
+    def predict(self, observation: Any, state: Any = None, episode_start: Any = None,
+                deterministic: bool = True) -> tuple[np.ndarray, Any]:
+        if self.base is None:
+            raise RuntimeError("ResidualAgentPolicy: call reset(env) after env.reset")
+        obs = np.asarray(observation, np.float32)
+        b = self.base.act(obs)
+        r, state = self.model.predict(augment(obs, b), state=state, episode_start=episode_start,
+                                      deterministic=deterministic)
+        return compose(b, np.asarray(r).reshape(b.shape), self.scale), state
+
+
+if ENV_ID not in gym.registry:
+    gym.register(ENV_ID, entry_point=make_residual_env)
