@@ -1,0 +1,173 @@
+"""Cross-field consistency of a well config and the resource bounds checked before any work (nodes, dense
+arrays, steps per stroke, recorded samples); each refusal names the field, the value and what is expected."""
+
+from __future__ import annotations
+
+import math
+from typing import Any
+
+from .config_sections import SurfaceConfig, WellConfig
+from .errors import ConfigError
+from .unit_catalogue import conventional_unit
+
+
+def _check_consistency(cfg: WellConfig) -> None:
+    """Cross-field checks (each names the offending field)."""
+    if not cfg.rod.tapers:
+        raise ConfigError("rod.tapers", [], "at least one taper")
+    p = cfg.pump
+    if p.load_source == "loads" and not p.upstroke_load_n > p.downstroke_load_n:
+        raise ConfigError("pump.downstroke_load_n", p.downstroke_load_n,
+                          f"a load in N below pump.upstroke_load_n = {p.upstroke_load_n} (P+ < P-)")
+    if p.law == "nonmonotone":
+        if p.load_source != "loads":
+            raise ConfigError("pump.law", p.law, "'constant' when pump.load_source is 'pressures'")
+        if not p.downstroke_load_n < p.dynamic_load_n <= p.upstroke_load_n:
+            raise ConfigError("pump.dynamic_load_n", p.dynamic_load_n,
+                              "a load in N between pump.downstroke_load_n and pump.upstroke_load_n")
+    if p.intake_gas_fraction > 0 or p.intake_glr_m3_m3 > 0:
+        if p.intake_gas_fraction > 0 and p.intake_glr_m3_m3 > 0:
+            raise ConfigError("pump.intake_glr_m3_m3", p.intake_glr_m3_m3,
+                              "0 when pump.intake_gas_fraction is given (one measure of the free gas)")
+        if p.intake_gas_fraction >= 1:
+            raise ConfigError("pump.intake_gas_fraction", p.intake_gas_fraction, "a fraction below 1")
+        if p.load_source != "pressures" or p.law != "constant":
+            raise ConfigError("pump.load_source", p.load_source, "'pressures' with pump.law 'constant' when the "
+                              "intake carries free gas (the chamber pressure sets the plunger load)")
+        if p.gas_polytropic_exponent < 1:
+            raise ConfigError("pump.gas_polytropic_exponent", p.gas_polytropic_exponent,
+                              "an exponent >= 1 (1 isothermal, 1.3 adiabatic natural gas)")
+    tb = cfg.tubing
+    if not tb.anchored:
+        if tb.inner_diameter_mm >= tb.outer_diameter_mm:
+            raise ConfigError("tubing.inner_diameter_mm", tb.inner_diameter_mm,
+                              f"a diameter in mm below tubing.outer_diameter_mm = {tb.outer_diameter_mm}")
+        if tb.anchor_depth_m >= cfg.rod_length_m:
+            raise ConfigError("tubing.anchor_depth_m", tb.anchor_depth_m,
+                              f"a depth in m above the pump ({cfg.rod_length_m} m)")
+        if p.intake_gas_fraction > 0 or p.intake_glr_m3_m3 > 0:
+            raise ConfigError("tubing.anchored", tb.anchored, "true when the intake carries free gas (the "
+                              "two chamber models are not combined)")
+        if p.law != "constant":
+            raise ConfigError("tubing.anchored", tb.anchored, "true with pump.law 'nonmonotone'")
+    f = cfg.friction
+    if f.law == "nonmonotone" and f.kinetic_coefficient > f.coefficient:
+        raise ConfigError("friction.kinetic_coefficient", f.kinetic_coefficient,
+                          f"a coefficient <= friction.coefficient = {f.coefficient} (static)")
+    st = cfg.survey.stations
+    for i in range(1, len(st)):
+        if not st[i].md_m > st[i - 1].md_m:
+            raise ConfigError(f"survey.stations[{i}].md_m", st[i].md_m,
+                              f"a depth in m greater than the previous station's {st[i - 1].md_m}")
+    if st and st[-1].md_m < cfg.rod_length_m - 1e-6:
+        raise ConfigError(f"survey.stations[{len(st) - 1}].md_m", st[-1].md_m,
+                          f"a depth in m reaching the pump at {cfg.rod_length_m} m (sum of taper lengths)")
+    if st and st[0].md_m != 0:
+        raise ConfigError("survey.stations[0].md_m", st[0].md_m, "0 m (the survey starts at the surface)")
+    if cfg.surface.motion == "conventional":
+        _check_conventional_unit(cfg.surface)
+    if cfg.surface.motion == "measured":  # a bad card file is refused at load time, before any work
+        from .measured_motion import load_measured_motion
+
+        load_measured_motion(cfg.surface.measured_card_csv, cfg.surface.measured_spm)
+    c = cfg.control
+    if c.spm_min >= c.spm_max:
+        raise ConfigError("control.spm_max", c.spm_max, f"strokes/min above control.spm_min = {c.spm_min}")
+    if c.stroke_min_m > c.stroke_max_m:
+        raise ConfigError("control.stroke_max_m", c.stroke_max_m,
+                          f"a length in m >= control.stroke_min_m = {c.stroke_min_m}")
+    s = cfg.simulation
+    if not (s.newmark_gamma >= 0.5 and s.newmark_beta >= 0.25 * (0.5 + s.newmark_gamma) ** 2 - 1e-12):
+        raise ConfigError("simulation.newmark_beta", s.newmark_beta,
+                          "beta >= (gamma + 1/2)^2 / 4 with gamma >= 1/2 (unconditional stability)")
+    if s.element_length_m > cfg.rod_length_m:
+        raise ConfigError("simulation.element_length_m", s.element_length_m,
+                          f"a length in m no longer than the rod ({cfg.rod_length_m} m)")
+    if s.qp_solver not in _known_solvers():
+        raise ConfigError("simulation.qp_solver", s.qp_solver,
+                          "an installed qpsolvers backend: " + ", ".join(_known_solvers()))
+    if cfg.inflow.model != "none":
+        i = cfg.inflow
+        if i.tubing_outer_diameter_mm >= i.casing_inner_diameter_mm:
+            raise ConfigError("inflow.tubing_outer_diameter_mm", i.tubing_outer_diameter_mm,
+                              f"a diameter in mm below inflow.casing_inner_diameter_mm = {i.casing_inner_diameter_mm}")
+        if p.load_source != "pressures":
+            raise ConfigError("pump.load_source", p.load_source,
+                              "'pressures' when an inflow model sets the intake pressure")
+    for i, t in enumerate(cfg.rod.tapers):
+        if p.load_source == "pressures" and t is cfg.rod.tapers[-1] and t.diameter_mm >= p.plunger_diameter_mm:
+            raise ConfigError("pump.plunger_diameter_mm", p.plunger_diameter_mm,
+                              f"a diameter in mm larger than the bottom rod ({t.diameter_mm} mm)")
+        if t.diameter_mm >= cfg.damping.tubing_inner_diameter_mm and cfg.damping.model == "annulus_shear":
+            raise ConfigError(f"rod.tapers[{i}].diameter_mm", t.diameter_mm,
+                              f"a diameter in mm below damping.tubing_inner_diameter_mm = "
+                              f"{cfg.damping.tubing_inner_diameter_mm}")
+
+
+# Derived resource bounds (docs/reliability.md): checked when a config is loaded, before any allocation.
+MAX_NODES = 2000  # FE nodes of the rod string (a 10 km string at 5 m elements)
+MAX_DENSE_NODES = 500  # consistent mass (dense eigenproblem) or always_qp (dense QP every step): n^2 arrays
+MAX_STEPS_PER_STROKE = 200_000  # time steps of one stroke (memory of its recorded trace: 13 MB)
+MAX_RUN_SAMPLES = 1_000_000  # recorded time steps of one CLI run / sweep case (the CSV's rows, ~100 MB)
+
+
+def node_count(cfg: WellConfig) -> int:
+    """Nodes of the FE mesh :func:`srenv.rod.build_mesh` builds (whole elements per taper, plus the top)."""
+    h = cfg.simulation.element_length_m
+    return 1 + sum(max(1, math.ceil(t.length_m / h - 1e-9)) for t in cfg.rod.tapers)
+
+
+def check_dense_size(cfg: WellConfig, always_qp: bool | None = None) -> None:
+    """Refuse dense n x n work above MAX_DENSE_NODES (``always_qp`` may come from the command line)."""
+    always = cfg.simulation.always_qp if always_qp is None else always_qp
+    n = node_count(cfg)
+    if n > MAX_DENSE_NODES and (always or cfg.rod.mass_matrix == "consistent"):
+        why = "simulation.always_qp / --always-qp" if always else "rod.mass_matrix = consistent"
+        raise ConfigError("simulation.element_length_m", cfg.simulation.element_length_m,
+                          f"a length in m giving at most {MAX_DENSE_NODES} nodes with {why} (dense n^2 "
+                          f"arrays; this mesh has {n} nodes)")
+
+
+def steps_per_stroke(cfg: WellConfig, spm: float) -> int:
+    return max(1, math.ceil(60.0 / spm / cfg.simulation.time_step_s - 1e-9))
+
+
+def check_stroke_steps(cfg: WellConfig, spm: float, field_name: str) -> None:
+    n = steps_per_stroke(cfg, spm)
+    if n > MAX_STEPS_PER_STROKE:
+        raise ConfigError("simulation.time_step_s", cfg.simulation.time_step_s,
+                          f"a time step in s giving at most {MAX_STEPS_PER_STROKE} steps per stroke at "
+                          f"{field_name} = {spm:g} strokes/min (this one: {n})")
+
+
+def check_run_samples(n_samples: int, flag: str, value: Any) -> None:
+    """Refuse a run that would record more than MAX_RUN_SAMPLES time steps (memory and output size)."""
+    if n_samples > MAX_RUN_SAMPLES:
+        raise ConfigError(flag, value, f"a run of at most {MAX_RUN_SAMPLES} recorded time steps (this one: "
+                          f"{n_samples}; shorten it or raise simulation.time_step_s)")
+
+
+def _check_resources(cfg: WellConfig) -> None:
+    n = node_count(cfg)
+    if n > MAX_NODES:
+        raise ConfigError("simulation.element_length_m", cfg.simulation.element_length_m,
+                          f"a length in m giving at most {MAX_NODES} nodes (this mesh of the "
+                          f"{cfg.rod_length_m:g} m string has {n})")
+    check_dense_size(cfg)
+    if cfg.surface.motion != "pullout":
+        check_stroke_steps(cfg, cfg.surface.spm, "surface.spm")
+
+
+def _check_conventional_unit(surface: SurfaceConfig) -> None:
+    """A conventional unit's stroke comes from its crank hole: the unit must exist and have that hole, or
+    the stroke would be beyond what the unit can make. Checked at load time (not only when a simulator is
+    built) so that every loader of a config - CLI, env, sweeps - refuses it before doing any work."""
+    conventional_unit(surface.unit, surface.crank_hole)
+
+
+def _known_solvers() -> list[str]:
+    import qpsolvers
+
+    return list(qpsolvers.available_solvers)
+
+
