@@ -23,11 +23,11 @@ from agents.baselines_v1 import (
     ConstantPolicy,
     FillagePIPolicy,
     InstalledPolicy,
-    OraclePolicy,
     PumpOffPolicy,
     action_from_setpoints,
 )
 from agents.benchmark import load_benchmark_config, mean_ci
+from agents.oracle_v1 import OraclePolicy
 from agents.rollout_v1 import Runner, make_env, run_episode
 from agents.tuning import Evaluator, TuningSet, refuse_test_split, search_best_constant
 

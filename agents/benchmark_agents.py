@@ -1,0 +1,92 @@
+"""The benchmark's agents: one training run per (algo, seed) in a worker, model export, residual runs.
+
+A run's model is copied to ``OUT/models/<name>_v1_seed<k>.zip`` with its observation statistics as plain
+arrays (``<stem>_obs_norm.npz``); a residual run (``residual: {base, scale}``) trains on
+:class:`agents.residual_v1.ResidualEnv` around a tuned field baseline.
+"""
+
+from __future__ import annotations
+
+import os
+import shutil
+import sys
+from pathlib import Path
+from typing import Any
+
+from .benchmark_config import BenchmarkConfigError
+from .rollout_v1 import ObsNormalizer
+from .tuning import refuse_test_split
+
+
+def train_job(job: dict[str, Any]) -> dict[str, Any]:
+    """Worker entry: train one (algo, seed) run with :func:`agents.train.train`."""
+    import torch
+
+    from .train import load_train_config, train
+
+    torch.set_num_threads(1)
+    over = {"seed": job["seed"], **job.get("overrides", {})}
+    cfg = load_train_config(job["config"], over)
+    refuse_test_split(cfg.env_kwargs.get("scenario", "train"), "train")
+    summary = train(cfg, job["out"], progress_bar=False,
+                    log=lambda m: print(f"[{job['algo']} seed {job['seed']}] {m}", file=sys.stderr, flush=True))
+    summary["seed"] = job["seed"]
+    return summary
+
+
+def export_model(summary: dict[str, Any], dest_zip: Path) -> dict[str, Any]:
+    """Copy a trained model to ``dest_zip`` and its observation statistics to ``<stem>_obs_norm.npz``
+    (plain arrays: the VecNormalize pickle, our own file from training, is read here and not shipped)."""
+    import pickle
+
+    dest_zip.parent.mkdir(parents=True, exist_ok=True)
+    tmp = dest_zip.with_suffix(".zip.tmp")
+    shutil.copyfile(summary["model"], tmp)
+    os.replace(tmp, dest_zip)
+    norm_path = None
+    if summary.get("vecnormalize"):
+        with open(summary["vecnormalize"], "rb") as fh:
+            vn = pickle.load(fh)  # written by this benchmark's own training run
+        if vn.norm_obs:
+            norm_path = dest_zip.with_name(dest_zip.stem + "_obs_norm.npz")
+            ObsNormalizer(vn.obs_rms.mean, vn.obs_rms.var, vn.clip_obs, vn.epsilon).save(str(norm_path))
+    return {"kind": "agent", "path": str(dest_zip), "obs_norm": str(norm_path) if norm_path else None}
+
+
+def _algo_of(run: dict[str, Any]) -> str:
+    from .train import load_train_config
+
+    return load_train_config(run["config"]).algo
+
+
+def _policy_part(spec: dict[str, Any]) -> dict[str, Any]:
+    return {k: spec[k] for k in ("kind", "path", "obs_norm", "residual") if k in spec}
+
+
+def residual_spec(run: dict[str, Any], tuned: dict[str, Any]) -> dict[str, Any] | None:
+    """``{base, params, scale}`` of a residual agent run (``residual: {base: NAME | best_tuned, scale}``):
+    the base is a tuned field baseline; ``best_tuned`` = the best tuning score (training wells)."""
+    res = run.get("residual")
+    if not res:
+        return None
+    base = res.get("base", "best_tuned")
+    if base == "best_tuned":
+        base = max(("best_constant", "pump_off", "fillage_pi"), key=lambda n: tuned[n]["score"])
+    if base not in ("best_constant", "pump_off", "fillage_pi"):
+        raise BenchmarkConfigError(f"residual base = {base!r}: expected best_constant, pump_off, fillage_pi "
+                                   "or best_tuned")
+    return {"base": base, "params": tuned[base]["params"], "scale": float(res.get("scale", 0.3))}
+
+
+def residual_overrides(res: dict[str, Any] | None, run: dict[str, Any], cfg: dict[str, Any]) -> dict[str, Any]:
+    """Training-YAML overrides that put a residual run on :class:`agents.residual_v1.ResidualEnv`."""
+    if not res:
+        return {}
+    from .residual_v1 import ENV_ID
+    from .train import load_train_config
+
+    tc = load_train_config(run["config"])
+    return {"env_id": f"agents.residual_v1:{ENV_ID}",
+            "env_kwargs": {**tc.env_kwargs, "inner_env_id": tc.env_id, "base": res["base"],
+                           "base_params": res["params"], "scale": res["scale"]}}
+

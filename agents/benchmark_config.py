@@ -1,0 +1,121 @@
+"""The benchmark's YAML (``configs/benchmark/*.yaml``): read, checked before any work, ``quick:`` merged.
+
+Checks: seed lists (``[..]`` or ``{start, count}``), tuning on the training split only (the test split is
+refused), tuning / validation / test seeds pairwise disjoint, known baseline names, agent runs with a
+readable training YAML that does not train on the test split, residual bases.
+"""
+
+from __future__ import annotations
+
+import copy
+from pathlib import Path
+from typing import Any
+
+import yaml
+
+from .baselines_v1 import BASELINE_NAMES
+from .rollout_v1 import ENV_ID_V1
+from .tuning import refuse_test_split
+
+REPO = Path(__file__).resolve().parent.parent
+Z95 = 1.959963984540054
+
+
+class BenchmarkConfigError(ValueError):
+    """A benchmark YAML that cannot be used; the message names the key, the value and what is expected."""
+
+
+# -------------------------------------------------------------------------------------------- config
+_REPLACED = ("space", "runs")  # a quick block's search space / agent runs replace the full ones
+
+
+def _deep_merge(base: dict, over: dict) -> dict:
+    out = copy.deepcopy(base)
+    for k, v in over.items():
+        merge = isinstance(v, dict) and isinstance(out.get(k), dict) and k not in _REPLACED
+        out[k] = _deep_merge(out[k], v) if merge else copy.deepcopy(v)
+    return out
+
+
+def _seeds(value: Any, key: str) -> list[int]:
+    """A seed list: ``[1, 2, 3]`` or ``{start: S, count: N}``."""
+    if isinstance(value, dict) and set(value) == {"start", "count"}:
+        s, n = value["start"], value["count"]
+        if isinstance(s, int) and isinstance(n, int) and s >= 0 and n > 0:
+            return list(range(s, s + n))
+    elif (isinstance(value, list) and value and all(isinstance(v, int) and v >= 0 for v in value)
+          and len(set(value)) == len(value)):
+        return list(value)
+    raise BenchmarkConfigError(f"benchmark config: {key} = {value!r}: expected a list of distinct "
+                               "non-negative integers or {start: S, count: N}")
+
+
+def load_benchmark_config(path: str | Path, quick: bool = False) -> dict[str, Any]:
+    """Read and check a benchmark YAML (``quick``: merge its ``quick:`` block); the resolved dict."""
+    p = Path(path)
+    if not p.is_file():
+        raise FileNotFoundError(f"benchmark config {path}: no such file")
+    with open(p, encoding="utf-8") as fh:
+        raw = yaml.safe_load(fh)
+    if not isinstance(raw, dict):
+        raise BenchmarkConfigError(f"benchmark config {path}: expected a mapping")
+    cfg = _deep_merge(raw, raw.get("quick") or {}) if quick else copy.deepcopy(raw)
+    cfg.pop("quick", None)
+    cfg["source"] = str(path)
+    cfg.setdefault("env_id", ENV_ID_V1)
+    cfg.setdefault("env_kwargs", {"observation": "field"})
+    if "scenario" in cfg["env_kwargs"]:
+        raise BenchmarkConfigError("benchmark config: env_kwargs.scenario: expected none (the protocol sets "
+                                   "train for tuning/training and test for the evaluation)")
+    w = cfg.setdefault("workers", 2)
+    if not (isinstance(w, int) and w >= 1):
+        raise BenchmarkConfigError(f"benchmark config: workers = {w!r}: expected a positive integer")
+    for part in ("tuning", "test"):
+        if not isinstance(cfg.get(part), dict) or "seeds" not in cfg[part]:
+            raise BenchmarkConfigError(f"benchmark config: {part}: expected a mapping with seeds")
+        cfg[part]["seeds"] = _seeds(cfg[part]["seeds"], f"{part}.seeds")
+    cfg["tuning"].setdefault("scenario", "train")
+    refuse_test_split(cfg["tuning"]["scenario"], "tune")
+    val = cfg.setdefault("validation", {"seeds": []})
+    val["seeds"] = _seeds(val["seeds"], "validation.seeds") if val.get("seeds") else []
+    sets = {"tuning": set(cfg["tuning"]["seeds"]), "validation": set(val["seeds"]), "test": set(cfg["test"]["seeds"])}
+    for a, b in (("tuning", "test"), ("validation", "test"), ("tuning", "validation")):
+        if sets[a] & sets[b]:
+            raise BenchmarkConfigError(f"benchmark config: {a}.seeds and {b}.seeds share "
+                                       f"{sorted(sets[a] & sets[b])[:5]}: expected disjoint seed sets")
+    bl = cfg.setdefault("baselines", {})
+    for name in bl:
+        if name not in BASELINE_NAMES:
+            raise BenchmarkConfigError(f"benchmark config: baselines.{name}: expected one of {BASELINE_NAMES}")
+    ag = cfg.setdefault("agents", {})
+    sel = ag.setdefault("selection", "mean")
+    if sel not in ("mean", "best_on_validation"):
+        raise BenchmarkConfigError(f"benchmark config: agents.selection = {sel!r}: expected mean or "
+                                   "best_on_validation")
+    if sel == "best_on_validation" and not val["seeds"]:
+        raise BenchmarkConfigError("benchmark config: agents.selection = best_on_validation needs "
+                                   "validation.seeds")
+    runs = ag.setdefault("runs", {})
+    if not isinstance(runs, dict):
+        raise BenchmarkConfigError(f"benchmark config: agents.runs = {runs!r}: expected a mapping algo -> run")
+    from .train import load_train_config
+
+    for algo, run in runs.items():
+        if not isinstance(run, dict) or "config" not in run:
+            raise BenchmarkConfigError(f"benchmark config: agents.runs.{algo}: expected {{config: YAML, seeds: [...]}}")
+        run["config"] = str(_resolve(run["config"]))
+        run["seeds"] = _seeds(run.get("seeds", [0, 1, 2]), f"agents.runs.{algo}.seeds")
+        tc = load_train_config(run["config"])  # checks the YAML now, not after the tuning
+        refuse_test_split(tc.env_kwargs.get("scenario", "train"), "train")
+        res = run.get("residual")
+        if res is not None and (not isinstance(res, dict) or res.get("base", "best_tuned") not in
+                                ("best_tuned", "best_constant", "pump_off", "fillage_pi")):
+            raise BenchmarkConfigError(f"benchmark config: agents.runs.{algo}.residual = {res!r}: expected "
+                                       "{base: best_tuned | best_constant | pump_off | fillage_pi, scale: S}")
+    return cfg
+
+
+def _resolve(path: str | Path) -> Path:
+    p = Path(path)
+    return p if p.is_absolute() or p.exists() else REPO / p
+
