@@ -281,8 +281,8 @@ def behaviour_table(report: dict[str, Any]) -> list[str]:
         lines.append(f"| {n} | " + " | ".join(cells) + " |")
     gap = _fillage_gap(pol)
     if gap is not None:
-        lines += ["", f"The field baselines act on `fillage_est`, the controller's estimate from the surface card; "
-                  f"over all policies' test episodes it differs from the true pump fillage by {gap:.2f} on average "
+        lines += ["", "The field baselines act on `fillage_est`, the controller's estimate read off the downhole card "
+                  f"(`task.fillage_estimator`); over all policies' test episodes it differs from the true pump fillage by {gap:.2f} on average "
                   "(episode means)" + (": where it stays near 1 while the pump is pounding, pump-off control and the "
                                        "fillage PI cannot see the pump-off, while an agent reading the whole card can."
                                        if gap > 0.1 else ".")]
