@@ -44,3 +44,22 @@ def card_rgb(trace: dict, title: str = "", last_stroke_s: float | None = None) -
 
 def save_cards(trace: dict, path: str, title: str = "", last_stroke_s: float | None = None) -> None:
     card_figure(trace, title, last_stroke_s).savefig(path)
+
+
+class CardWindow:
+    """Mixin for an env rendering its cards in a matplotlib window (``render_mode="human"``): the window closes
+    with the env and never travels with a pickled or copied env (SubprocVecEnv, deepcopy)."""
+
+    _fig = None
+
+    def close(self) -> None:
+        if self._fig is not None:
+            import matplotlib.pyplot as plt
+
+            plt.close(self._fig)
+            self._fig = None
+
+    def __getstate__(self) -> dict:
+        state = self.__dict__.copy()
+        state["_fig"] = None  # a window does not travel
+        return state

@@ -92,6 +92,7 @@ from gymnasium import spaces
 from ..config import WellConfig, check_stroke_steps, field_bounds, load_config
 from ..errors import ConfigError, SolverFailure
 from ..metrics import resample_prescribed_card
+from ..render import CardWindow
 from ..reward import RodFailureMonitor, SuckerRodReward
 from ..simulator import Simulator
 from ..stroke_summary import summarize
@@ -110,7 +111,7 @@ def _overrides_from_kwargs(kwargs: dict) -> dict:
     return {k.replace("__", "."): v for k, v in kwargs.items()}
 
 
-class SuckerRodEnv(gym.Env):
+class SuckerRodEnv(CardWindow, gym.Env):
     metadata: ClassVar[dict[str, Any]] = {"render_modes": ["rgb_array", "human"], "render_fps": 2}
 
     def __init__(self, config: str | WellConfig = "default", overrides: dict | None = None,
@@ -285,15 +286,3 @@ class SuckerRodEnv(gym.Env):
             self._fig.suptitle(title)
             plt.pause(0.001)
         return None
-
-    def close(self) -> None:
-        if self._fig is not None:
-            import matplotlib.pyplot as plt
-
-            plt.close(self._fig)
-            self._fig = None
-
-    def __getstate__(self) -> dict:
-        state = self.__dict__.copy()
-        state["_fig"] = None  # a window does not travel
-        return state

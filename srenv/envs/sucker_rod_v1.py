@@ -80,6 +80,7 @@ from ..economics import COST_TERMS, REWARD_TERMS, EconomicReward
 from ..errors import ConfigError, SolverFailure
 from ..interval import IntervalResult, IntervalRunner, StrokeFigures
 from ..metrics import resample_prescribed_card
+from ..render import CardWindow
 from ..simulator import Simulator
 
 CARD_POINTS = 32
@@ -124,7 +125,7 @@ def _overrides_from_kwargs(kwargs: dict) -> dict:
     return {k.replace("__", "."): v for k, v in kwargs.items()}
 
 
-class SuckerRodV1Env(gym.Env):
+class SuckerRodV1Env(CardWindow, gym.Env):
     metadata: ClassVar[dict[str, Any]] = {"render_modes": ["rgb_array", "human"], "render_fps": 2}
 
     def __init__(self, scenario: str = "train", observation: str = "field", render_mode: str | None = None,
@@ -357,15 +358,3 @@ class SuckerRodV1Env(gym.Env):
             self._fig = card_figure(self._last.trace, title)
             plt.pause(0.001)
         return None
-
-    def close(self) -> None:
-        if self._fig is not None:
-            import matplotlib.pyplot as plt
-
-            plt.close(self._fig)
-            self._fig = None
-
-    def __getstate__(self) -> dict:
-        state = self.__dict__.copy()
-        state["_fig"] = None
-        return state
