@@ -8,9 +8,9 @@ import sys
 import matplotlib
 
 matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
+import matplotlib.pyplot as plt
 
-from srenv.action_sweep import sweep  # noqa: E402
+from srenv.action_sweep import sweep
 
 SEEDS = (4, 11, 30)
 
