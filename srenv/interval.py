@@ -217,8 +217,6 @@ class IntervalRunner:
         self._setpoint = setpoint
         while done < n_total - 1e-9:
             remaining = n_total - done
-            if not self._fast_forward and remaining >= 1.0 - 1e-9:
-                need_exact = True
             if need_exact and len(exact) < max(exact_max, 1) and (remaining >= 1.0 - 1e-9 or not exact):
                 r = sim.run_stroke(spm, stroke_m, record=True)
                 f = self._figures(r)

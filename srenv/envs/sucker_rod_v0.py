@@ -96,6 +96,7 @@ from ..render import CardWindow
 from ..reward import RodFailureMonitor, SuckerRodReward
 from ..simulator import Simulator
 from ..stroke_summary import summarize
+from .action_check import checked_action
 
 OBS_TAIL = ("spm", "stroke", "fluid_level", "intake_pressure", "fillage", "pprl", "goodman", "stick_slip")
 OBS_BOUND = 10.0
@@ -235,9 +236,7 @@ class SuckerRodEnv(CardWindow, gym.Env):
     def step(self, action: np.ndarray) -> tuple[np.ndarray, float, bool, bool, dict]:
         if self.sim is None:
             raise RuntimeError("call reset() before step()")
-        action = np.asarray(action, dtype=np.float64).reshape(-1)
-        if action.shape != (2,) or not np.all(np.isfinite(action)):
-            raise ValueError(f"action = {action.tolist()}: expected 2 finite numbers in [-1, 1] (SPM, stroke)")
+        action = checked_action(action, "SPM, stroke")
         self._spm, stroke = self._to_operating_point(action)
         self._stroke = self.sim.surface.stroke_length_m(stroke)
         m, failure = self._run_strokes()

@@ -82,6 +82,7 @@ from ..interval import IntervalResult, IntervalRunner, StrokeFigures
 from ..metrics import resample_prescribed_card
 from ..render import CardWindow
 from ..simulator import Simulator
+from .action_check import checked_action
 
 CARD_POINTS = 32
 OBS_BOUND = 10.0
@@ -234,9 +235,7 @@ class SuckerRodV1Env(CardWindow, gym.Env):
     def step(self, action: np.ndarray) -> tuple[np.ndarray, float, bool, bool, dict]:
         if self.sim is None:
             raise RuntimeError("call reset() before step()")
-        action = np.asarray(action, dtype=np.float64).reshape(-1)
-        if action.shape != (2,) or not np.all(np.isfinite(action)):
-            raise ValueError(f"action = {action.tolist()}: expected 2 finite numbers in [-1, 1] (avg SPM, stroke)")
+        action = checked_action(action, "avg SPM, stroke")
         ctl = self.cfg.control
         avg, stroke = setpoints_from_action(action, ctl)
         avg, stroke = float(avg), float(stroke)

@@ -1,0 +1,14 @@
+"""The one check every srenv env applies to an incoming action (training loops get a clear ValueError, never a
+silent NaN propagated into the simulator)."""
+
+from __future__ import annotations
+
+import numpy as np
+
+
+def checked_action(action: np.ndarray, meaning: str) -> np.ndarray:
+    """`action` as 2 finite float64 numbers, or ``ValueError`` naming the value and what is expected."""
+    a = np.asarray(action, dtype=np.float64).reshape(-1)
+    if a.shape != (2,) or not np.all(np.isfinite(a)):
+        raise ValueError(f"action = {a.tolist()}: expected 2 finite numbers in [-1, 1] ({meaning})")
+    return a
