@@ -111,15 +111,16 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 def cmd_train(args: argparse.Namespace) -> dict:
-    from .rllib_backend import read_backend
+    from .rllib_config import read_backend
     from .train import load_train_config, train
 
     out = args.out or str(Path("runs") / Path(args.config).stem)
     if read_backend(args.config) == "rllib":
         from . import rllib_backend
+        from .rllib_config import load_rllib_config
 
-        rcfg = rllib_backend.load_rllib_config(args.config,
-                                               {"num_env_runners": args.n_envs} if args.n_envs else None)
+        rcfg = load_rllib_config(args.config,
+                                 {"num_env_runners": args.n_envs} if args.n_envs else None)
         return rllib_backend.train(rcfg, out, total_timesteps=args.total_timesteps, resume=args.resume,
                                    address=args.address)
     if args.address:

@@ -155,7 +155,7 @@ def make_policy(spec: str, env: Any, trust: bool = False) -> Policy:
         return RockingMachinePolicy(well_config(env))
     if spec == "fillage":
         return FillagePolicy(well_config(env), fillage_index=fillage_index(env))
-    from .rllib_backend import is_rllib_checkpoint, load_rllib_policy
+    from .rllib_policy import is_rllib_checkpoint, load_rllib_policy
 
     if is_rllib_checkpoint(spec):  # a directory from backend: rllib (its checkpoint/ or step_<N>/)
         return load_rllib_policy(spec, env, trust=trust)

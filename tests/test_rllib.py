@@ -20,7 +20,9 @@ import yaml
 pytest.importorskip("ray.rllib")
 
 from agents.evaluate import evaluate, make_policy
-from agents.rllib_backend import RLlibPolicy, parse_rllib_config, start_ray
+from agents.rllib_backend import start_ray
+from agents.rllib_config import parse_rllib_config
+from agents.rllib_policy import RLlibPolicy
 from agents.train import TrainConfigError, make_env
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -138,7 +140,7 @@ def test_registration_patterns() -> None:
 def test_pickle_only_checkpoint_needs_trust(run: tuple[Path, Path, dict], tmp_path: Path) -> None:
     import shutil
 
-    from agents.rllib_backend import POLICY_JSON
+    from agents.rllib_checkpoints import POLICY_JSON
 
     _, out, _ = run
     bare = tmp_path / "bare"

@@ -1,0 +1,125 @@
+"""The RLlib training YAML (``backend: rllib``): its schema, validation and the AlgorithmConfig it builds.
+
+One YAML describes one run (read with srenv's bounded safe loader; nothing in it is evaluated as code)::
+
+    backend: rllib
+    algo: ppo                        # ppo | appo | sac
+    env_id: srenv/SuckerRod-v0       # the plain id: srenv.rllib.register() makes it known to every runner
+    env_kwargs: {config: default}    # gymnasium.make keyword arguments (RLlib's env_config)
+    n_timesteps: 100000              # environment steps in total, resumed ones included
+    num_env_runners: 2               # sampling processes (0 = sample in the driver)
+    num_envs_per_env_runner: 1
+    seed: 0
+    checkpoint_freq: 20000           # environment steps between checkpoints
+    num_cpus: null                   # local Ray only: CPUs it may schedule (null = max(cores, runners + 1))
+    model_config: {fcnet_hiddens: [64, 64], fcnet_activation: tanh}   # RLlib's DefaultModelConfig
+    training: {lr: 3.0e-4, gamma: 0.95, train_batch_size_per_learner: 512, minibatch_size: 64}
+
+``training`` goes to ``AlgorithmConfig.training`` (checked against its signature).
+"""
+
+from __future__ import annotations
+
+import inspect
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+from .train_config import ENV_ID, TrainConfigError, _expect, _positive_int, _yaml12_float, read_train_yaml
+
+BACKEND = "rllib"
+_HARNESS_KEYS = {"backend", "algo", "env_id", "env_kwargs", "n_timesteps", "num_env_runners",
+                 "num_envs_per_env_runner", "seed", "checkpoint_freq", "num_cpus", "model_config", "training"}
+
+
+def algorithm_configs() -> dict[str, type]:
+    """Supported RLlib algorithms by YAML name (imported lazily: Ray is slow to import)."""
+    from ray.rllib.algorithms.appo import APPOConfig
+    from ray.rllib.algorithms.ppo import PPOConfig
+    from ray.rllib.algorithms.sac import SACConfig
+
+    return {"ppo": PPOConfig, "appo": APPOConfig, "sac": SACConfig}
+
+
+@dataclass
+class RLlibTrainConfig:
+    algo: str
+    env_id: str = ENV_ID
+    env_kwargs: dict[str, Any] = field(default_factory=dict)
+    n_timesteps: int = 100_000
+    num_env_runners: int = 2
+    num_envs_per_env_runner: int = 1
+    seed: int = 0
+    checkpoint_freq: int = 20_000
+    num_cpus: int | None = None
+    model_config: dict[str, Any] = field(default_factory=dict)
+    training: dict[str, Any] = field(default_factory=dict)
+    backend: str = BACKEND
+
+
+def _training_arguments(config_cls: type) -> set[str]:
+    """Keyword arguments ``config_cls().training`` accepts: its own and those of every base class."""
+    names: set[str] = set()
+    for klass in config_cls.__mro__:
+        fn = klass.__dict__.get("training")
+        if fn is not None:
+            names |= {n for n, p in inspect.signature(fn).parameters.items()
+                      if p.kind in (p.KEYWORD_ONLY, p.POSITIONAL_OR_KEYWORD)}
+    return names - {"self"}
+
+
+def parse_rllib_config(data: Any, source: str = "<dict>") -> RLlibTrainConfig:
+    """Validate a YAML mapping into a :class:`RLlibTrainConfig` (one clear error naming the key)."""
+    _expect(isinstance(data, dict), source, type(data).__name__, "a mapping of hyperparameters")
+    unknown = sorted(set(data) - _HARNESS_KEYS)
+    _expect(not unknown, unknown[0] if unknown else "", data.get(unknown[0]) if unknown else None,
+            f"one of {sorted(_HARNESS_KEYS)} (algorithm arguments go under training:)")
+    algo = str(data.get("algo", "")).lower()
+    configs = algorithm_configs()
+    _expect(algo in configs, "algo", data.get("algo"), "one of " + ", ".join(configs))
+    runners = data.get("num_env_runners", 2)
+    _expect(isinstance(runners, int) and not isinstance(runners, bool) and runners >= 0, "num_env_runners",
+            runners, "a non-negative integer")
+    num_cpus = data.get("num_cpus")
+    _expect(num_cpus is None or (isinstance(num_cpus, int) and num_cpus > 0), "num_cpus", num_cpus,
+            "a positive integer or null")
+    for key in ("env_kwargs", "model_config", "training"):
+        _expect(isinstance(data.get(key) or {}, dict), key, data.get(key), "a mapping")
+    training = {k: _yaml12_float(v) for k, v in (data.get("training") or {}).items()}
+    accepted = _training_arguments(configs[algo])
+    for key in sorted(set(training) - accepted):
+        _expect(False, f"training.{key}", training[key], f"an argument of RLlib's {algo.upper()} training()")
+    return RLlibTrainConfig(
+        algo=algo, env_id=str(data.get("env_id", ENV_ID)), env_kwargs=dict(data.get("env_kwargs") or {}),
+        n_timesteps=_positive_int(data, "n_timesteps", 100_000), num_env_runners=runners,
+        num_envs_per_env_runner=_positive_int(data, "num_envs_per_env_runner", 1),
+        seed=int(data.get("seed", 0)), checkpoint_freq=_positive_int(data, "checkpoint_freq", 20_000),
+        num_cpus=num_cpus, model_config=dict(data.get("model_config") or {}), training=training)
+
+
+def build_algorithm_config(cfg: RLlibTrainConfig) -> Any:
+    import srenv.rllib
+
+    if cfg.env_id in srenv.rllib.srenv_ids():
+        srenv.rllib.register([cfg.env_id])  # the plain id, known to every env runner of the cluster
+    return (algorithm_configs()[cfg.algo]()
+            .environment(cfg.env_id, env_config=dict(cfg.env_kwargs))
+            .env_runners(num_env_runners=cfg.num_env_runners,
+                         num_envs_per_env_runner=cfg.num_envs_per_env_runner)
+            .framework("torch")
+            .rl_module(model_config=dict(cfg.model_config))
+            .training(**cfg.training)
+            .debugging(seed=cfg.seed))
+
+
+def read_backend(path: str | Path) -> str:
+    """The ``backend`` key of a training YAML (``sb3`` when absent)."""
+    data = read_train_yaml(path)
+    backend = data.get("backend", "sb3") if isinstance(data, dict) else "sb3"
+    if backend not in ("sb3", BACKEND):
+        raise TrainConfigError(f"train config: backend = {backend!r}: expected sb3 or rllib")
+    return str(backend)
+
+
+def load_rllib_config(path: str | Path, overrides: dict[str, Any] | None = None) -> RLlibTrainConfig:
+    return parse_rllib_config(read_train_yaml(path, overrides), str(path))

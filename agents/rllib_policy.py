@@ -1,0 +1,105 @@
+"""Evaluating an RLlib checkpoint: its policy with SB3's ``predict`` interface, read as data by default
+(``srenv_policy.json`` + ``srenv_policy_weights.pt``), RLlib's own pickles only when trusted."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from .rllib_checkpoints import POLICY_JSON, POLICY_WEIGHTS
+from .rllib_config import algorithm_configs
+
+
+def is_rllib_checkpoint(path: str | Path) -> bool:
+    """A directory written by ``Algorithm.save_to_path`` (this backend's ``checkpoint/`` or ``step_<N>/``)."""
+    p = Path(path)
+    return p.is_dir() and (p / "learner_group").is_dir()
+
+
+class RLlibPolicy:
+    """The RL module of an RLlib checkpoint with SB3's ``predict`` interface (no Ray process needed).
+
+    Deterministic actions are the mode of the module's action distribution (the Gaussian mean for PPO),
+    clipped into the env's action box as RLlib's env runners do.
+    """
+
+    def __init__(self, module: Any, action_space: Any, path: str = "") -> None:
+        self.module = module
+        self.action_space = action_space
+        self.path = path
+
+    def predict(self, observation: np.ndarray, state: Any = None, episode_start: np.ndarray | None = None,
+                deterministic: bool = True) -> tuple[np.ndarray, Any]:
+        import torch
+
+        obs = torch.as_tensor(np.asarray(observation, dtype=np.float32)[None])
+        with torch.no_grad():
+            out = self.module.forward_inference({"obs": obs})
+            dist = self.module.get_inference_action_dist_cls().from_logits(out["action_dist_inputs"])
+            action = (dist.to_deterministic() if deterministic else dist).sample()
+        a = np.asarray(action[0].numpy(), dtype=self.action_space.dtype)
+        return np.clip(a, self.action_space.low, self.action_space.high), state
+
+    def __repr__(self) -> str:
+        return f"RLlibPolicy({type(self.module).__name__}, {self.path})"
+
+
+def _module_from_data(p: Path, env: Any) -> Any:
+    """Rebuild the module from ``srenv_policy.json`` (plain JSON) and load its tensors with
+    ``torch.load(weights_only=True)``, which refuses anything but tensors and plain containers."""
+    import torch
+
+    from .evaluate import check_spaces
+
+    meta = json.loads((p / POLICY_JSON).read_text())
+    configs = algorithm_configs()
+    if meta.get("algo") not in configs or not isinstance(meta.get("model_config"), dict):
+        raise ValueError(f"{p / POLICY_JSON}: expected algo one of {', '.join(configs)} and a model_config mapping")
+    saved_obs, saved_act = tuple(meta["observation_shape"]), tuple(meta["action_shape"])
+    check_spaces(saved_obs, saved_act, env.observation_space.shape, env.action_space.shape, p)
+    if not (np.allclose(meta["action_low"], env.action_space.low)
+            and np.allclose(meta["action_high"], env.action_space.high)):
+        raise ValueError(f"{p} does not fit this env: action bounds {meta['action_low']}..{meta['action_high']} "
+                         f"vs {env.action_space}")
+    spec = configs[meta["algo"]]().rl_module(model_config=meta["model_config"]).get_default_rl_module_spec()
+    spec.observation_space, spec.action_space = env.observation_space, env.action_space
+    spec.model_config, spec.inference_only = meta["model_config"], bool(meta.get("inference_only", False))
+    module = spec.build()
+    module.load_state_dict(torch.load(p / POLICY_WEIGHTS, weights_only=True, map_location="cpu"))
+    module.eval()
+    return module
+
+
+def load_rllib_policy(path: str | Path, env: Any, trust: bool = False) -> RLlibPolicy:
+    """The default policy of an RLlib checkpoint directory, checked against ``env``'s spaces.
+
+    By default read as data (``srenv_policy.json`` + ``srenv_policy_weights.pt``, written by this backend);
+    ``trust=True`` (``--trust-model``) loads RLlib's own pickled module instead - pickles can run code when
+    read, so only for checkpoints you made (e.g. written by RLlib outside this backend).
+    """
+    p = Path(path)
+    if not trust:
+        if not ((p / POLICY_JSON).is_file() and (p / POLICY_WEIGHTS).is_file()):
+            raise ValueError(f"--policy {p}: an RLlib checkpoint without {POLICY_JSON} / {POLICY_WEIGHTS} holds "
+                             "only pickles, which can run arbitrary code when loaded; pass --trust-model if you "
+                             "made it yourself")
+        return RLlibPolicy(_module_from_data(p, env), env.action_space, str(p))
+    from ray.rllib.core import (
+        COMPONENT_LEARNER,
+        COMPONENT_LEARNER_GROUP,
+        COMPONENT_RL_MODULE,
+        DEFAULT_MODULE_ID,
+    )
+    from ray.rllib.core.rl_module.rl_module import RLModule
+
+    from .evaluate import check_spaces
+
+    module_dir = p / COMPONENT_LEARNER_GROUP / COMPONENT_LEARNER / COMPONENT_RL_MODULE / DEFAULT_MODULE_ID
+    if not module_dir.is_dir():
+        raise FileNotFoundError(f"--policy {p}: an RLlib checkpoint without {module_dir.relative_to(p)}")
+    module = RLModule.from_checkpoint(str(module_dir.resolve()))
+    check_spaces(module.observation_space, module.action_space, env.observation_space, env.action_space, p)
+    return RLlibPolicy(module, env.action_space, str(p))
