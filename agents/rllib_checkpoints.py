@@ -31,9 +31,12 @@ def step_checkpoints(out_dir: str | Path) -> list[tuple[int, Path]]:
 def export_policy(algo: Any, cfg: RLlibTrainConfig, directory: Path) -> None:
     """The policy as data beside RLlib's pickles: the module's tensors (``torch.save`` of a state dict,
     read back with ``weights_only=True``) and a JSON description to rebuild the module from, so that
-    ``evaluate`` needs no ``--trust-model`` for a checkpoint this backend wrote."""
+    ``evaluate`` needs no ``--trust-model`` for a checkpoint this backend wrote. With ``normalize`` on, the
+    observation normaliser's statistics go into the same JSON (the module was trained on its output)."""
     import torch
     from ray.rllib.core import DEFAULT_MODULE_ID
+
+    from .rllib_obs_filter import OBS_NORMALIZER_KEY, export_stats
 
     module = algo.get_module(DEFAULT_MODULE_ID)  # the env runners' copy: inference-only for PPO
     torch.save({k: v.detach().cpu() for k, v in module.state_dict().items()}, directory / POLICY_WEIGHTS)
@@ -45,7 +48,8 @@ def export_policy(algo: Any, cfg: RLlibTrainConfig, directory: Path) -> None:
         "algo": cfg.algo, "model_config": model_config, "inference_only": bool(module.inference_only),
         "module_class": type(module).__name__,
         "observation_shape": list(obs.shape), "action_shape": list(act.shape),
-        "action_low": np.asarray(act.low).tolist(), "action_high": np.asarray(act.high).tolist()}, indent=1))
+        "action_low": np.asarray(act.low).tolist(), "action_high": np.asarray(act.high).tolist(),
+        OBS_NORMALIZER_KEY: export_stats(algo)}, indent=1))
 
 
 def save_checkpoint(algo: Any, cfg: RLlibTrainConfig, path: Path, num_timesteps: int, iterations: int) -> Path:

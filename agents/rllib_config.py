@@ -14,8 +14,12 @@ One YAML describes one run (read with srenv's bounded safe loader; nothing in it
     num_cpus: null                   # local Ray only: CPUs it may schedule (null = max(cores, runners + 1))
     model_config: {fcnet_hiddens: [64, 64], fcnet_activation: tanh}   # RLlib's DefaultModelConfig
     training: {lr: 3.0e-4, gamma: 0.95, train_batch_size_per_learner: 512, minibatch_size: 64}
+    normalize: {clip_std: 10}        # or true (clip_std 10) / false (default): observation mean-std filter
 
-``training`` goes to ``AlgorithmConfig.training`` (checked against its signature).
+``training`` goes to ``AlgorithmConfig.training`` (checked against its signature). ``normalize`` puts
+:class:`agents.rllib_obs_filter.ObsMeanStdFilter` first in the env runners' env-to-module pipeline:
+observations minus their running mean, over their running standard deviation, clipped to
+``+-clip_std`` standard deviations (rewards are not normalised).
 """
 
 from __future__ import annotations
@@ -29,7 +33,9 @@ from .train_config import ENV_ID, TrainConfigError, _expect, _positive_int, _yam
 
 BACKEND = "rllib"
 _HARNESS_KEYS = {"backend", "algo", "env_id", "env_kwargs", "n_timesteps", "num_env_runners",
-                 "num_envs_per_env_runner", "seed", "checkpoint_freq", "num_cpus", "model_config", "training"}
+                 "num_envs_per_env_runner", "seed", "checkpoint_freq", "num_cpus", "model_config", "training",
+                 "normalize"}
+DEFAULT_CLIP_STD = 10.0  # RLlib's and SB3's default clip of normalised observations
 
 
 def algorithm_configs() -> dict[str, type]:
@@ -55,6 +61,7 @@ class RLlibTrainConfig:
     model_config: dict[str, Any] = field(default_factory=dict)
     training: dict[str, Any] = field(default_factory=dict)
     backend: str = BACKEND
+    normalize: dict[str, Any] | None = None  # {"clip_std": c}; None = observations as the env gives them
 
 
 def _training_arguments(config_cls: type) -> set[str]:
@@ -66,6 +73,20 @@ def _training_arguments(config_cls: type) -> set[str]:
             names |= {n for n, p in inspect.signature(fn).parameters.items()
                       if p.kind in (p.KEYWORD_ONLY, p.POSITIONAL_OR_KEYWORD)}
     return names - {"self"}
+
+
+def _normalize(value: Any) -> dict[str, Any] | None:
+    """``normalize: true | false | {clip_std: c}`` -> ``{"clip_std": c}`` or None."""
+    if value is None or value is False:
+        return None
+    if value is True:
+        return {"clip_std": DEFAULT_CLIP_STD}
+    _expect(isinstance(value, dict) and set(value) <= {"clip_std"}, "normalize", value,
+            "true, false or a mapping {clip_std: <standard deviations>}")
+    clip = _yaml12_float(value.get("clip_std", DEFAULT_CLIP_STD))
+    _expect(isinstance(clip, (int, float)) and not isinstance(clip, bool) and 0 < clip < float("inf"),
+            "normalize.clip_std", clip, "a positive number of standard deviations")
+    return {"clip_std": float(clip)}
 
 
 def parse_rllib_config(data: Any, source: str = "<dict>") -> RLlibTrainConfig:
@@ -94,7 +115,8 @@ def parse_rllib_config(data: Any, source: str = "<dict>") -> RLlibTrainConfig:
         n_timesteps=_positive_int(data, "n_timesteps", 100_000), num_env_runners=runners,
         num_envs_per_env_runner=_positive_int(data, "num_envs_per_env_runner", 1),
         seed=int(data.get("seed", 0)), checkpoint_freq=_positive_int(data, "checkpoint_freq", 20_000),
-        num_cpus=num_cpus, model_config=dict(data.get("model_config") or {}), training=training)
+        num_cpus=num_cpus, model_config=dict(data.get("model_config") or {}), training=training,
+        normalize=_normalize(data.get("normalize")))
 
 
 def build_algorithm_config(cfg: RLlibTrainConfig) -> Any:
@@ -102,10 +124,15 @@ def build_algorithm_config(cfg: RLlibTrainConfig) -> Any:
 
     if cfg.env_id in srenv.rllib.srenv_ids():
         srenv.rllib.register([cfg.env_id])  # the plain id, known to every env runner of the cluster
+    runners: dict[str, Any] = {"num_env_runners": cfg.num_env_runners,
+                               "num_envs_per_env_runner": cfg.num_envs_per_env_runner}
+    if cfg.normalize is not None:
+        from .rllib_obs_filter import connector_factory
+
+        runners["env_to_module_connector"] = connector_factory(cfg.normalize["clip_std"])
     return (algorithm_configs()[cfg.algo]()
             .environment(cfg.env_id, env_config=dict(cfg.env_kwargs))
-            .env_runners(num_env_runners=cfg.num_env_runners,
-                         num_envs_per_env_runner=cfg.num_envs_per_env_runner)
+            .env_runners(**runners)
             .framework("torch")
             .rl_module(model_config=dict(cfg.model_config))
             .training(**cfg.training)

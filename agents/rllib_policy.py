@@ -23,19 +23,22 @@ class RLlibPolicy:
     """The RL module of an RLlib checkpoint with SB3's ``predict`` interface (no Ray process needed).
 
     Deterministic actions are the mode of the module's action distribution (the Gaussian mean for PPO),
-    clipped into the env's action box as RLlib's env runners do.
+    clipped into the env's action box as RLlib's env runners do. ``obs_filter`` is the observation
+    normaliser the module was trained behind (frozen statistics), None when training had none.
     """
 
-    def __init__(self, module: Any, action_space: Any, path: str = "") -> None:
+    def __init__(self, module: Any, action_space: Any, path: str = "", obs_filter: Any = None) -> None:
         self.module = module
         self.action_space = action_space
         self.path = path
+        self.obs_filter = obs_filter
 
     def predict(self, observation: np.ndarray, state: Any = None, episode_start: np.ndarray | None = None,
                 deterministic: bool = True) -> tuple[np.ndarray, Any]:
         import torch
 
-        obs = torch.as_tensor(np.asarray(observation, dtype=np.float32)[None])
+        x = np.asarray(observation, dtype=np.float32)
+        obs = torch.as_tensor((self.obs_filter(x) if self.obs_filter is not None else x)[None])
         with torch.no_grad():
             out = self.module.forward_inference({"obs": obs})
             dist = self.module.get_inference_action_dist_cls().from_logits(out["action_dist_inputs"])
@@ -47,12 +50,15 @@ class RLlibPolicy:
         return f"RLlibPolicy({type(self.module).__name__}, {self.path})"
 
 
-def _module_from_data(p: Path, env: Any) -> Any:
+def _module_from_data(p: Path, env: Any) -> tuple[Any, Any]:
     """Rebuild the module from ``srenv_policy.json`` (plain JSON) and load its tensors with
-    ``torch.load(weights_only=True)``, which refuses anything but tensors and plain containers."""
+    ``torch.load(weights_only=True)``, which refuses anything but tensors and plain containers; with the
+    observation normaliser recorded there (None when training had none)."""
+    import gymnasium as gym
     import torch
 
     from .evaluate import check_spaces
+    from .rllib_obs_filter import OBS_NORMALIZER_KEY, ObsNormalizer
 
     meta = json.loads((p / POLICY_JSON).read_text())
     configs = algorithm_configs()
@@ -64,13 +70,18 @@ def _module_from_data(p: Path, env: Any) -> Any:
             and np.allclose(meta["action_high"], env.action_space.high)):
         raise ValueError(f"{p} does not fit this env: action bounds {meta['action_low']}..{meta['action_high']} "
                          f"vs {env.action_space}")
+    obs_space, normalizer = env.observation_space, None
+    if meta.get(OBS_NORMALIZER_KEY) is not None:
+        normalizer = ObsNormalizer.from_data(meta[OBS_NORMALIZER_KEY], obs_space.shape, p / POLICY_JSON)
+        # the module was built on the normaliser's output space (as RLlib's MeanStdFilter states it)
+        obs_space = gym.spaces.Box(-normalizer.clip_std, normalizer.clip_std, obs_space.shape, obs_space.dtype)
     spec = configs[meta["algo"]]().rl_module(model_config=meta["model_config"]).get_default_rl_module_spec()
-    spec.observation_space, spec.action_space = env.observation_space, env.action_space
+    spec.observation_space, spec.action_space = obs_space, env.action_space
     spec.model_config, spec.inference_only = meta["model_config"], bool(meta.get("inference_only", False))
     module = spec.build()
     module.load_state_dict(torch.load(p / POLICY_WEIGHTS, weights_only=True, map_location="cpu"))
     module.eval()
-    return module
+    return module, normalizer
 
 
 def load_rllib_policy(path: str | Path, env: Any, trust: bool = False) -> RLlibPolicy:
@@ -86,7 +97,8 @@ def load_rllib_policy(path: str | Path, env: Any, trust: bool = False) -> RLlibP
             raise ValueError(f"--policy {p}: an RLlib checkpoint without {POLICY_JSON} / {POLICY_WEIGHTS} holds "
                              "only pickles, which can run arbitrary code when loaded; pass --trust-model if you "
                              "made it yourself")
-        return RLlibPolicy(_module_from_data(p, env), env.action_space, str(p))
+        module, normalizer = _module_from_data(p, env)
+        return RLlibPolicy(module, env.action_space, str(p), obs_filter=normalizer)
     from ray.rllib.core import (
         COMPONENT_LEARNER,
         COMPONENT_LEARNER_GROUP,
@@ -96,10 +108,14 @@ def load_rllib_policy(path: str | Path, env: Any, trust: bool = False) -> RLlibP
     from ray.rllib.core.rl_module.rl_module import RLModule
 
     from .evaluate import check_spaces
+    from .rllib_obs_filter import RLlibObsFilter
 
     module_dir = p / COMPONENT_LEARNER_GROUP / COMPONENT_LEARNER / COMPONENT_RL_MODULE / DEFAULT_MODULE_ID
     if not module_dir.is_dir():
         raise FileNotFoundError(f"--policy {p}: an RLlib checkpoint without {module_dir.relative_to(p)}")
     module = RLModule.from_checkpoint(str(module_dir.resolve()))
-    check_spaces(module.observation_space, module.action_space, env.observation_space, env.action_space, p)
-    return RLlibPolicy(module, env.action_space, str(p))
+    obs_filter = RLlibObsFilter.from_checkpoint(p, env.observation_space, env.action_space)
+    # behind a normaliser the module's input space is the normaliser's output (a clipped box)
+    expected_obs = obs_filter.observation_space if obs_filter is not None else env.observation_space
+    check_spaces(module.observation_space, module.action_space, expected_obs, env.action_space, p)
+    return RLlibPolicy(module, env.action_space, str(p), obs_filter=obs_filter)
