@@ -151,7 +151,8 @@ class RLlibObsFilter:
         from ray.rllib.connectors.connector_v2 import ConnectorV2
         from ray.rllib.core import COMPONENT_ENV_RUNNER, COMPONENT_ENV_TO_MODULE_CONNECTOR
 
-        for d in (path / COMPONENT_ENV_RUNNER / COMPONENT_ENV_TO_MODULE_CONNECTOR, path / COMPONENT_ENV_TO_MODULE_CONNECTOR):
+        runner_dir = path / COMPONENT_ENV_RUNNER / COMPONENT_ENV_TO_MODULE_CONNECTOR
+        for d in (runner_dir, path / COMPONENT_ENV_TO_MODULE_CONNECTOR):
             if d.is_dir():
                 pipeline = ConnectorV2.from_checkpoint(str(d.resolve()))  # unpickles: trusted only
                 found = [c for c in pipeline.connectors if isinstance(c, MeanStdFilter)]

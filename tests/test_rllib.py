@@ -108,7 +108,8 @@ def test_normaliser_statistics_are_saved_and_applied_by_evaluate(run: tuple[Path
     assert stats["clip_std"] == 10.0 and np.all(std >= 0) and np.count_nonzero(std > 1e-6) > len(std) // 2
     assert np.max(np.abs(mean)) > 0.1  # non-trivial: the observation is not already centred
     env = make_env(config="default", **SHORT)
-    policy, trusted = make_policy(str(out / "checkpoint"), env), make_policy(str(out / "checkpoint"), env, trust=True)
+    policy = make_policy(str(out / "checkpoint"), env)
+    trusted = make_policy(str(out / "checkpoint"), env, trust=True)
     assert type(trusted.obs_filter).__name__ == "RLlibObsFilter"  # RLlib's MeanStdFilter from the pickles
     assert trusted.obs_filter.observation_space == policy.module.observation_space
 
