@@ -75,7 +75,10 @@ def residual_spec(run: dict[str, Any], tuned: dict[str, Any]) -> dict[str, Any] 
     if base not in ("best_constant", "pump_off", "fillage_pi"):
         raise BenchmarkConfigError(f"residual base = {base!r}: expected best_constant, pump_off, fillage_pi "
                                    "or best_tuned")
-    return {"base": base, "params": tuned[base]["params"], "scale": float(res.get("scale", 0.3))}
+    spec = {"base": base, "params": tuned[base]["params"], "scale": float(res.get("scale", 0.3))}
+    if res.get("shaping"):
+        spec["shaping"] = res["shaping"]  # training only: evaluation drives the plain env
+    return spec
 
 
 def residual_overrides(res: dict[str, Any] | None, run: dict[str, Any], cfg: dict[str, Any]) -> dict[str, Any]:
@@ -83,10 +86,13 @@ def residual_overrides(res: dict[str, Any] | None, run: dict[str, Any], cfg: dic
     if not res:
         return {}
     from .residual_v1 import ENV_ID
+    from .shaping_v1 import SHAPED_ENV_ID
     from .train import load_train_config
 
     tc = load_train_config(run["config"])
+    # potential-based shaping (agents/shaping_v1.py) wraps the env the residual acts on, for training only
+    inner = SHAPED_ENV_ID if res.get("shaping") == "potential" else tc.env_id
     return {"env_id": f"agents.residual_v1:{ENV_ID}",
-            "env_kwargs": {**tc.env_kwargs, "inner_env_id": tc.env_id, "base": res["base"],
+            "env_kwargs": {**tc.env_kwargs, "inner_env_id": inner, "base": res["base"],
                            "base_params": res["params"], "scale": res["scale"]}}
 

@@ -112,6 +112,9 @@ def load_benchmark_config(path: str | Path, quick: bool = False) -> dict[str, An
                                 ("best_tuned", "best_constant", "pump_off", "fillage_pi")):
             raise BenchmarkConfigError(f"benchmark config: agents.runs.{algo}.residual = {res!r}: expected "
                                        "{base: best_tuned | best_constant | pump_off | fillage_pi, scale: S}")
+        if res is not None and res.get("shaping") not in (None, "potential"):
+            raise BenchmarkConfigError(f"benchmark config: agents.runs.{algo}.residual.shaping = "
+                                       f"{res.get('shaping')!r}: expected potential or nothing")
     return cfg
 
 

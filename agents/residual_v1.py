@@ -80,8 +80,12 @@ class ResidualEnv(gym.Wrapper):
 def make_residual_env(inner_env_id: str = "srenv/SuckerRod-v1", base: str = "fillage_pi",
                       base_params: dict[str, Any] | None = None, scale: float = 0.3,
                       **env_kwargs: Any) -> ResidualEnv:
-    from .rollout_v1 import make_env
+    from .rollout_v1 import ENV_ID_V1, make_env
+    from .shaping_v1 import SHAPED_ENV_ID
 
+    # a fixed set: the id is a module path for gymnasium, and a training YAML must not choose what is imported
+    if inner_env_id not in (ENV_ID_V1, SHAPED_ENV_ID):
+        raise ValueError(f"residual inner_env_id = {inner_env_id!r}: expected {ENV_ID_V1} or {SHAPED_ENV_ID}")
     return ResidualEnv(make_env(inner_env_id, **env_kwargs), base, base_params or {}, scale)
 
 
