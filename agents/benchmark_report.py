@@ -203,6 +203,9 @@ def write_markdown(report: dict[str, Any], path: Path, figure: str | None) -> No
     if figure:
         parts += [f"![benchmark]({figure})", ""]
     parts += behaviour_table(report)
+    history = (report.get("config") or {}).get("history") or []
+    if history:  # every earlier evaluation on the test split, as the config records it (no silent re-runs)
+        parts += ["## Test evaluations of this benchmark", "", *(f"- {h}" for h in history), ""]
     parts += [PROTOCOL, "", "## Tuned baselines (training wells only)", ""]
     for n, t in tuned.items():
         parts.append(f"- `{n}`: {json.dumps(t.get('params'))}" + (f" (tuning score {t['score']:.1f})"
@@ -256,7 +259,11 @@ PROTOCOL = """## Protocol
   over its seeds' models (the training procedure, not a lucky seed); the shipped single model
   `models/<name>_v1.zip` is the seed best on the validation episodes (training wells). A `*_residual`
   agent acts as `clip(b + scale * r)`: the tuned baseline's action `b` plus the network's learned
-  correction `r` (residual policy learning; it sees `b`), trained the same way.
+  correction `r` (residual policy learning; it sees `b`), trained the same way. A `*_shaped` agent trained on
+  a potential-based shaping of the reward (`agents/shaping_v1.py`: `r + Phi(s') - Phi(s)`, `Phi` = the value of
+  the present reservoir inflow for the time left), which telescopes to the true return minus the first state's
+  potential and so ranks policies as the true return does; it is evaluated, like every policy, on the env's
+  own reward.
 - **Statistics.** Mean return with a normal 95 % interval; paired differences with their 95 %
   interval over the test episodes (`*` = above zero); the IQM over (training seed, episode)."""
 
