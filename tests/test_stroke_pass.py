@@ -12,13 +12,13 @@ import numpy as np
 import pytest
 
 import srenv  # noqa: F401 - registers the envs
-from srenv import metrics
+from srenv.analysis import metrics
+from srenv.analysis.pump_card import analyse_pump_card
+from srenv.analysis.stroke_pass import pump_card_figures
+from srenv.analysis.stroke_summary import SLIP_FLOOR_M, _card_class, _taper_top_data, slip_window_s, summarize
 from srenv.config import load_config
-from srenv.inflow import SECONDS_PER_DAY
-from srenv.pump_card import analyse_pump_card
-from srenv.simulator import Simulator, concat_traces
-from srenv.stroke_pass import pump_card_figures
-from srenv.stroke_summary import SLIP_FLOOR_M, _card_class, _taper_top_data, slip_window_s, summarize
+from srenv.physics.inflow import SECONDS_PER_DAY
+from srenv.simulation.simulator import Simulator, concat_traces
 
 RTOL = 1e-12
 

@@ -89,13 +89,13 @@ import gymnasium as gym
 import numpy as np
 from gymnasium import spaces
 
+from ..analysis.metrics import resample_prescribed_card
+from ..analysis.render import CardWindow
+from ..analysis.stroke_summary import summarize
 from ..config import WellConfig, check_stroke_steps, field_bounds, load_config
 from ..errors import ConfigError, SolverFailure
-from ..metrics import resample_prescribed_card
-from ..render import CardWindow
-from ..reward import RodFailureMonitor, SuckerRodReward
-from ..simulator import Simulator
-from ..stroke_summary import summarize
+from ..simulation.simulator import Simulator
+from ..task.reward import RodFailureMonitor, SuckerRodReward
 from .action_check import checked_action
 
 OBS_TAIL = ("spm", "stroke", "fluid_level", "intake_pressure", "fillage", "pprl", "goodman", "stick_slip")
@@ -267,7 +267,7 @@ class SuckerRodEnv(CardWindow, gym.Env):
     def render(self) -> np.ndarray | None:
         if self._trace is None:
             return None
-        from ..render import card_figure, card_rgb
+        from ..analysis.render import card_figure, card_rgb
 
         title = f"{self.cfg.name}: {self._spm:.2f} SPM, {self._stroke:.2f} m"
         if self.render_mode == "rgb_array":
