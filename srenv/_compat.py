@@ -1,4 +1,4 @@
-"""Deprecated import paths of the flat layout (before the packages of docs/scale.md, "Layout").
+"""Deprecated import paths of the flat layout (before the packages: README and docs/scale.md, "Layout").
 
 ``srenv`` was one flat package; its modules now live in subpackages named for what they hold (``srenv.physics``,
 ``srenv.numerics``, ...). Every old dotted name keeps working, as an alias: ``import srenv.simulator`` returns the

@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import ast
 import importlib
+import pickle
 import pkgutil
 import re
 import subprocess
@@ -44,6 +45,12 @@ def test_a_moved_subpackage_aliases_its_modules() -> None:
     assert old_valve is valve and rod_friction is importlib.import_module("srenv.physics.laws.rod_friction")
     assert new_name("srenv.laws.gas_spring") == "srenv.physics.laws.gas_spring"
     assert new_name("srenv.config") is None and new_name("srenv.simulatorx") is None
+
+
+def test_a_pickle_naming_the_old_module_loads_the_new_object() -> None:
+    from srenv.analysis.pump_card import analyse_pump_card
+
+    assert pickle.loads(b"csrenv.pump_card\nanalyse_pump_card\n.") is analyse_pump_card  # protocol 0: GLOBAL
 
 
 def test_monkeypatching_the_old_name_patches_the_new_module(monkeypatch: pytest.MonkeyPatch) -> None:
