@@ -1,4 +1,4 @@
-"""The compiled per-stroke summary (srenv/stroke_pass.py) gives the values of the metrics functions it replaced.
+"""The compiled per-stroke summary (srenv/analysis/stroke_pass.py) gives the values of the metrics functions it replaced.
 
 The reference is the summary as it was computed before the one-pass version: the public metrics functions
 (`metrics.card_metrics`, `metrics.stick_slip_index`, `pump_card.analyse_pump_card`, `metrics.goodman_loading_pct`)
