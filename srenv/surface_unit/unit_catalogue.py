@@ -20,7 +20,7 @@ from ..shipped import shipped_dir
 from .beam_unit import BeamUnitGeometry, ConventionalUnit
 
 PACKAGE_CATALOGUE_PATH = shipped_dir("units") / "catalogue.yaml"
-REPO_CATALOGUE_PATH = Path(__file__).parents[1] / "configs" / "units" / "catalogue.yaml"
+REPO_CATALOGUE_PATH = Path(__file__).parents[2] / "configs" / "units" / "catalogue.yaml"  # srenv/surface_unit/ up two
 
 IN_LB_TO_NM = 0.0254 * 4.4482216152605
 LBF_TO_N = 4.4482216152605
