@@ -195,7 +195,7 @@ def stats_record(vecnormalize: Any) -> dict[str, Any]:
 
 def write_stats(vecnormalize: Any, path: str | Path) -> None:
     """Write the statistics JSON atomically (temporary file in the target directory, then rename)."""
-    from srenv.cli import atomic_write
+    from srenv.outputs import atomic_write
 
     text = json.dumps(stats_record(vecnormalize), allow_nan=False)
     atomic_write(path, lambda tmp: Path(tmp).write_text(text))

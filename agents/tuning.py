@@ -30,7 +30,7 @@ from .rollout_v1 import ENV_ID_V1, Runner, episode_jobs
 def refuse_test_split(scenario: str, purpose: str = "tune") -> None:
     """Raise ``ValueError`` when tuning or training would touch the held-out test split."""
     try:
-        from srenv.well_family import check_split
+        from srenv.task.well_family import check_split
     except ImportError:  # an env without the family module (the tests' fake): our guard alone
         check_split = None
     if check_split is not None and scenario in ("train", "test"):  # a fixed well name is no split

@@ -19,6 +19,7 @@ args = ap.parse_args()
 reps, strokes = args.repeats, args.strokes
 code = r'''
 import sys, time, json
+# the flat module names: the only ones a checkout from before the packages has (and aliases since, srenv/_compat.py)
 from srenv.config import load_config
 from srenv.simulator import Simulator
 from srenv.bench import CASES

@@ -10,7 +10,7 @@ from __future__ import annotations
 import argparse
 
 from srenv.config import load_config
-from srenv.simulator import Simulator
+from srenv.simulation.simulator import Simulator
 
 
 def peak_loads(name: str, h: float, dt: float) -> tuple[float, float]:

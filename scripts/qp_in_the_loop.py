@@ -22,7 +22,7 @@ import numpy as np
 
 import srenv  # noqa: F401  (registers the env)
 from srenv.config import load_config
-from srenv.simulator import Simulator
+from srenv.simulation.simulator import Simulator
 
 MODES = {"default": {}, "max_corrections_0": {"simulation.max_corrections": 0},
          "always_qp": {"simulation.always_qp": True}}

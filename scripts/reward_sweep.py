@@ -10,7 +10,7 @@ import matplotlib
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt
 
-from srenv.action_sweep import sweep
+from srenv.tools.action_sweep import sweep
 
 SEEDS = (4, 11, 30)
 

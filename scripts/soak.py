@@ -25,7 +25,7 @@ import gymnasium as gym
 import numpy as np
 
 import srenv  # noqa: F401 - registers srenv/SuckerRod-v0
-from srenv.simulator import Simulator
+from srenv.simulation.simulator import Simulator
 
 ENERGY_RTOL = 1e-6
 RSS_GROWTH_LIMIT_PCT = 5.0

@@ -1,7 +1,11 @@
 """srenv: exact nonsmooth finite-element sucker-rod pump simulator and Gymnasium environment."""
 
+from . import _compat
 from .config import WellConfig, load_config
 from .errors import ConfigError, SolverFailure
+
+# the deprecated flat module names (srenv.simulator, srenv.metrics, ...) as aliases of the packaged ones
+_compat.install()
 
 __all__ = ["ConfigError", "Simulator", "SolverFailure", "WellConfig", "load_config"]
 __version__ = "0.1.0"
@@ -49,7 +53,7 @@ register_envs()
 def __getattr__(name: str) -> type:
     # lazy: importing srenv must not compile the kernel
     if name == "Simulator":
-        from .simulator import Simulator
+        from .simulation.simulator import Simulator
 
         return Simulator
     raise AttributeError(name)

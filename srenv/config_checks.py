@@ -8,7 +8,7 @@ from typing import Any
 
 from .config_sections import SurfaceConfig, WellConfig
 from .errors import ConfigError
-from .unit_catalogue import conventional_unit
+from .surface_unit.unit_catalogue import conventional_unit
 
 
 def _check_consistency(cfg: WellConfig) -> None:
@@ -67,7 +67,7 @@ def _check_consistency(cfg: WellConfig) -> None:
     if cfg.surface.motion == "conventional":
         _check_conventional_unit(cfg.surface)
     if cfg.surface.motion == "measured":  # a bad card file is refused at load time, before any work
-        from .measured_motion import load_measured_motion
+        from .surface_unit.measured_motion import load_measured_motion
 
         load_measured_motion(cfg.surface.measured_card_csv, cfg.surface.measured_spm)
     c = cfg.control

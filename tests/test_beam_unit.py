@@ -9,8 +9,8 @@ import math
 import numpy as np
 import pytest
 
-from srenv.beam_unit import BeamUnitGeometry, ConventionalUnit, harmonic_deviation
-from srenv.unit_catalogue import (
+from srenv.surface_unit.beam_unit import BeamUnitGeometry, ConventionalUnit, harmonic_deviation
+from srenv.surface_unit.unit_catalogue import (
     PACKAGE_CATALOGUE_PATH,
     REPO_CATALOGUE_PATH,
     get_unit,

@@ -8,8 +8,8 @@ from pathlib import Path
 
 import pytest
 
-from srenv.cli import main
 from srenv.config import config_doc
+from srenv.tools.cli import main
 
 COLUMNS = ["t_s", "polished_rod_position_m", "polished_rod_load_n", "pump_position_m", "pump_velocity_m_s",
            "pump_load_n"]

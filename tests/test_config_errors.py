@@ -21,9 +21,9 @@ from typing import Any
 import pytest
 import yaml
 
-from srenv.cli import EXIT_BAD_INPUT, main
 from srenv.config import CONFIG_DIR, load_config, read_raw
 from srenv.errors import ConfigError
+from srenv.tools.cli import EXIT_BAD_INPUT, main
 
 FIG3 = "paper_fig3_vertical"
 FIG4 = "paper_fig4_deviated"
@@ -321,7 +321,7 @@ def _restoring_time_step_s(message: str) -> float:
 def test_time_step_breaking_convexity_names_the_time_step_that_restores_it() -> None:
     """Default (DC iterations to a tolerance, nonconvex_step: error): refused, naming the largest convex
     time step; that time step is then accepted silently, so the refusal is about dt, not the law."""
-    from srenv.simulator import Simulator
+    from srenv.simulation.simulator import Simulator
 
     with pytest.raises(ConfigError) as err:
         Simulator(load_config(FIG6, [*STEEP_FIG6, "simulation.time_step_s=0.02"]))
@@ -335,7 +335,7 @@ def test_time_step_breaking_convexity_names_the_time_step_that_restores_it() -> 
 
 
 def test_nonconvex_step_can_be_run_with_a_warning() -> None:
-    from srenv.simulator import Simulator
+    from srenv.simulation.simulator import Simulator
 
     with pytest.warns(UserWarning, match=r"simulation\.time_step_s = 0\.02 s: the step problem is not convex"):
         Simulator(load_config(FIG6, [*STEEP_FIG6, "simulation.time_step_s=0.02",

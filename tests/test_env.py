@@ -11,11 +11,11 @@ import numpy as np
 import pytest
 
 import srenv  # registers the env
+from srenv.analysis.metrics import ROD_GRADE_TENSILE_PA
+from srenv.analysis.stroke_summary import summarize
 from srenv.config import load_config
 from srenv.envs import SuckerRodEnv
-from srenv.metrics import ROD_GRADE_TENSILE_PA
-from srenv.simulator import Simulator
-from srenv.stroke_summary import summarize
+from srenv.simulation.simulator import Simulator
 
 ENV_ID = "srenv/SuckerRod-v0"
 SHORT = {"control__max_episode_steps": 5}

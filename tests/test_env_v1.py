@@ -10,11 +10,9 @@ import numpy as np
 import pytest
 
 import srenv  # registers the envs
-from srenv import well_family as wf
-from srenv.action_sweep import sweep
-from srenv.card_features import stick_slip_energy_j
+from srenv.analysis.card_features import stick_slip_energy_j
+from srenv.analysis.stroke_summary import summarize
 from srenv.config import load_config, shipped_configs
-from srenv.economics import COST_TERMS, REWARD_TERMS
 from srenv.envs.sucker_rod_v1 import (
     FIELD_OBS_NAMES,
     PRIVILEGED_OBS_NAMES,
@@ -22,9 +20,11 @@ from srenv.envs.sucker_rod_v1 import (
     action_from_setpoints,
     obs_index,
 )
-from srenv.interval import IntervalRunner, string_stiffness_n_m
-from srenv.simulator import Simulator
-from srenv.stroke_summary import summarize
+from srenv.simulation.simulator import Simulator
+from srenv.task import well_family as wf
+from srenv.task.economics import COST_TERMS, REWARD_TERMS
+from srenv.task.interval import IntervalRunner, string_stiffness_n_m
+from srenv.tools.action_sweep import sweep
 
 ID = "srenv/SuckerRod-v1"
 

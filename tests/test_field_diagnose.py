@@ -10,10 +10,10 @@ import sys
 import numpy as np
 import pytest
 
+from srenv.analysis.diagnose import diagnose_card, march
+from srenv.analysis.pump_card import analyse_pump_card
 from srenv.config import load_config
-from srenv.diagnose import diagnose_card, march
-from srenv.pump_card import analyse_pump_card
-from srenv.simulator import Simulator
+from srenv.simulation.simulator import Simulator
 
 
 def _last_stroke(name: str, *overrides: str, strokes: int = 4):

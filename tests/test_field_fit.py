@@ -9,9 +9,9 @@ import sys
 import numpy as np
 import pytest
 
+from srenv.analysis.fit import CardFit, fit_card
 from srenv.config import load_config
-from srenv.fit import CardFit, fit_card
-from srenv.simulator import Simulator
+from srenv.simulation.simulator import Simulator
 
 BASE = ["inflow.model=none"]
 TRUE = {"damping.damping_factor": 0.08, "friction.coefficient": 0.15, "pump.intake_pressure_pa": 1.5e6}

@@ -6,10 +6,10 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from srenv.analysis.pump_card import analyse_pump_card
+from srenv.analysis.stroke_summary import summarize
 from srenv.config import ConfigError, load_config
-from srenv.pump_card import analyse_pump_card
-from srenv.simulator import Simulator
-from srenv.stroke_summary import summarize
+from srenv.simulation.simulator import Simulator
 
 BASE = ["inflow.model=none"]  # the default well's 1.75 in pump at a fixed 1 MPa intake pressure
 

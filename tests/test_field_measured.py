@@ -10,8 +10,8 @@ import pytest
 
 from srenv.config import load_config
 from srenv.errors import ConfigError
-from srenv.measured_motion import stroke_period_s
-from srenv.simulator import Simulator, concat_traces
+from srenv.simulation.simulator import Simulator, concat_traces
+from srenv.surface_unit.measured_motion import stroke_period_s
 
 FIG3 = "paper_fig3_vertical"
 

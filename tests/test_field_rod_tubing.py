@@ -7,12 +7,12 @@ import math
 import numpy as np
 import pytest
 
+from srenv.analysis.diagnose import diagnose_card
+from srenv.analysis.pump_card import analyse_pump_card
+from srenv.analysis.stroke_summary import summarize
 from srenv.config import load_config
-from srenv.diagnose import diagnose_card
-from srenv.pump_card import analyse_pump_card
-from srenv.rod import GRAVITY_M_S2
-from srenv.simulator import Simulator
-from srenv.stroke_summary import summarize
+from srenv.physics.rod import GRAVITY_M_S2
+from srenv.simulation.simulator import Simulator
 
 FIG3 = "paper_fig3_vertical"
 

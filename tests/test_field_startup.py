@@ -10,9 +10,9 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from srenv.analysis.stroke_summary import summarize
 from srenv.config import load_config
-from srenv.simulator import Simulator
-from srenv.stroke_summary import summarize
+from srenv.simulation.simulator import Simulator
 
 FIG3 = "paper_fig3_vertical"
 

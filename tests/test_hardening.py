@@ -25,9 +25,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from srenv.cli import check_finite, main
 from srenv.config import CONFIG_DIR, MAX_YAML_BYTES
 from srenv.errors import VALUE_REPR_CHARS, NumericFailure, short_repr
+from srenv.tools.cli import check_finite, main
 
 ROOT = Path(__file__).resolve().parents[1]
 FIG3 = "paper_fig3_vertical"
@@ -251,10 +251,10 @@ def test_env_refuses_an_spm_range_beyond_the_bound_and_steps_at_any_legal_spm() 
     import gymnasium as gym
 
     import srenv  # noqa: F401
+    from srenv.analysis.stroke_summary import summarize
     from srenv.config import load_config
     from srenv.errors import ConfigError
-    from srenv.simulator import Simulator
-    from srenv.stroke_summary import summarize
+    from srenv.simulation.simulator import Simulator
 
     with pytest.raises(ConfigError, match=r"control.spm_max.*\[0.1, 60\]"):
         gym.make("srenv/SuckerRod-v0", control__spm_max=100)

@@ -15,8 +15,8 @@ import numpy as np
 import pytest
 
 from srenv.config import load_config
-from srenv.hopf import SpringBlock
-from srenv.simulator import Simulator
+from srenv.simulation.hopf import SpringBlock
+from srenv.simulation.simulator import Simulator
 
 CASES = {
     "fig3": ("paper_fig3_vertical", [], 2),

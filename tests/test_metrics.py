@@ -7,7 +7,7 @@ import math
 import numpy as np
 import pytest
 
-from srenv.metrics import (
+from srenv.analysis.metrics import (
     ROD_GRADE_TENSILE_PA,
     card_metrics,
     count_stick_episodes_per_node,

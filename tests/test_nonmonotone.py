@@ -11,10 +11,10 @@ import warnings
 import numpy as np
 import pytest
 
-from srenv import metrics
+from srenv.analysis import metrics
 from srenv.config import load_config
 from srenv.errors import ConfigError
-from srenv.hopf import (
+from srenv.simulation.hopf import (
     SpringBlock,
     find_hopf_velocity,
     hopf_velocity_m_s,
@@ -22,7 +22,7 @@ from srenv.hopf import (
     rod_hopf_velocity_m_s,
     rod_impedance_n_s_m,
 )
-from srenv.simulator import Simulator
+from srenv.simulation.simulator import Simulator
 
 FIG6 = "paper_fig6_nonmonotone"
 FIG7 = "paper_fig7_pullout"

@@ -18,11 +18,11 @@ import pytest
 import qpsolvers
 
 import srenv  # noqa: F401 - registers srenv/SuckerRod-v0
-from srenv.cli import EXIT_SOLVER, main
 from srenv.config import load_config
 from srenv.errors import SolverFailure
-from srenv.simulator import RunResult, Simulator
-from srenv.step_qp import StepQP
+from srenv.numerics.step_qp import StepQP
+from srenv.simulation.simulator import RunResult, Simulator
+from srenv.tools.cli import EXIT_SOLVER, main
 
 FIG3 = "paper_fig3_vertical"
 FIG4 = "paper_fig4_deviated"

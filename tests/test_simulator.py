@@ -7,11 +7,11 @@ import math
 import numpy as np
 import pytest
 
-from srenv import metrics
+from srenv.analysis import metrics
 from srenv.config import load_config
-from srenv.pump import ValveLaw
-from srenv.rod import GRAVITY_M_S2
-from srenv.simulator import Simulator, concat_traces
+from srenv.physics.pump import ValveLaw
+from srenv.physics.rod import GRAVITY_M_S2
+from srenv.simulation.simulator import Simulator, concat_traces
 
 UNIFORM_ROD = {
     "rod": {"tapers": [{"diameter_mm": 19.0, "length_m": 1000.0, "youngs_modulus_pa": 2.0e11,

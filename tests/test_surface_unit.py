@@ -11,13 +11,13 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from srenv import gearbox
-from srenv.beam_unit import ConventionalUnit
+from srenv.analysis.stroke_summary import summarize
 from srenv.config import CONFIG_DIR, SurfaceConfig, load_config
 from srenv.errors import ConfigError
-from srenv.simulator import RunResult, Simulator
-from srenv.stroke_summary import summarize
-from srenv.surface import SurfaceMotion
+from srenv.simulation.simulator import RunResult, Simulator
+from srenv.surface_unit import gearbox
+from srenv.surface_unit.beam_unit import ConventionalUnit
+from srenv.surface_unit.surface import SurfaceMotion
 
 CONFIG = "conventional_fig4"
 N_STROKES = 3  # the first stroke starts from rest; strokes 2-3 are the periodic regime

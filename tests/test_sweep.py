@@ -9,10 +9,10 @@ from pathlib import Path
 
 import pytest
 
-from srenv.cli import main
 from srenv.config import read_raw
 from srenv.errors import ConfigError
-from srenv.sweep import (
+from srenv.tools.cli import main
+from srenv.tools.sweep import (
     SET_COLUMN,
     _run_case_portable,
     _unwrap,

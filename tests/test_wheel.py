@@ -26,7 +26,7 @@ PROBE = r"""
 import json, os, sys
 import gymnasium as gym
 import srenv
-from srenv.cli import main
+from srenv.tools.cli import main
 from srenv.config import shipped_configs
 site = os.environ["SRENV_SITE"]
 assert srenv.__file__.startswith(site), f"srenv imported from {srenv.__file__}, not the wheel"

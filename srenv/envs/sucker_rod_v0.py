@@ -89,13 +89,13 @@ import gymnasium as gym
 import numpy as np
 from gymnasium import spaces
 
+from ..analysis.metrics import resample_prescribed_card
+from ..analysis.render import CardWindow
+from ..analysis.stroke_summary import summarize
 from ..config import WellConfig, check_stroke_steps, field_bounds, load_config
 from ..errors import ConfigError, SolverFailure
-from ..metrics import resample_prescribed_card
-from ..render import CardWindow
-from ..reward import RodFailureMonitor, SuckerRodReward
-from ..simulator import Simulator
-from ..stroke_summary import summarize
+from ..simulation.simulator import Simulator
+from ..task.reward import RodFailureMonitor, SuckerRodReward
 from .action_check import checked_action
 
 OBS_TAIL = ("spm", "stroke", "fluid_level", "intake_pressure", "fillage", "pprl", "goodman", "stick_slip")
@@ -164,11 +164,12 @@ class SuckerRodEnv(CardWindow, gym.Env):
 
     def _to_operating_point(self, action: np.ndarray) -> tuple[float, float]:
         c = self.cfg.control
-        a = np.clip(action, -1.0, 1.0)
-        spm = c.spm_min + 0.5 * (a[0] + 1.0) * (c.spm_max - c.spm_min)
-        stroke = c.stroke_min_m + 0.5 * (a[1] + 1.0) * (c.stroke_max_m - c.stroke_min_m)
+        # clipped to [-1, 1] in Python floats (the same IEEE arithmetic as numpy scalars, at a fraction of the cost)
+        a0, a1 = (min(max(float(x), -1.0), 1.0) for x in action)
+        spm = c.spm_min + 0.5 * (a0 + 1.0) * (c.spm_max - c.spm_min)
+        stroke = c.stroke_min_m + 0.5 * (a1 + 1.0) * (c.stroke_max_m - c.stroke_min_m)
         if c.spm_rate_limit > 0 and self._spm is not None:
-            spm = float(np.clip(spm, self._spm - c.spm_rate_limit, self._spm + c.spm_rate_limit))
+            spm = min(max(spm, self._spm - c.spm_rate_limit), self._spm + c.spm_rate_limit)
         return float(spm), float(stroke)
 
     def _observe(self, m: dict) -> np.ndarray:
@@ -184,7 +185,9 @@ class SuckerRodEnv(CardWindow, gym.Env):
         tail = [unit(self._spm, ctl.spm_min, ctl.spm_max), unit(self._stroke, ctl.stroke_min_m, ctl.stroke_max_m),
                 level / 100.0, m["intake_pressure_pa"] / 1e7, m["fillage"], m["pprl_n"] / rating,
                 m["goodman_max_pct"] / 100.0, m["stick_slip_index"] / 10.0]
-        obs = np.concatenate([card, tail]).astype(np.float32)
+        obs = np.empty(card.size + len(tail), dtype=np.float32)  # filled in place: no concatenated temporaries
+        obs[:card.size] = card
+        obs[card.size:] = tail
         return np.clip(obs, -OBS_BOUND, OBS_BOUND, out=obs)  # every term is finite by construction
 
     def _run_strokes(self) -> tuple[dict, str | None]:
@@ -264,7 +267,7 @@ class SuckerRodEnv(CardWindow, gym.Env):
     def render(self) -> np.ndarray | None:
         if self._trace is None:
             return None
-        from ..render import card_figure, card_rgb
+        from ..analysis.render import card_figure, card_rgb
 
         title = f"{self.cfg.name}: {self._spm:.2f} SPM, {self._stroke:.2f} m"
         if self.render_mode == "rgb_array":

@@ -74,14 +74,14 @@ import gymnasium as gym
 import numpy as np
 from gymnasium import spaces
 
-from .. import well_family as wf
+from ..analysis.metrics import resample_prescribed_card
+from ..analysis.render import CardWindow
 from ..config import ControlConfig, WellConfig, load_config
-from ..economics import COST_TERMS, REWARD_TERMS, EconomicReward
 from ..errors import ConfigError, SolverFailure
-from ..interval import IntervalResult, IntervalRunner, StrokeFigures
-from ..metrics import resample_prescribed_card
-from ..render import CardWindow
-from ..simulator import Simulator
+from ..simulation.simulator import Simulator
+from ..task import well_family as wf
+from ..task.economics import COST_TERMS, REWARD_TERMS, EconomicReward
+from ..task.interval import IntervalResult, IntervalRunner, StrokeFigures
 from .action_check import checked_action
 
 CARD_POINTS = 32
@@ -343,7 +343,7 @@ class SuckerRodV1Env(CardWindow, gym.Env):
     def render(self) -> np.ndarray | None:
         if self.sim is None:
             return None
-        from ..render import card_figure, card_rgb
+        from ..analysis.render import card_figure, card_rgb
 
         title = f"{self.well.well_id}: {self._spm:.2f} SPM, {self._stroke:.2f} m, duty {self._duty:.2f}"
         if self.render_mode == "rgb_array":

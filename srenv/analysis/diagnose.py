@@ -1,0 +1,278 @@
+"""Downhole (pump) card from a surface card: Gibbs' Fourier method, marched down the string taper by taper,
+with a split-step correction for Coulomb rod-tubing friction in deviated wells.
+
+The rod obeys (design §2, u positive down, N = N_eq equivalent axial force)
+    dN/dx = rho*A u_tt + c u_t - w - q_t,    du/dx = N / (E A),
+w = (rho - rho_f) g A cos(alpha) the buoyed weight per length, q_t the friction per length (positive down).
+Given u(0, t) and N(0, t) over one (periodic) stroke, this is a Cauchy problem in x, solved per harmonic n
+of the stroke frequency w0: without friction each harmonic travels exactly through a uniform segment of
+length h,
+    [U, N](x + h) = [[cosh(lh), sinh(lh)/(EA l)], [EA l sinh(lh), cosh(lh)]] [U, N](x),
+    (EA) l^2 = -rho A (n w0)^2 + i n w0 c   (Gibbs 1963; n = 0: U += N h / EA),
+so the taper steps are exact (U and N_eq are continuous at a shoulder; the true load jumps by p dA).
+Friction is not linear in the harmonics: each segment is a Strang split step, half a step of the weight
+and friction sources in the time domain (N -= h/2 (w + q_t)), the exact linear transfer, the other half.
+The friction per length is q_t = -mu q_n sgn(u_t), q_n = |w_b sin(alpha) - N dalpha/ds| the soft-string side
+force with the local axial force (the simulator's law), and sgn regularised as tanh(v / v_eps) (the stuck
+reaction of the exact model is not known from the surface; v_eps is a small fraction of the peak rod speed).
+
+Harmonics above ``harmonics`` are dropped at the top (a measured card's noise would otherwise be marched
+down; the transfer of a high harmonic grows like exp(c L / (2 rho A a)) only, but sensor noise is broad).
+"""
+
+from __future__ import annotations
+
+import json
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..config import WellConfig
+from ..errors import ConfigError
+from ..physics.fluid import tubing_pressure_pa
+from ..physics.rod import GRAVITY_M_S2, build_mesh, damping_per_length
+from ..physics.survey import Survey
+from ..surface_unit.measured_motion import read_card_csv, stroke_period_s
+
+CARD_COLUMNS = ("t_s", "polished_rod_position_m", "polished_rod_load_n")
+PUMP_COLUMNS = ("t_s", "pump_position_m", "pump_load_n")
+DEFAULT_HARMONICS = 60
+
+
+@dataclass(frozen=True)
+class Segments:
+    """The string cut into short uniform segments, top-down, with what the march needs on each."""
+
+    h_m: np.ndarray
+    ea_n: np.ndarray
+    rho_a_kg_m: np.ndarray
+    c_n_s_m2: np.ndarray          # viscous damping per length
+    w_n_m: np.ndarray             # buoyed weight per length along the string (cos alpha included)
+    fw_n_m: np.ndarray            # mu * w_b sin(alpha)
+    fa_1_m: np.ndarray            # mu * dalpha/ds
+    fc_1_m: np.ndarray            # mu * sin(alpha) dphi/ds (3-D survey only)
+    top_area_m2: float
+    bottom_area_m2: float
+
+
+def segments(cfg: WellConfig, segment_length_m: float | None = None) -> Segments:
+    seg = segment_length_m or min(cfg.simulation.element_length_m, 25.0)
+    mesh = build_mesh(cfg.rod, seg)
+    survey = Survey.from_config(cfg.survey, cfg.rod_length_m)
+    xm = 0.5 * (mesh.x_m[1:] + mesh.x_m[:-1])
+    incl = survey.inclination(xm)
+    rho_rod = mesh.rho_a_kg_m / mesh.area_m2
+    w_b = (rho_rod - cfg.fluid.density_kg_m3) * GRAVITY_M_S2 * mesh.area_m2
+    mu = cfg.friction.coefficient
+    turn = survey.turn_rate(xm) if cfg.survey.three_d else np.zeros_like(xm)
+    return Segments(mesh.length_m, mesh.ea_n, mesh.rho_a_kg_m, damping_per_length(mesh, cfg.damping),
+                    w_b * np.cos(incl), mu * w_b * np.sin(incl), mu * survey.build_rate(xm),
+                    mu * np.sin(incl) * turn, float(mesh.area_m2[0]), float(mesh.area_m2[-1]))
+
+
+@dataclass
+class PumpCard:
+    t_s: np.ndarray
+    pump_position_m: np.ndarray   # upward, as srenv simulate writes it
+    pump_load_n: np.ndarray       # true load at the pump, tension positive
+    pump_velocity_m_s: np.ndarray
+    polished_rod_position_m: np.ndarray
+    polished_rod_load_n: np.ndarray
+    period_s: float
+    harmonics: int
+
+
+def _resample_periodic(t: np.ndarray, y: np.ndarray, t0: float, period: float, m: int) -> np.ndarray:
+    """Linear periodic interpolation onto m equally spaced times from t0 (a no-op for uniform samples)."""
+    tt = t0 + np.arange(m) * (period / m)
+    tp = np.r_[t, t[0] + period]
+    yp = np.r_[y, y[0]]
+    return np.interp(tt, tp, yp)
+
+
+def march(cfg: WellConfig, u0_m: np.ndarray, n0_eq_n: np.ndarray, period_s: float, harmonics: int,
+          segment_length_m: float | None = None, friction: bool = True, v_eps_fraction: float = 0.02
+          ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """March (u, N_eq) from the polished rod to the pump over one periodic stroke sampled at m equal times.
+    Returns (u, N_eq, u_t) at the pump, u positive down."""
+    sg = segments(cfg, segment_length_m)
+    m = len(u0_m)
+    nh = min(harmonics, m // 2 - 1)
+    w0 = 2 * math.pi / period_s
+    n = np.arange(nh + 1)
+    iw = 1j * n * w0
+
+    def spec(y: np.ndarray) -> np.ndarray:
+        return np.fft.rfft(y)[: nh + 1]
+
+    def time(c: np.ndarray) -> np.ndarray:
+        full = np.zeros(m // 2 + 1, dtype=complex)
+        full[: nh + 1] = c
+        return np.fft.irfft(full, m)
+
+    uh, nhat = spec(u0_m), spec(n0_eq_n)
+    use_friction = friction and (np.any(sg.fw_n_m) or np.any(sg.fa_1_m) or np.any(sg.fc_1_m))
+    v_eps = None
+
+    def source(uh: np.ndarray, nhat: np.ndarray, k: int, half: float) -> np.ndarray:
+        nonlocal v_eps
+        dn = np.zeros(nh + 1, dtype=complex)
+        dn[0] = -half * sg.h_m[k] * sg.w_n_m[k] * m  # weight: the mean (rfft scaling: sum, not mean)
+        if use_friction and (sg.fw_n_m[k] or sg.fa_1_m[k] or sg.fc_1_m[k]):
+            v = time(iw * uh)
+            if v_eps is None:
+                v_eps = max(v_eps_fraction * float(np.max(np.abs(v))), 1e-6)
+            nt = time(nhat)
+            qn = np.hypot(sg.fw_n_m[k] - sg.fa_1_m[k] * nt, sg.fc_1_m[k] * nt)
+            q_t = -qn * np.tanh(v / v_eps)
+            dn -= half * sg.h_m[k] * spec(q_t)
+        return nhat + dn
+
+    for k in range(len(sg.h_m)):
+        nhat = source(uh, nhat, k, 0.5)
+        ea, h = sg.ea_n[k], sg.h_m[k]
+        lam = np.sqrt((-sg.rho_a_kg_m[k] * (n * w0) ** 2 + iw * sg.c_n_s_m2[k]) / ea + 0j)
+        ch = np.cosh(lam * h)
+        lh = lam * h
+        # sinh(lh)/l and l sinh(lh), finite at l = 0 (the mean)
+        sinc = np.where(np.abs(lh) > 1e-12, np.sinh(lh) / np.where(lam == 0, 1, lam), h)
+        ls = lam * np.sinh(lh)
+        uh, nhat = ch * uh + sinc * nhat / ea, ea * ls * uh + ch * nhat
+        nhat = source(uh, nhat, k, 0.5)
+    return time(uh), time(nhat), time(iw * uh)
+
+
+def diagnose_card(cfg: WellConfig, t_s: np.ndarray, position_m: np.ndarray, load_n: np.ndarray,
+                  harmonics: int = DEFAULT_HARMONICS, period_s: float | None = None,
+                  segment_length_m: float | None = None, friction: bool = True) -> PumpCard:
+    """Pump card of the last stroke of a surface card (time, polished-rod position upward, load)."""
+    period = stroke_period_s(t_s, position_m) if period_s is None else float(period_s)
+    dt = float(np.median(np.diff(t_s)))
+    keep = t_s > t_s[-1] - period + 0.5 * dt
+    t, x, f = t_s[keep], position_m[keep], load_n[keep]
+    m = max(len(t), 2 * harmonics + 4)
+    m += m % 2
+    xs = _resample_periodic(t, x, t[0], period, m)
+    fs = _resample_periodic(t, f, t[0], period, m)
+    sg_top = segments(cfg, segment_length_m)
+    p_top = float(cfg.fluid.wellhead_pressure_pa)
+    survey = Survey.from_config(cfg.survey, cfg.rod_length_m)
+    p_pump = float(tubing_pressure_pa(cfg.fluid, survey.tvd(cfg.rod_length_m)))
+    f_sb = cfg.surface.stuffing_box_friction_n
+    if f_sb > 0:  # the stuffing box's share of the measured load: opposite to the polished rod's velocity
+        vx = np.gradient(np.r_[xs[-1], xs, xs[0]])[1:-1]
+        fs = fs - f_sb * np.sign(vx)
+    ub, nb, vb = march(cfg, -xs, fs + p_top * sg_top.top_area_m2, period, harmonics, segment_length_m, friction)
+    tt = t[0] + np.arange(m) * (period / m)
+    # back onto the input's own times (the same base as the surface card)
+    pos = np.interp(t, np.r_[tt, tt[0] + period], np.r_[-ub, -ub[0]])
+    load = np.interp(t, np.r_[tt, tt[0] + period], np.r_[nb, nb[0]]) - p_pump * sg_top.bottom_area_m2
+    vel = np.interp(t, np.r_[tt, tt[0] + period], np.r_[-vb, -vb[0]])
+    return PumpCard(t, pos, load, vel, x, f, period, min(harmonics, m // 2 - 1))
+
+
+# ------------------------------------------------------------------------------------------ the CLI
+def read_surface_card(path: str) -> dict[str, np.ndarray]:
+    return read_card_csv(path, "CARD.csv", CARD_COLUMNS)
+
+
+def write_pump_csv(card: PumpCard, path: str) -> None:
+    from ..outputs import atomic_write
+
+    data = np.column_stack([card.t_s, card.pump_position_m, card.pump_load_n])
+
+    def write(tmp: str) -> None:
+        np.savetxt(tmp, data, delimiter=",", header=",".join(PUMP_COLUMNS), comments="", fmt="%.12g")
+    atomic_write(path, write)
+
+
+def summary(cfg: WellConfig, card: PumpCard) -> dict:
+    from .pump_card import analyse_pump_card
+
+    s = analyse_pump_card(card.pump_position_m, card.pump_load_n)
+    survey = Survey.from_config(cfg.survey, cfg.rod_length_m)
+    p_out = float(tubing_pressure_pa(cfg.fluid, survey.tvd(cfg.rod_length_m)))
+    from ..physics.pump import plunger_area_m2
+
+    a_pl = plunger_area_m2(cfg.pump)
+    friction = cfg.pump.plunger_friction_n if cfg.pump.load_source == "pressures" else 0.0
+    # fluid load = (p_out - p_in) A_pl + 2 P_f between the two plateaus (valve law, design §2)
+    # (with the loads given directly the config has no plunger area to turn the load into a pressure: null)
+    p_in = None if cfg.pump.load_source == "loads" else max(
+        0.0, p_out - (s["fluid_load_n"] - 2 * friction - cfg.pump.discharge_overpressure_pa * a_pl) / a_pl)
+    return {
+        "period_s": card.period_s,
+        "spm": 60.0 / card.period_s,
+        "harmonics": card.harmonics,
+        "polished_rod_stroke_m": float(np.ptp(card.polished_rod_position_m)),
+        "pprl_n": float(card.polished_rod_load_n.max()),
+        "mprl_n": float(card.polished_rod_load_n.min()),
+        **s,
+        "discharge_pressure_pa": p_out,
+        "intake_pressure_pa": p_in,
+    }
+
+
+def cmd_diagnose(args) -> int:
+    from ..config import load_config
+
+    cfg = load_config(args.config, list(args.set or []))
+    from pathlib import Path
+
+    for p, name in ((args.out, "--out"), (args.plot, "--plot")):
+        if p and not Path(p).resolve().parent.is_dir():
+            raise ConfigError(name, p, "a path in an existing directory")
+    cols = read_surface_card(args.card)
+    t, x, f = cols["t_s"], cols["polished_rod_position_m"], cols["polished_rod_load_n"]
+    period = 60.0 / args.spm if args.spm else None
+    if period is not None and t[-1] - t[0] < period * (1 - 1e-6) - 2 * float(np.median(np.diff(t))):
+        raise ConfigError("--spm", args.spm, f"a stroke rate whose period fits in the card ({t[-1] - t[0]:.4g} s)")
+    card = diagnose_card(cfg, t, x, f, harmonics=args.harmonics, period_s=period,
+                         friction=not args.no_friction)
+    out = summary(cfg, card)
+    write_pump_csv(card, args.out)
+    if args.plot:
+        from ..outputs import atomic_write
+
+        atomic_write(args.plot, lambda tmp: save_plot(card, tmp, cfg.name))
+    print(json.dumps(out, default=float))
+    return 0
+
+
+def save_plot(card: PumpCard, path: str, title: str = "") -> None:
+    import matplotlib
+
+    matplotlib.use("Agg", force=False)
+    from matplotlib.figure import Figure
+
+    fig = Figure(figsize=(6.5, 4.5), dpi=100)
+    ax = fig.subplots()
+    x = card.polished_rod_position_m
+    ax.plot(x - x.min(), card.polished_rod_load_n / 1e3, lw=1.0, label="surface (measured)")
+    xp = card.pump_position_m
+    ax.plot(xp - xp.min(), card.pump_load_n / 1e3, lw=1.0, color="tab:red", label="pump (diagnosed)")
+    ax.set(xlabel="position above the bottom of the stroke (m)", ylabel="load (kN)",
+           title=title or "surface and diagnosed pump card")
+    ax.grid(alpha=0.3)
+    ax.legend()
+    fig.tight_layout()
+    fig.savefig(path)
+
+
+def add_parser(sub) -> None:
+    from ..cli_types import positive as _positive
+    from ..cli_types import positive_int as _positive_int
+
+    d = sub.add_parser("diagnose", help="downhole (pump) card from a measured surface card")
+    d.add_argument("card", help="CSV with t_s, polished_rod_position_m, polished_rod_load_n")
+    d.add_argument("--config", required=True, help="well YAML path or shipped name (rod string, fluid, survey)")
+    d.add_argument("--set", action="append", metavar="KEY.PATH=VALUE", help="override a config field")
+    d.add_argument("--out", required=True, help="pump card CSV: t_s, pump_position_m, pump_load_n")
+    d.add_argument("--plot", help="PNG with the surface and the pump card")
+    d.add_argument("--spm", type=_positive("--spm", "strokes/min"),
+                   help="stroke rate of the card (default: found from the position record)")
+    d.add_argument("--harmonics", type=_positive_int("--harmonics"), default=DEFAULT_HARMONICS,
+                   help=f"Fourier harmonics kept (default {DEFAULT_HARMONICS})")
+    d.add_argument("--no-friction", action="store_true", help="skip the deviated-well friction correction")
+    d.set_defaults(func=cmd_diagnose)

@@ -1,0 +1,118 @@
+"""Pump (plunger) valve law, paper eqs. 1-2 and 32, in equivalent-force form.
+
+Sign convention: loads are true axial tension at the rod end, positive in tension. P- acts while the
+plunger moves up (travelling valve closed, fluid load on the plunger), P+ while it moves down; at rest the
+load is anywhere in [P+, P-]. In equivalent force (N_eq = N + p A, p = tubing pressure at the pump):
+P-_eq = (p_out - p_in) A_pl + P_f and P+_eq = -dp_out A_pl - P_f.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+from ..config import PumpConfig
+
+
+@dataclass(frozen=True)
+class ValveLaw:
+    """The plunger's admissible loads in equivalent force (N)."""
+
+    up_eq_n: float          # P-_eq (static value P0 for the nonmonotone law)
+    down_eq_n: float        # P+_eq
+    drop_n: float = 0.0     # P0 - P_inf of the nonmonotone upstroke law
+    v0_m_s: float = 1.0
+
+    def up_eq_at(self, speed_m_s: float) -> float:
+        """P-_eq(v) = P_inf + (P0 - P_inf) exp(-|v|/v0)."""
+        return self.up_eq_n - self.drop_n * (1.0 - math.exp(-abs(speed_m_s) / self.v0_m_s))
+
+
+def plunger_area_m2(pump: PumpConfig) -> float:
+    return math.pi / 4 * (pump.plunger_diameter_mm * 1e-3) ** 2
+
+
+def valve_law(pump: PumpConfig, p_out_pa: float, rod_area_m2: float, intake_pressure_pa: float | None = None
+              ) -> ValveLaw:
+    """Valve law from the two loads or from pressures and diameters (p_out = tubing pressure at the pump)."""
+    if pump.load_source == "loads":
+        shift = p_out_pa * rod_area_m2  # true -> equivalent force at the rod end
+        drop = pump.upstroke_load_n - pump.dynamic_load_n if pump.law == "nonmonotone" else 0.0
+        return ValveLaw(pump.upstroke_load_n + shift, pump.downstroke_load_n + shift, drop,
+                        pump.reference_velocity_m_s)
+    p_in = pump.intake_pressure_pa if intake_pressure_pa is None else intake_pressure_pa
+    a_pl = plunger_area_m2(pump)
+    up = (p_out_pa - p_in) * a_pl + pump.plunger_friction_n
+    down = -pump.discharge_overpressure_pa * a_pl - pump.plunger_friction_n
+    return ValveLaw(up, down)
+
+
+def true_loads_n(law: ValveLaw, p_out_pa: float, rod_area_m2: float) -> tuple[float, float]:
+    """(P-, P+) as true loads, for reporting."""
+    shift = p_out_pa * rod_area_m2
+    return law.up_eq_n - shift, law.down_eq_n - shift
+
+
+STANDARD_PRESSURE_PA = 101325.0
+
+
+@dataclass(frozen=True)
+class GasChamber:
+    """Free gas in the pump chamber (ideal gas, polytropic p V^k = const, liquid incompressible).
+
+    The upstroke fills the chamber (clearance V_d + swept A_pl L) with intake mixture of free-gas volume
+    fraction phi at p_in. On the downstroke both valves stay closed until the plunger has compressed the gas
+    to the discharge pressure p_d = p_out + dp_out: over the travel
+        s_open = phi V_c (1 - (p_in / p_d)^(1/k)) / A_pl,
+    the load falls along the compression curve (p_out - p_c) A_pl instead of at once (gas interference).
+    The clearance keeps the compressed mixture (gas fraction phi_d); on the upstroke it re-expands to p_in
+    before the standing valve opens, over s_up = V_gd ((p_d / p_in)^(1/k) - 1) / A_pl.
+    ``intake_glr_m3_m3`` gives phi from the free gas-liquid ratio at standard conditions (isothermal,
+    z = 1): G = GLR p_std / p_in, phi = G / (1 + G).
+    """
+
+    area_m2: float
+    clearance_m3: float
+    exponent: float
+    gas_fraction: float = 0.0
+    glr_m3_m3: float = 0.0
+
+    @classmethod
+    def from_config(cls, pump: PumpConfig, nominal_stroke_m: float) -> GasChamber | None:
+        if pump.intake_gas_fraction <= 0 and pump.intake_glr_m3_m3 <= 0:
+            return None
+        a = plunger_area_m2(pump)
+        return cls(a, pump.clearance_volume_fraction * a * nominal_stroke_m, pump.gas_polytropic_exponent,
+                   pump.intake_gas_fraction, pump.intake_glr_m3_m3)
+
+    def fraction(self, p_in_pa: float) -> float:
+        """Free-gas volume fraction of the intake mixture at p_in."""
+        if self.glr_m3_m3 > 0:
+            g = self.glr_m3_m3 * STANDARD_PRESSURE_PA / max(p_in_pa, STANDARD_PRESSURE_PA)
+            return g / (1.0 + g)
+        return self.gas_fraction
+
+    def top_gas_m3(self, p_in_pa: float, upstroke_m: float) -> float:
+        """Gas volume at p_in in the chamber at the top of the stroke."""
+        return self.fraction(p_in_pa) * (self.clearance_m3 + self.area_m2 * max(upstroke_m, 0.0))
+
+    def clearance_gas_m3(self, p_in_pa: float, p_d_pa: float) -> float:
+        """Gas volume at p_d left in the clearance at the bottom of the stroke."""
+        phi = self.fraction(p_in_pa)
+        vg = phi * (p_in_pa / p_d_pa) ** (1.0 / self.exponent)
+        return self.clearance_m3 * vg / (vg + 1.0 - phi)
+
+    def compression_travel_m(self, p_in_pa: float, p_d_pa: float, upstroke_m: float,
+                             p_to_pa: float | None = None) -> float:
+        """Plunger travel from the top until the chamber reaches p_to (default p_d: the valve opens)."""
+        p_to = p_d_pa if p_to_pa is None else p_to_pa
+        v0 = self.top_gas_m3(p_in_pa, upstroke_m)
+        return v0 * (1.0 - (p_in_pa / p_to) ** (1.0 / self.exponent)) / self.area_m2
+
+    def liquid_fraction(self, p_in_pa: float, p_d_pa: float, upstroke_m: float) -> float:
+        """Liquid delivered per stroke / swept volume (what the gas leaves of the pump's displacement)."""
+        swept = self.area_m2 * max(upstroke_m, 1e-12)
+        phi = self.fraction(p_in_pa)
+        vg_d = self.clearance_gas_m3(p_in_pa, p_d_pa)
+        liquid_in = (1.0 - phi) * (self.clearance_m3 + swept)
+        return float(min(max((liquid_in - (self.clearance_m3 - vg_d)) / swept, 0.0), 1.0))

@@ -1,0 +1,200 @@
+"""Gearbox (speed reducer) torque and power of a conventional beam unit over simulated strokes.
+
+The simulator gives the polished-rod load PRL(t) of every time step; the unit's kinematics give the crank
+angle θ(t) of that step (each stroke starts at the bottom, θ = θ_bottom, and the crank turns at constant
+speed ω = 2π·SPM/60). From them, API Spec 11E / RP 11L:
+
+* net gearbox torque  T(θ) = TF(θ)·(PRL − SU) − M·sin(θ + τ)   (N·m, positive = the gearbox drives the
+  cranks; sign conventions in :mod:`srenv.beam_unit`),
+* gearbox loading     100·max|T| / torque rating   (%),
+* polished-rod power  PRL·v, v upward (W); its stroke mean is the card work per unit time,
+* crank-shaft power   T·ω (W); over whole strokes its mean equals the polished-rod power, because the
+  counterweights and the structural unbalance only store and return energy within a crank turn,
+* motor power         mean of max(T·ω, 0) / efficiency: the motor supplies the positive crank power and is
+  credited nothing while the well over-runs it (generating torque is braked, not recovered), the usual
+  conservative sizing assumption for a conventional unit.
+
+:func:`optimal_counterbalance_nm` picks the counterbalance moment that minimises the peak |T| of a
+stroke: the setting a field crew approximates by "balancing" the unit on equal up- and downstroke peaks.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import TYPE_CHECKING
+
+import numpy as np
+import numpy.typing as npt
+
+from .beam_unit import ConventionalUnit
+
+if TYPE_CHECKING:
+    from ..simulation.run_result import RunResult
+
+FloatArray = npt.NDArray[np.float64]
+
+# Bisection on the counterbalance moment halves the bracket each pass; 100 passes shrink it by 2^-100,
+# far below any torque a gearbox rating resolves, so the loop ends on the tolerance, not the pass limit.
+_BISECTION_PASSES = 100
+_BISECTION_RTOL = 1e-12
+
+
+@dataclass(frozen=True)
+class GearboxReport:
+    """Per-sample torque and power of one or more strokes, and the figures a well analyst reads."""
+
+    crank_angle_rad: FloatArray
+    net_torque_nm: FloatArray
+    polished_rod_power_w: FloatArray
+    crank_power_w: FloatArray
+    time_step_s: FloatArray
+    torque_rating_nm: float
+    counterbalance_moment_nm: float
+    optimal_counterbalance_nm: float
+    motor_efficiency: float
+
+    @property
+    def peak_torque_nm(self) -> float:
+        """Largest |T| over the strokes: a reversed (generating) peak loads the gear teeth as much."""
+        return float(np.max(np.abs(self.net_torque_nm)))
+
+    @property
+    def loading_pct(self) -> float:
+        return 100.0 * self.peak_torque_nm / self.torque_rating_nm
+
+    def _time_mean(self, values: FloatArray) -> float:
+        # strokes at different SPM have different steps: weight each sample by its own step
+        return float(np.sum(values * self.time_step_s) / np.sum(self.time_step_s))
+
+    @property
+    def mean_polished_rod_power_w(self) -> float:
+        return self._time_mean(self.polished_rod_power_w)
+
+    @property
+    def mean_crank_power_w(self) -> float:
+        return self._time_mean(self.crank_power_w)
+
+    @property
+    def motor_power_w(self) -> float:
+        return self._time_mean(np.maximum(self.crank_power_w, 0.0)) / self.motor_efficiency
+
+    def summary(self) -> dict[str, float]:
+        """The JSON keys :func:`srenv.stroke_summary.summarize` adds for a conventional unit."""
+        return {
+            "peak_gearbox_torque_nm": self.peak_torque_nm,
+            "max_gearbox_torque_nm": float(np.max(self.net_torque_nm)),
+            "min_gearbox_torque_nm": float(np.min(self.net_torque_nm)),
+            "gearbox_torque_rating_nm": self.torque_rating_nm,
+            "gearbox_loading_pct": self.loading_pct,
+            "counterbalance_moment_nm": self.counterbalance_moment_nm,
+            "optimal_counterbalance_nm": self.optimal_counterbalance_nm,
+            "polished_rod_power_w": self.mean_polished_rod_power_w,
+            "motor_power_w": self.motor_power_w,
+        }
+
+
+def optimal_counterbalance_nm(
+    unit: ConventionalUnit,
+    crank_angle_rad: npt.ArrayLike,
+    polished_rod_load_n: npt.ArrayLike,
+    crank_offset_rad: float = 0.0,
+) -> float:
+    """The counterbalance moment M ≥ 0 minimising max |T(θ)| over the given samples, N·m.
+
+    T_i(M) = w_i − M·s_i with w_i = TF(θ_i)(PRL_i − SU) and s_i = sin(θ_i + τ), so max_i |T_i| is a
+    convex, piecewise-linear function of M. Bisection on the sign of a subgradient (−s_i·sign T_i at the
+    worst sample) therefore converges to the exact minimiser without a general-purpose optimiser.
+    """
+    theta = np.asarray(crank_angle_rad, dtype=float)
+    well = unit.net_torque_nm(theta, polished_rod_load_n, 0.0)
+    arm = np.sin(theta + crank_offset_rad)
+    worst_arm = float(np.max(np.abs(arm)))
+    if worst_arm == 0.0:
+        return 0.0
+    # beyond this M the counterweight term alone exceeds twice the M = 0 peak: no better than M = 0
+    lo, hi = 0.0, 2.0 * float(np.max(np.abs(well))) / worst_arm
+    for _ in range(_BISECTION_PASSES):
+        if hi - lo <= _BISECTION_RTOL * max(hi, 1.0):
+            break
+        mid = 0.5 * (lo + hi)
+        torque = well - mid * arm
+        worst = int(np.argmax(np.abs(torque)))
+        slope = -arm[worst] * math.copysign(1.0, torque[worst])
+        if slope > 0.0:
+            hi = mid
+        elif slope < 0.0:
+            lo = mid
+        else:
+            return mid
+    return 0.5 * (lo + hi)
+
+
+def analyse(
+    unit: ConventionalUnit,
+    crank_angle_rad: npt.ArrayLike,
+    polished_rod_load_n: npt.ArrayLike,
+    polished_rod_velocity_m_s: npt.ArrayLike,
+    crank_speed_rad_s: npt.ArrayLike,
+    time_step_s: npt.ArrayLike,
+    *,
+    counterbalance_moment_nm: float,
+    counterbalance_offset_rad: float = 0.0,
+    motor_efficiency: float = 1.0,
+) -> GearboxReport:
+    """Torque and power at each sample (arrays of equal length; velocity upward, ω > 0)."""
+    if not 0.0 < motor_efficiency <= 1.0:
+        raise ValueError(f"motor_efficiency = {motor_efficiency!r}: expected a number in (0, 1]")
+    theta = np.asarray(crank_angle_rad, dtype=float)
+    load = np.asarray(polished_rod_load_n, dtype=float)
+    torque = np.asarray(unit.net_torque_nm(theta, load, counterbalance_moment_nm, counterbalance_offset_rad))
+    shape = theta.shape
+    return GearboxReport(
+        crank_angle_rad=theta,
+        net_torque_nm=torque,
+        polished_rod_power_w=load * np.asarray(polished_rod_velocity_m_s, dtype=float),
+        crank_power_w=torque * np.broadcast_to(np.asarray(crank_speed_rad_s, dtype=float), shape),
+        time_step_s=np.broadcast_to(np.asarray(time_step_s, dtype=float), shape).copy(),
+        torque_rating_nm=unit.geometry.torque_rating_nm,
+        counterbalance_moment_nm=float(counterbalance_moment_nm),
+        optimal_counterbalance_nm=optimal_counterbalance_nm(unit, theta, load, counterbalance_offset_rad),
+        motor_efficiency=float(motor_efficiency),
+    )
+
+
+def stroke_crank_angle_rad(unit: ConventionalUnit, result: RunResult) -> FloatArray:
+    """θ at each recorded step of one stroke: the simulator records the state at the END of step k, i.e.
+    k·Δt after the stroke began at the bottom (k = 1..n), the same instants its prescribed velocity uses."""
+    step_s = result.duration_s / result.n_steps
+    since_bottom_s = np.arange(1, result.n_steps + 1) * step_s
+    return np.asarray(unit.crank_angle_rad(since_bottom_s, result.spm), dtype=float)
+
+
+def analyse_runs(
+    unit: ConventionalUnit,
+    results: list[RunResult],
+    *,
+    counterbalance_moment_nm: float,
+    counterbalance_offset_rad: float = 0.0,
+    motor_efficiency: float = 1.0,
+) -> GearboxReport:
+    """:func:`analyse` over recorded strokes (``run_stroke(record=True)``), each at its own SPM."""
+    if not results or any(r.trace is None or r.spm <= 0 for r in results):
+        raise ValueError("gearbox analysis needs recorded strokes (record=True, SPM > 0)")
+    columns: dict[str, list[FloatArray]] = {k: [] for k in ("theta", "load", "vel", "omega", "dt")}
+    for r in results:
+        n = r.n_steps
+        if len(r.trace["t_s"]) != n:
+            raise ValueError(f"a stroke recorded {len(r.trace['t_s'])} of its {n} steps: cannot place θ")
+        columns["theta"].append(stroke_crank_angle_rad(unit, r))
+        columns["load"].append(r.trace["polished_rod_load_n"])
+        columns["vel"].append(r.trace["polished_rod_velocity_m_s"])
+        columns["omega"].append(np.full(n, 2.0 * math.pi * r.spm / 60.0))
+        columns["dt"].append(np.full(n, r.duration_s / n))
+    joined = {k: np.concatenate(v) for k, v in columns.items()}
+    return analyse(
+        unit, joined["theta"], joined["load"], joined["vel"], joined["omega"], joined["dt"],
+        counterbalance_moment_nm=counterbalance_moment_nm,
+        counterbalance_offset_rad=counterbalance_offset_rad,
+        motor_efficiency=motor_efficiency,
+    )

@@ -1,0 +1,269 @@
+"""One control interval of well time: exact strokes, a quasi-steady fast-forward, and idle time.
+
+The v1 env's step is ``task.interval_s`` of well time at an *average* stroke rate. At or above the VSD's
+minimum speed the unit runs continuously at that rate; below it, it runs at the minimum speed for the fraction
+``avg / spm_min`` of the interval and stands still for the rest (intermittent pumping), so the interval's
+production is continuous in the action down to 0 SPM (idle).
+
+Strokes are simulated **exactly** (the full nonsmooth FE model) until two consecutive strokes agree
+(fillage within 0.01, PPRL within 0.5 %, stick-slip energy within 10 % + 1 J) or ``task.exact_strokes_max`` were run. The remaining strokes of
+the interval are **fast-forwarded**: the last exact stroke repeats (its loads, card work, Goodman loading,
+stick-slip energy and impact speed), while the annulus mass balance is integrated stroke by stroke (inflow
+at the current level; the pump draws ``min(displacement, liquid available)``), so the fillage follows the
+level. When the fast-forwarded fillage drifts from the exact stroke's by more than
+``task.fast_forward_fillage_tol`` and the exact budget is not spent, the next stroke is simulated exactly
+again. A fractional last stroke is counted by its fraction (of its liquid, work and costs), so every figure
+is continuous in the stroke rate. The error of the fast-forward against simulating every stroke is measured
+by ``tests/test_interval.py`` (production and PPRL within 1 %).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from ..analysis import card_features as cf
+from ..analysis.stroke_summary import summarize
+from ..physics.pump import plunger_area_m2
+from ..simulation.simulator import RunResult, Simulator
+
+
+@dataclass
+class StrokeFigures:
+    """What the costs need from one stroke (per stroke)."""
+
+    summary: dict
+    trace: dict
+    lifted_m3: float
+    displacement_m3: float
+    fillage: float
+    fillage_est: float
+    work_j: float
+    damage: float
+    stick_slip_j: float
+    impact_m_s: float
+    power_mean_w: float
+    power_peak_w: float
+
+
+@dataclass
+class IntervalResult:
+    duration_s: float
+    pumping_s: float = 0.0
+    spm: float = 0.0
+    stroke_length_m: float = 0.0
+    strokes: float = 0.0
+    exact_strokes: int = 0
+    fast_forward_strokes: float = 0.0
+    lifted_m3: float = 0.0
+    displaced_m3: float = 0.0
+    annulus_start_m3: float = 0.0
+    annulus_end_m3: float = 0.0
+    inflow_m3: float = 0.0
+    work_j: float = 0.0
+    damage: float = 0.0
+    stick_slip_j: float = 0.0
+    impact_sq_sum: float = 0.0
+    impact_sum: float = 0.0
+    pprl_n: float = float("nan")
+    mprl_n: float = float("nan")
+    goodman_max_pct: float = 0.0
+    gearbox_loading_pct: float = 0.0
+    last: StrokeFigures | None = None
+    solver: dict = field(default_factory=lambda: {"certified_steps": 0, "corrected_steps": 0, "qp_steps": 0,
+                                                  "solver_calls": 0})
+
+    @property
+    def pumping_fraction(self) -> float:
+        return self.pumping_s / self.duration_s if self.duration_s > 0 else 0.0
+
+    @property
+    def fillage(self) -> float:
+        return self.lifted_m3 / self.displaced_m3 if self.displaced_m3 > 0 else float("nan")
+
+
+def string_stiffness_n_m(sim: Simulator) -> float:
+    """Static axial stiffness of the string at the pump with the top held: 1 / sum(L / EA)."""
+    return float(1.0 / np.sum(sim.mesh.length_m / sim.mesh.ea_n))
+
+
+def controller_fillage(sim: Simulator, summary: dict, tr: dict) -> float:
+    """The fillage a pump-off controller reads (``task.fillage_estimator``): off the downhole card as modern
+    controllers compute it, or off the surface card."""
+    how = sim.cfg.task.fillage_estimator
+    if how == "pump_card":
+        return float(summary["card_fillage"])
+    if how == "diagnose":
+        from ..analysis.diagnose import diagnose_card
+        from ..analysis.pump_card import analyse_pump_card
+
+        pc = diagnose_card(sim.cfg, tr["t_s"], tr["polished_rod_position_m"], tr["polished_rod_load_n"],
+                           period_s=float(tr["t_s"][-1] - tr["t_s"][0] + (tr["t_s"][1] - tr["t_s"][0])))
+        return float(analyse_pump_card(pc.pump_position_m, pc.pump_load_n)["fillage"])
+    return cf.fillage_estimate(tr["polished_rod_position_m"], tr["polished_rod_load_n"])
+
+
+def stroke_figures(sim: Simulator, r: RunResult, fatigue_life: float, fatigue_exponent: float,
+                   stiffness_n_m: float) -> StrokeFigures:
+    m = summarize(sim, [r])
+    tr = r.trace
+    a_pl = plunger_area_m2(sim.cfg.pump)
+    disp = a_pl * max(m["pump_stroke_m"], 0.0)
+    g = max(m["goodman_max_pct"], 0.0)
+    p_mean, p_peak = cf.polished_rod_power_w(tr["polished_rod_position_m"], tr["polished_rod_velocity_m_s"],
+                                             tr["polished_rod_load_n"], tr["t_s"])
+    return StrokeFigures(
+        summary=m, trace=tr, lifted_m3=r.pumped_m3, displacement_m3=disp, fillage=r.fillage,
+        fillage_est=controller_fillage(sim, m, tr),
+        work_j=m["card_work_j_per_stroke"], damage=(g / 100.0) ** fatigue_exponent / fatigue_life,
+        stick_slip_j=cf.stick_slip_energy_j(tr["pump_position_m"], tr["pump_velocity_m_s"], tr["pump_load_n"],
+                                            stiffness_n_m),
+        impact_m_s=cf.impact_speed_m_s(tr["pump_position_m"], tr["pump_velocity_m_s"], tr["pump_load_n"]),
+        power_mean_w=p_mean, power_peak_w=p_peak)
+
+
+class IntervalRunner:
+    """Runs control intervals on one simulator (see the module docstring)."""
+
+    def __init__(self, sim: Simulator) -> None:
+        self.sim = sim
+        cfg = sim.cfg
+        self.task = cfg.task
+        self.econ = cfg.economics
+        self.spm_min = cfg.control.spm_min
+        self.stiffness = string_stiffness_n_m(sim)
+        self.running = True  # the unit is turning (False after an idle stretch: the next run restarts from rest)
+        self._setpoint: tuple[float, float] | None = None
+        self._restart = False
+
+    def _figures(self, r: RunResult) -> StrokeFigures:
+        return stroke_figures(self.sim, r, self.econ.fatigue_life_cycles, self.econ.fatigue_exponent,
+                              self.stiffness)
+
+    def warm_up(self, spm: float, stroke_m: float) -> StrokeFigures:
+        """One exact stroke outside any interval (the env's reset), for the first observation."""
+        return self._figures(self.sim.run_stroke(spm, stroke_m, record=True))
+
+    def run(self, avg_spm: float, stroke_m: float, duration_s: float,
+            exact_strokes_max: int | None = None, fast_forward: bool = True) -> IntervalResult:
+        """One interval; ``fast_forward=False`` simulates every stroke exactly (the reference the quasi-steady
+        fast-forward is measured against)."""
+        sim = self.sim
+        ann = sim.annulus
+        exact_max = self.task.exact_strokes_max if exact_strokes_max is None else exact_strokes_max
+        self._fast_forward = fast_forward
+        if not fast_forward:
+            exact_max = 10**9
+        res = IntervalResult(duration_s=duration_s)
+        t0 = sim.time_s
+        res.annulus_start_m3 = ann.volume_m3 if ann is not None else 0.0
+        stroke_m = sim.surface.stroke_length_m(stroke_m)
+        res.stroke_length_m = stroke_m
+        if avg_spm > 1e-9:
+            spm = max(avg_spm, self.spm_min)
+            res.spm = spm
+            res.pumping_s = duration_s * min(1.0, avg_spm / self.spm_min)
+            period = 60.0 / spm
+            n_total = res.pumping_s / period
+            self._restart = not self.running
+            if self._restart:
+                sim.replan_upstroke(period)
+            self.running = True
+            self._pump(res, spm, stroke_m, period, n_total, exact_max)
+        if sim.time_s < t0 + duration_s - 1e-9 or res.pumping_s < duration_s:
+            if self.running:
+                sim.stop_at_bottom()
+                self.running = False
+            sim.idle(t0 + duration_s - sim.time_s)
+        if ann is not None:
+            ann.accumulate(sim.time_s)  # the annulus is otherwise booked at valve events only
+        res.annulus_end_m3 = ann.volume_m3 if ann is not None else 0.0
+        res.inflow_m3 = res.annulus_end_m3 - res.annulus_start_m3 + res.lifted_m3
+        return res
+
+    def _add(self, res: IntervalResult, f: StrokeFigures, w: float, lifted_m3: float, displaced_m3: float,
+             costs: bool = True) -> None:
+        res.strokes += w
+        res.lifted_m3 += lifted_m3
+        res.displaced_m3 += displaced_m3
+        res.work_j += w * f.work_j
+        if costs:
+            self._add_costs(res, f, w)
+
+    def _add_costs(self, res: IntervalResult, f: StrokeFigures, w: float) -> None:
+        res.damage += w * f.damage
+        res.stick_slip_j += w * f.stick_slip_j
+        res.impact_sq_sum += w * f.impact_m_s ** 2
+        res.impact_sum += w * f.impact_m_s
+        m = f.summary
+        res.pprl_n = m["pprl_n"] if not np.isfinite(res.pprl_n) else max(res.pprl_n, m["pprl_n"])
+        res.mprl_n = m["mprl_n"] if not np.isfinite(res.mprl_n) else min(res.mprl_n, m["mprl_n"])
+        res.goodman_max_pct = max(res.goodman_max_pct, m["goodman_max_pct"])
+        res.gearbox_loading_pct = max(res.gearbox_loading_pct, m.get("gearbox_loading_pct", 0.0))
+
+    def _pump(self, res: IntervalResult, spm: float, stroke_m: float, period: float, n_total: float,
+              exact_max: int) -> None:
+        sim, ann = self.sim, self.sim.annulus
+        t_end = sim.time_s + res.pumping_s
+        done = 0.0
+        exact: list[StrokeFigures] = []
+        need_exact = True
+        # The simulator switches the setpoint at a stroke boundary, a VSD ramps it over seconds: the first stroke
+        # after a change rings with the step change. Its liquid and work count as simulated; its costs (peaks,
+        # stick-slip, pound, fatigue) are those of the next, settled stroke when there is one.
+        setpoint = (spm, stroke_m)
+        transient_w = 0.0 if setpoint == self._setpoint and not self._restart else None
+        self._setpoint = setpoint
+        while done < n_total - 1e-9:
+            remaining = n_total - done
+            if need_exact and len(exact) < max(exact_max, 1) and (remaining >= 1.0 - 1e-9 or not exact):
+                r = sim.run_stroke(spm, stroke_m, record=True)
+                f = self._figures(r)
+                w = min(1.0, remaining)
+                lifted = f.lifted_m3
+                if w < 1.0 and ann is not None:  # only part of this stroke belongs to the interval
+                    ann.volume_m3 += (1.0 - w) * lifted
+                    lifted *= w
+                if transient_w is None:  # the first stroke after a change: its costs wait for the next one
+                    self._add(res, f, w, lifted, w * f.displacement_m3, costs=False)
+                    transient_w = w
+                else:
+                    self._add(res, f, w, lifted, w * f.displacement_m3)
+                    if transient_w > 0:
+                        self._add_costs(res, f, transient_w)
+                        transient_w = 0.0
+                for k in res.solver:
+                    res.solver[k] += int(f.summary[k])
+                res.exact_strokes += 1
+                done += w
+                exact.append(f)
+                if len(exact) >= 2:
+                    a, b = exact[-2].summary, exact[-1].summary
+                    e1, e2 = exact[-2].stick_slip_j, exact[-1].stick_slip_j
+                    need_exact = not self._fast_forward or not (abs(exact[-1].fillage - exact[-2].fillage) < 0.01
+                                      and abs(b["pprl_n"] / a["pprl_n"] - 1.0) < 0.005
+                                      and abs(e2 - e1) <= 0.1 * max(e1, e2) + 1.0)
+                continue
+            # fast-forward from the last exact stroke
+            f = exact[-1]
+            w = min(1.0, remaining)
+            t_next = min(sim.time_s + w * period, t_end) if w < 1.0 else sim.time_s + period
+            if ann is not None:
+                ann.accumulate(t_next)
+                take = min(w * f.displacement_m3, ann.volume_m3)
+                ann.volume_m3 -= take
+                fill = take / (w * f.displacement_m3) if f.displacement_m3 > 0 else 1.0
+            else:
+                take, fill = w * f.displacement_m3, 1.0
+            sim.time_s = t_next
+            self._add(res, f, w, take, w * f.displacement_m3)
+            res.fast_forward_strokes += w
+            done += w
+            if (abs(fill - f.fillage) > self.task.fast_forward_fillage_tol and len(exact) < exact_max):
+                sim.replan_upstroke(period)
+                need_exact = True
+        if transient_w and exact:  # no settled stroke followed: the transient stroke prices itself
+            self._add_costs(res, exact[0], transient_w)
+        res.last = exact[-1] if exact else None
+        sim.replan_upstroke(period)

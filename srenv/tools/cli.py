@@ -1,0 +1,205 @@
+"""Command line: ``srenv simulate | bench | sweep | config-doc``.
+
+Bad input (config or flags) prints one line naming the field, the value and the expected unit, exits with
+status 2, and leaves no output file behind (outputs are written to a temporary file and renamed).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import signal
+import sys
+
+import numpy as np
+
+from ..cli_types import MAX_DURATION_S
+from ..cli_types import bounded as _bounded
+from ..cli_types import positive as _positive
+from ..cli_types import positive_int as _positive_int
+from ..errors import ConfigError, NumericFailure, SolverFailure
+from ..outputs import atomic_write, check_output_path
+
+EXIT_BAD_INPUT = 2
+EXIT_SOLVER = 3
+EXIT_INTERRUPTED = 130
+MAX_STROKES = 100_000  # --strokes; the recorded size of the run is bounded separately (MAX_RUN_SAMPLES)
+
+
+def _raise_on_sigterm(signum: int, frame: object) -> None:
+    # SIGTERM becomes an exception, so that every `finally` runs: temporary files are removed, Ray and
+    # worker processes shut down (a killed command leaves nothing behind)
+    raise KeyboardInterrupt(f"signal {signum}")
+
+
+class _Parser(argparse.ArgumentParser):
+    def error(self, message: str) -> None:  # one line, status 2, no usage dump
+        print(f"srenv: error: {message}", file=sys.stderr)
+        sys.exit(EXIT_BAD_INPUT)
+
+
+def check_finite(trace: dict, summary: dict) -> None:
+    """A run whose numbers are not finite is a failure, not a result (and NaN is not JSON)."""
+    for name, col in trace.items():
+        if not np.all(np.isfinite(col)):
+            raise NumericFailure(name, "the simulation diverged; check the config's magnitudes")
+
+    def walk(key: str, v: object) -> None:
+        if isinstance(v, dict):
+            for k, w in v.items():
+                walk(k, w)
+        elif isinstance(v, (list, tuple)):
+            for w in v:
+                walk(key, w)
+        elif isinstance(v, (float, np.floating)) and not math.isfinite(v):
+            raise NumericFailure(key, "the summary is not finite; check the config's magnitudes")
+    walk("summary", summary)
+
+
+def write_trace_csv(trace: dict, path: str) -> None:
+    from ..simulation.simulator import TRACE_COLUMNS
+
+    cols = [c for c in TRACE_COLUMNS if c in trace]
+    data = np.column_stack([trace[c] for c in cols])
+
+    def write(tmp: str) -> None:
+        np.savetxt(tmp, data, delimiter=",", header=",".join(cols), comments="", fmt="%.12g")
+    atomic_write(path, write)
+
+
+def cmd_simulate(args: argparse.Namespace) -> int:
+    from ..analysis.stroke_summary import summarize
+    from ..config import check_run_samples, load_config, steps_per_stroke
+    from ..simulation.simulator import Simulator, concat_traces
+
+    overrides = list(args.set or [])
+    if args.spm is not None:
+        overrides.append(f"surface.spm={args.spm}")
+    if args.stroke_length_m is not None:
+        overrides.append(f"surface.stroke_length_m={args.stroke_length_m}")
+    if args.pull_velocity_m_s is not None:
+        overrides.append(f"surface.pull_velocity_m_s={args.pull_velocity_m_s}")
+    if args.qp_solver is not None:
+        overrides.append(f"simulation.qp_solver={args.qp_solver}")
+    check_output_path("--out", args.out, (".csv",))
+    check_output_path("--plot", args.plot, (".png",))
+    cfg = load_config(args.config, overrides)
+    # the run's size, before any allocation: strokes x steps per stroke, or duration / time step
+    if cfg.surface.motion == "pullout":
+        duration = args.duration_s if args.duration_s is not None else 60.0
+        check_run_samples(math.ceil(duration / cfg.simulation.time_step_s), "--duration-s", duration)
+    else:
+        n_strokes = args.strokes
+        if args.duration_s is not None:
+            n_strokes = max(1, round(args.duration_s * cfg.surface.spm / 60.0))
+        check_run_samples(n_strokes * steps_per_stroke(cfg, cfg.surface.spm),
+                          "--duration-s" if args.duration_s is not None else "--strokes",
+                          args.duration_s if args.duration_s is not None else args.strokes)
+    sim = Simulator(cfg, always_qp=True if args.always_qp else None)
+    if cfg.surface.motion == "pullout":
+        results = [sim.run_duration(duration)]
+    else:
+        results = sim.run_strokes(n_strokes)
+    trace = concat_traces(results)
+    if cfg.surface.motion == "pullout":
+        summary = pullout_summary(sim, results[0])
+    else:
+        summary = summarize(sim, results)
+    summary["natural_frequency_hz"] = sim.f1_hz
+    summary["energy_residual_j"] = sim.energy_balance()["residual_j"]
+    check_finite(trace, summary)
+    write_trace_csv(trace, args.out)
+    if args.plot:
+        from ..analysis.render import save_cards
+
+        period = 60.0 / cfg.surface.spm if cfg.surface.motion != "pullout" else None
+        atomic_write(args.plot, lambda tmp: save_cards(trace, tmp, cfg.name, period))
+    print(json.dumps(summary, default=float, allow_nan=False))
+    return 0
+
+
+def pullout_summary(sim, result) -> dict:
+    from ..analysis import metrics
+
+    tr = result.trace
+    t = tr["t_s"]
+    late = t >= t[0] + 0.3 * (t[-1] - t[0])
+    du = tr["polished_rod_position_m"] - tr["pump_position_m"]
+    return {
+        "duration_s": result.duration_s,
+        "plunger_stick_episodes_after_start": len(metrics.rest_episodes(tr["pump_velocity_m_s"][late])),
+        "slip_amplitude_m": metrics.slip_amplitude_m(t[late], du[late], 1.0 / sim.f1_hz),
+        "pprl_n": float(tr["polished_rod_load_n"].max()),
+        "certified_steps": result.certified_steps, "corrected_steps": result.corrected_steps,
+        "qp_steps": result.qp_steps, "solver_calls": result.qp_calls,
+    }
+
+
+def build_parser() -> argparse.ArgumentParser:
+    p = _Parser(prog="srenv", description=__doc__.splitlines()[0])
+    sub = p.add_subparsers(dest="command", required=True, parser_class=_Parser)
+    s = sub.add_parser("simulate", help="simulate a well and write a per-time-step CSV")
+    s.add_argument("config", help="well YAML path or shipped name")
+    g = s.add_mutually_exclusive_group()
+    g.add_argument("--strokes", type=_positive_int("--strokes", MAX_STROKES), default=3)
+    g.add_argument("--duration-s", type=_bounded(_positive("--duration-s", "s"), "--duration-s", "s",
+                                                 MAX_DURATION_S))
+    s.add_argument("--spm", type=_positive("--spm", "strokes/min"))
+    s.add_argument("--stroke-length-m", type=_positive("--stroke-length-m", "m"))
+    s.add_argument("--pull-velocity-m-s", type=_positive("--pull-velocity-m-s", "m/s"))
+    s.add_argument("--set", action="append", metavar="KEY.PATH=VALUE", help="override a config field")
+    s.add_argument("--qp-solver", help="qpsolvers backend for the step QP (default proxqp)")
+    s.add_argument("--always-qp", action="store_true", help="solve every step's QP (reference mode)")
+    s.add_argument("--out", required=True, help="CSV file, one row per time step")
+    s.add_argument("--plot", help="PNG with the surface and pump cards")
+    s.set_defaults(func=cmd_simulate)
+    b = sub.add_parser("bench", help="performance figures as JSON")
+    b.add_argument("--repeats", type=_positive_int("--repeats", 1000), default=5)
+    b.add_argument("--strokes", type=_positive_int("--strokes", 1000), default=10)
+    b.add_argument("--quick", action="store_true", help="fewer repeats and strokes (smoke run)")
+    b.set_defaults(func=lambda a: __import__("srenv.tools.bench", fromlist=["main"]).main(a))
+    d = sub.add_parser("config-doc", help="print the table of config fields")
+    d.set_defaults(func=lambda a: print(__import__("srenv.config", fromlist=["x"]).config_doc()) or 0)
+    try:
+        from .sweep import add_parser as add_sweep
+    except ImportError:
+        add_sweep = None
+    if add_sweep is not None:
+        add_sweep(sub)
+    from ..analysis.diagnose import add_parser as add_diagnose  # field engineering (docs/field.md)
+
+    add_diagnose(sub)
+    from ..analysis.fit import add_parser as add_fit
+
+    add_fit(sub)
+    return p
+
+
+def main(argv: list[str] | None = None) -> int:
+    args = build_parser().parse_args(argv)
+    previous = None
+    if argv is None:  # the command itself, not a test calling main() in-process
+        previous = signal.signal(signal.SIGTERM, _raise_on_sigterm)
+    try:
+        rc = args.func(args)
+    except ConfigError as exc:
+        print(f"srenv: error: {exc}", file=sys.stderr)
+        return EXIT_BAD_INPUT
+    except NumericFailure as exc:
+        print(f"srenv: error: {exc}", file=sys.stderr)
+        return EXIT_BAD_INPUT
+    except SolverFailure as exc:
+        print(f"srenv: solver failure: {exc}", file=sys.stderr)
+        return EXIT_SOLVER
+    except KeyboardInterrupt:
+        print("srenv: interrupted", file=sys.stderr)
+        return EXIT_INTERRUPTED
+    finally:
+        if previous is not None:
+            signal.signal(signal.SIGTERM, previous)
+    return int(rc or 0)
+
+
+if __name__ == "__main__":
+    sys.exit(main())
