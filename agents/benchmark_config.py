@@ -67,6 +67,10 @@ def load_benchmark_config(path: str | Path, quick: bool = False) -> dict[str, An
     if "scenario" in cfg["env_kwargs"]:
         raise BenchmarkConfigError("benchmark config: env_kwargs.scenario: expected none (the protocol sets "
                                    "train for tuning/training and test for the evaluation)")
+    hist = cfg.setdefault("history", [])
+    if not (isinstance(hist, list) and all(isinstance(h, str) for h in hist)):
+        raise BenchmarkConfigError(f"benchmark config: history = {str(hist)[:120]!r}: expected a list of strings "
+                                   "(one line per earlier test evaluation)")
     w = cfg.setdefault("workers", 2)
     if not (isinstance(w, int) and w >= 1):
         raise BenchmarkConfigError(f"benchmark config: workers = {w!r}: expected a positive integer")

@@ -104,6 +104,7 @@ def build_report(cfg: dict[str, Any], policies: dict[str, dict[str, Any]], split
     return {
         "schema": "srenv benchmark v1",
         "config": cfg["source"],
+        "history": [str(h) for h in cfg.get("history") or []],  # earlier test evaluations, as the config lists them
         "env_id": cfg["env_id"], "env_kwargs": cfg["env_kwargs"],
         "units": {"reward": "episode return: sum over control intervals of the interval's reward rate, "
                             "USD per hour of well time", "reward_rate_usd_h": "return / intervals",
@@ -203,7 +204,7 @@ def write_markdown(report: dict[str, Any], path: Path, figure: str | None) -> No
     if figure:
         parts += [f"![benchmark]({figure})", ""]
     parts += behaviour_table(report)
-    history = (report.get("config") or {}).get("history") or []
+    history = report.get("history") or []
     if history:  # every earlier evaluation on the test split, as the config records it (no silent re-runs)
         parts += ["## Test evaluations of this benchmark", "", *(f"- {h}" for h in history), ""]
     parts += [PROTOCOL, "", "## Tuned baselines (training wells only)", ""]

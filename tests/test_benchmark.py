@@ -212,7 +212,11 @@ def _quick_cfg(tmp_path: Path, env_id: str = FAKE, env_kwargs: dict | None = Non
                    "runs": {"ppo": {"config": str(tmp_path / "ppo.yaml"), "seeds": [0, 1]},
                             "sac": {"config": str(tmp_path / "sac.yaml"), "seeds": [0]},
                             "ppo_residual": {"config": str(tmp_path / "ppo.yaml"), "seeds": [0],
-                                             "residual": {"base": "best_tuned", "scale": 0.3}}}},
+                                             "residual": {"base": "best_tuned", "scale": 0.3}},
+                            "ppo_residual_shaped": {"config": str(tmp_path / "ppo.yaml"), "seeds": [0],
+                                                    "residual": {"base": "best_tuned", "scale": 0.5,
+                                                                 "shaping": "potential"}}}},
+        "history": ["Run 0 (a test line): kept in the report"],
         "quick": {"test": {"seeds": {"start": 1000, "count": 4}}},
     }
 
@@ -251,8 +255,10 @@ def test_quick_benchmark_writes_the_schema_on_disjoint_splits_same_episodes(tmp_
     d = json.loads((out / "benchmark.json").read_text())
     P = d["policies"]
     assert set(P) == {"installed", "best_constant", "pump_off", "fillage_pi", "oracle", "ppo", "sac",
-                      "ppo_residual"}
-    assert {P[n]["kind"] for n in ("ppo", "sac", "ppo_residual")} == {"agent"}
+                      "ppo_residual", "ppo_residual_shaped"}
+    assert {P[n]["kind"] for n in ("ppo", "sac", "ppo_residual", "ppo_residual_shaped")} == {"agent"}
+    assert P["ppo_residual_shaped"]["residual_on"]["shaping"] == "potential"
+    assert "ppo_residual_shaped" in d["paired"]
     tuned = d["tuned"]
     best_tuned = max(("best_constant", "pump_off", "fillage_pi"), key=lambda n: tuned[n]["score"])
     assert P["ppo_residual"]["residual_on"]["base"] == best_tuned
@@ -282,7 +288,9 @@ def test_quick_benchmark_writes_the_schema_on_disjoint_splits_same_episodes(tmp_
     assert r["ppo"] == pytest.approx(np.mean([[e["reward"] for e in s["episodes"]] for s in per], axis=0))
     assert "iqm_test_reward" in d["training"]["runs"]["ppo"] and d["wall_time_s"]["total"] > 0
     assert d["machine"]["cpu_count"] >= 1
-    assert (out / "benchmark.md").read_text().count("| ppo |") >= 1
+    md = (out / "benchmark.md").read_text()
+    assert md.count("| ppo |") >= 1
+    assert d["history"] == cfg["history"] and "- Run 0 (a test line): kept in the report" in md
     assert (out / "figures" / "benchmark_v1.png").stat().st_size > 10_000
     assert (out / "models" / "ppo_v1.zip").is_file() and (out / "models" / "ppo_v1_obs_norm.npz").is_file()
     assert not list(out.rglob("*.tmp*"))
@@ -315,3 +323,13 @@ def test_residual_agent_with_zero_correction_is_its_baseline() -> None:
     b = obs[-2:]
     wrapped.step(np.ones(2, np.float32))
     assert wrapped.env.unwrapped.last_a0 == pytest.approx(min(1.0, b[0] + 0.3), abs=1e-6)
+
+
+@pytest.mark.parametrize("history", ["one line", [1, 2], {"run": 1}])
+def test_benchmark_config_refuses_a_history_that_is_not_lines(tmp_path, history) -> None:
+    cfg = _quick_cfg(tmp_path)
+    cfg["history"] = history
+    p = tmp_path / "bad.yaml"
+    p.write_text(yaml.safe_dump(cfg))
+    with pytest.raises(ValueError, match="history"):
+        load_benchmark_config(p)
