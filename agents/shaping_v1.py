@@ -58,8 +58,10 @@ class ShapedEnv(gym.Wrapper):
 
 
 def make_shaped_env(inner_env_id: str = "srenv/SuckerRod-v1", **env_kwargs: Any) -> ShapedEnv:
-    from .rollout_v1 import make_env
+    from .rollout_v1 import ENV_ID_V1, make_env
 
+    if inner_env_id != ENV_ID_V1:  # the potential reads v1's state; and no module chosen by a YAML is imported
+        raise ValueError(f"shaped inner_env_id = {inner_env_id!r}: expected {ENV_ID_V1}")
     return ShapedEnv(make_env(inner_env_id, **env_kwargs))
 
 

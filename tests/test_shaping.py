@@ -68,6 +68,14 @@ def test_residual_env_refuses_other_inner_envs(inner) -> None:
         make_residual_env(inner_env_id=inner, base="pump_off", base_params=PUMP_OFF, scale=0.5)
 
 
+@pytest.mark.parametrize("inner", ["os:system", "srenv/SuckerRod-v0"])
+def test_shaped_env_refuses_other_inner_envs(inner) -> None:
+    from agents.shaping_v1 import make_shaped_env
+
+    with pytest.raises(ValueError, match="inner_env_id"):
+        make_shaped_env(inner_env_id=inner)
+
+
 @pytest.mark.parametrize("shaping", ["bogus", 1, "reward"])
 def test_benchmark_config_refuses_unknown_shaping(tmp_path, shaping) -> None:
     cfg = yaml.safe_load((REPO / "configs/benchmark/v1.yaml").read_text())
