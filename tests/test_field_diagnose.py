@@ -9,6 +9,7 @@ import sys
 
 import numpy as np
 import pytest
+from cli_refusal import assert_cli_refuses
 
 from srenv.analysis.diagnose import diagnose_card, march
 from srenv.analysis.pump_card import analyse_pump_card
@@ -114,9 +115,4 @@ def test_cli_diagnose_bad_card_is_one_line_exit_2(tmp_path, content, expect):
     card = tmp_path / "card.csv"
     card.write_text(content)
     out = tmp_path / "pump.csv"
-    p = subprocess.run([sys.executable, "-m", "srenv.cli", "diagnose", str(card), "--config", "paper_fig3_vertical",
-                        "--out", str(out)], check=False, capture_output=True, text=True)
-    assert p.returncode == 2
-    lines = p.stderr.strip().splitlines()
-    assert len(lines) == 1 and expect in lines[0], p.stderr
-    assert not out.exists()
+    assert_cli_refuses(["diagnose", str(card), "--config", "paper_fig3_vertical", "--out", str(out)], out, expect)

@@ -2,11 +2,9 @@
 
 from __future__ import annotations
 
-import subprocess
-import sys
-
 import numpy as np
 import pytest
+from cli_refusal import assert_cli_refuses
 
 from srenv.config import load_config
 from srenv.errors import ConfigError
@@ -97,13 +95,8 @@ def test_bad_card_files_are_one_line_exit_2(tmp_path, content, expect):
     bad = tmp_path / "bad.csv"
     bad.write_text(content)
     out = tmp_path / "out.csv"
-    p = subprocess.run([sys.executable, "-m", "srenv.cli", "simulate", FIG3, "--set", "surface.motion=measured",
-                        "--set", f"surface.measured_card_csv={bad}", "--out", str(out)],
-                       check=False, capture_output=True, text=True)
-    assert p.returncode == 2
-    lines = p.stderr.strip().splitlines()
-    assert len(lines) == 1 and "surface.measured_card_csv" in lines[0] and expect in lines[0], p.stderr
-    assert not out.exists()
+    assert_cli_refuses(["simulate", FIG3, "--set", "surface.motion=measured", "--set",
+                        f"surface.measured_card_csv={bad}", "--out", str(out)], out, "surface.measured_card_csv", expect)
 
 
 def test_missing_card_file_is_refused_at_load():
