@@ -58,6 +58,7 @@ from .benchmark_report import (
     verdict,
     write_markdown,
 )
+from .ensemble_v1 import ensemble_spec
 from .rollout_v1 import Runner, episode_jobs
 from .tuning import Evaluator, TuningSet, coordinate_search, search_best_constant
 
@@ -163,6 +164,10 @@ def run_benchmark(cfg: dict[str, Any], out_dir: str | Path, quick: bool = False,
                 spec["train_summary"] = {k: summ[k] for k in ("num_timesteps", "wall_time_s", "seed",
                                                               "best_eval_mean_reward")}
                 agent_specs.setdefault(job["algo"], []).append(spec)
+            # seed ensembles (agents/ensemble_v1.py): the mean action of every seed's model, one more policy
+            for a in [a for a in agent_specs if runs[a].get("ensemble")]:
+                agent_specs[f"{a}_ensemble"] = [{**ensemble_spec(agent_specs[a]), "of": a,
+                                                 "train_summary": {"seed": "all"}}]
             wall["training"] = time.perf_counter() - t1
 
             # ---- validation (training wells) for the seed choice
@@ -223,6 +228,17 @@ def run_benchmark(cfg: dict[str, Any], out_dir: str | Path, quick: bool = False,
     training: dict[str, Any] = {"selection": cfg["agents"]["selection"], "runs": {}}
     for a, specs in agent_specs.items():
         per_seed = [by_entry[(a, k)] for k in range(len(specs))]
+        if specs[0]["kind"] == "ensemble":
+            of, eps = specs[0]["of"], per_seed[0]
+            policies[a] = {"kind": "agent", "algo": _algo_of(runs[of]), "ensemble_of": of,
+                           "selection": f"one policy: the mean action of {of}'s {len(specs[0]['members'])} "
+                                        "seeds' models",
+                           "residual_on": specs[0].get("residual"),
+                           "models": [_rel(m["path"], out) for m in specs[0]["members"]], "episodes": eps}
+            training.setdefault("ensembles", {})[a] = {
+                "of": of, "models": policies[a]["models"], "iqm_test_reward": iqm([e["reward"] for e in eps]),
+                "validation_reward": val_scores[a][0] if val_scores.get(a) else None}
+            continue
         seed_means = [float(np.mean([e["reward"] for e in eps])) for eps in per_seed]
         if cfg["agents"]["selection"] == "best_on_validation":
             pick = int(np.argmax(val_scores[a]))

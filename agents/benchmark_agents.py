@@ -60,7 +60,7 @@ def _algo_of(run: dict[str, Any]) -> str:
 
 
 def _policy_part(spec: dict[str, Any]) -> dict[str, Any]:
-    return {k: spec[k] for k in ("kind", "path", "obs_norm", "residual") if k in spec}
+    return {k: spec[k] for k in ("kind", "path", "obs_norm", "residual", "members") if k in spec}
 
 
 def residual_spec(run: dict[str, Any], tuned: dict[str, Any]) -> dict[str, Any] | None:

@@ -109,6 +109,9 @@ def load_benchmark_config(path: str | Path, quick: bool = False) -> dict[str, An
             raise BenchmarkConfigError(f"benchmark config: agents.runs.{algo}: expected {{config: YAML, seeds: [...]}}")
         run["config"] = str(_resolve(run["config"]))
         run["seeds"] = _seeds(run.get("seeds", [0, 1, 2]), f"agents.runs.{algo}.seeds")
+        if not isinstance(run.get("ensemble", False), bool) or (run.get("ensemble") and len(run["seeds"]) < 2):
+            raise BenchmarkConfigError(f"benchmark config: agents.runs.{algo}.ensemble = {run.get('ensemble')!r}: "
+                                       "expected true or false (true needs >= 2 seeds)")
         tc = load_train_config(run["config"])  # checks the YAML now, not after the tuning
         refuse_test_split(tc.env_kwargs.get("scenario", "train"), "train")
         res = run.get("residual")

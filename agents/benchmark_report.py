@@ -264,7 +264,9 @@ PROTOCOL = """## Protocol
   a potential-based shaping of the reward (`agents/shaping_v1.py`: `r + Phi(s') - Phi(s)`, `Phi` = the value of
   the present reservoir inflow for the time left), which telescopes to the true return minus the first state's
   potential and so ranks policies as the true return does; it is evaluated, like every policy, on the env's
-  own reward.
+  own reward. A `*_ensemble` agent is one policy made of a run's seed models (`agents/ensemble_v1.py`): it acts
+  with the mean of their actions (for a residual run, `clip(b + scale * mean(r))`). Every seed takes part with
+  the same weight, so no score on any split chose it; its CI is over test episodes only.
 - **Statistics.** Mean return with a normal 95 % interval; paired differences with their 95 %
   interval over the test episodes (`*` = above zero); the IQM over (training seed, episode)."""
 

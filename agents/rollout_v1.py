@@ -6,7 +6,9 @@ and policy:
 - ``{"kind": "baseline", "name": "pump_off", "params": {...}}`` (:mod:`agents.baselines_v1`),
 - ``{"kind": "agent", "path": "x.zip", "obs_norm": "x_obs_norm.npz" | None}`` (an SB3 model and the
   observation normalisation it was trained with, stored as npz: nothing is unpickled but the SB3 zip),
-  optionally with ``"residual": {"base", "params", "scale"}`` (:mod:`agents.residual_v1`).
+  optionally with ``"residual": {"base", "params", "scale"}`` (:mod:`agents.residual_v1`),
+- ``{"kind": "ensemble", "members": [{"path", "obs_norm"}, ...], "residual": ... | None}``: the mean of the
+  members' actions (:mod:`agents.ensemble_v1`).
 
 An *episode record* (:func:`run_episode`) holds ``well_id``, ``seed``, ``reward`` (the episode return: the
 sum of the per-interval rewards, as Gymnasium and SB3 count it; each interval's reward is a rate in USD
@@ -93,15 +95,20 @@ class AgentPolicy:
 def build_policy(spec: dict[str, Any], env: Any) -> Any:
     if spec["kind"] == "baseline":
         return make_baseline(spec["name"], spec.get("params", {}), obs_names_of(env))
-    if spec["kind"] == "agent":
-        agent = AgentPolicy(spec["path"], spec.get("obs_norm"))
+    if spec["kind"] in ("agent", "ensemble"):
+        if spec["kind"] == "agent":
+            agent: Any = AgentPolicy(spec["path"], spec.get("obs_norm"))
+        else:
+            from .ensemble_v1 import EnsemblePolicy
+
+            agent = EnsemblePolicy([AgentPolicy(m["path"], m.get("obs_norm")) for m in spec["members"]])
         res = spec.get("residual")
         if res:
             from .residual_v1 import ResidualAgentPolicy
 
             return ResidualAgentPolicy(agent, res["base"], res["params"], res["scale"])
         return agent
-    raise ValueError(f"policy spec kind = {spec.get('kind')!r}: expected baseline or agent")
+    raise ValueError(f"policy spec kind = {spec.get('kind')!r}: expected baseline, agent or ensemble")
 
 
 # ------------------------------------------------------------------------------------------ episodes

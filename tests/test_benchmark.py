@@ -209,7 +209,7 @@ def _quick_cfg(tmp_path: Path, env_id: str = FAKE, env_kwargs: dict | None = Non
                                      "space": {"ki": [0.1, 0.5]}, "rounds": 1},
                       "oracle": {"n_spm": 3, "n_stroke": 2, "segments": 2, "rounds": 1}},
         "agents": {"selection": "mean",
-                   "runs": {"ppo": {"config": str(tmp_path / "ppo.yaml"), "seeds": [0, 1]},
+                   "runs": {"ppo": {"config": str(tmp_path / "ppo.yaml"), "seeds": [0, 1], "ensemble": True},
                             "sac": {"config": str(tmp_path / "sac.yaml"), "seeds": [0]},
                             "ppo_residual": {"config": str(tmp_path / "ppo.yaml"), "seeds": [0],
                                              "residual": {"base": "best_tuned", "scale": 0.3}},
@@ -255,8 +255,12 @@ def test_quick_benchmark_writes_the_schema_on_disjoint_splits_same_episodes(tmp_
     d = json.loads((out / "benchmark.json").read_text())
     P = d["policies"]
     assert set(P) == {"installed", "best_constant", "pump_off", "fillage_pi", "oracle", "ppo", "sac",
-                      "ppo_residual", "ppo_residual_shaped"}
-    assert {P[n]["kind"] for n in ("ppo", "sac", "ppo_residual", "ppo_residual_shaped")} == {"agent"}
+                      "ppo_residual", "ppo_residual_shaped", "ppo_ensemble"}
+    assert {P[n]["kind"] for n in ("ppo", "sac", "ppo_residual", "ppo_residual_shaped", "ppo_ensemble")} == {"agent"}
+    # the seed ensemble is one more policy, made of the run's own models
+    assert P["ppo_ensemble"]["ensemble_of"] == "ppo" and P["ppo_ensemble"]["models"] == P["ppo"]["models"]
+    assert len(P["ppo"]["models"]) == 2 and "ppo_ensemble" in d["paired"]
+    assert d["training"]["ensembles"]["ppo_ensemble"]["validation_reward"] is not None
     assert P["ppo_residual_shaped"]["residual_on"]["shaping"] == "potential"
     assert "ppo_residual_shaped" in d["paired"]
     tuned = d["tuned"]
