@@ -1,4 +1,4 @@
-"""``python -m agents train | evaluate | quickstart | benchmark``.
+"""``python -m agents train | evaluate | quickstart | benchmark | replay``.
 
 Each command prints a JSON summary as its last stdout line (progress and notes go to stderr; ``evaluate``
 with several policies prints a markdown comparison table before the JSON). Bad input prints one line
@@ -107,7 +107,19 @@ def build_parser() -> argparse.ArgumentParser:
     b.add_argument("config", help="benchmark YAML, e.g. configs/benchmark/v1.yaml")
     b.add_argument("--quick", action="store_true", help="apply the config's quick: block (minutes, for CI)")
     b.add_argument("--out-dir", help="output directory (default docs, or runs/benchmark_quick with --quick)")
+
+    r = sub.add_parser("replay", help="re-run a benchmark report's test episodes from its own record (v1); "
+                       "exit 1 if a return differs")
+    r.add_argument("report", help="benchmark JSON, e.g. docs/benchmark.json (models are read next to it)")
+    r.add_argument("--policy", action="append", help="a policy of the report; repeat (default: all but the oracle)")
+    r.add_argument("--episodes", type=_positive_int, default=3, help="the first N test episodes (default 3)")
     return p
+
+
+def cmd_replay(args: argparse.Namespace) -> dict:
+    from .replay_v1 import replay
+
+    return replay(args.report, args.policy, args.episodes)
 
 
 def cmd_train(args: argparse.Namespace) -> dict:
@@ -193,14 +205,15 @@ def main(argv: list[str] | None = None) -> int:
     from .train import TrainConfigError
 
     commands = {"train": cmd_train, "evaluate": cmd_evaluate, "quickstart": cmd_quickstart,
-                "convert-stats": cmd_convert_stats, "benchmark": cmd_benchmark}
+                "convert-stats": cmd_convert_stats, "benchmark": cmd_benchmark,
+                "replay": cmd_replay}
     try:
         result = commands[args.command](args)
     except (ConfigError, TrainConfigError, ValueError, FileNotFoundError) as exc:
         print(f"agents: error: {exc}", file=sys.stderr)
         return EXIT_BAD_INPUT
     _print_json(result)
-    return 0
+    return 1 if result.get("reproduced") is False else 0  # replay: a return differs from the report's
 
 
 if __name__ == "__main__":

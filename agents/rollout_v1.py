@@ -74,15 +74,30 @@ class ObsNormalizer:
 
 
 class AgentPolicy:
-    """An SB3 model (PPO, SAC, ...) with its observation normaliser, deterministic by default."""
+    """An SB3 model (PPO, SAC, ...) with its observation normaliser, deterministic by default.
+
+    The zip is read as data (:func:`agents.model_io.load_policy`: the network rebuilt from its plain-text
+    kwargs, weights loaded tensors-only), so a model file cannot run code; the spaces are the Box shapes
+    the zip records, in the action box [-1, 1] of the v1 contract.
+    """
 
     def __init__(self, path: str, obs_norm: str | None = None) -> None:
+        import gymnasium as gym
+
         from .evaluate import detect_algo
+        from .model_io import load_policy, read_data, space_shape
         from .train import algorithms
 
         self.path = path
-        self.model = algorithms()[detect_algo(path)].load(path, device="cpu")
+        data = read_data(path)
+        obs_shape, act_shape = space_shape(data, "observation_space", path), space_shape(data, "action_space", path)
+        self.observation_space = gym.spaces.Box(-np.inf, np.inf, obs_shape, np.float32)
+        self.action_space = gym.spaces.Box(-1.0, 1.0, act_shape, np.float32)
+        self.model = load_policy(path, algorithms()[detect_algo(path)], self.observation_space, self.action_space)
         self.norm = ObsNormalizer.load(obs_norm) if obs_norm else None
+        if self.norm is not None and self.norm.mean.shape != obs_shape:
+            raise ValueError(f"{obs_norm}: statistics of shape {self.norm.mean.shape} do not fit the model "
+                             f"{path} (observation shape {obs_shape})")
 
     def predict(self, observation: Any, state: Any = None, episode_start: Any = None,
                 deterministic: bool = True) -> tuple[np.ndarray, Any]:
