@@ -314,8 +314,10 @@ def rerender(out_dir: str | Path) -> None:
 
 
 def _runs_text(training: dict[str, Any]) -> str:
-    runs = training.get("runs", {})
-    return ", ".join(f"{a} seeds {v['seeds']}" for a, v in runs.items()) or "none"
+    runs, ens = training.get("runs", {}), training.get("ensembles", {})
+    text = ", ".join(f"{a} seeds {v['seeds']}" for a, v in runs.items()) or "none"
+    return text + "".join(f"; {n}: the mean action of {v['of']}'s {len(v['models'])} seed models"
+                          for n, v in ens.items())
 
 
 def _seed_text(seeds: list[int]) -> str:
