@@ -40,7 +40,8 @@ def figure(report: dict[str, Any], traces: dict[str, dict[str, Any]], path: Path
         hours = np.arange(1, len(t["avg_spm"]) + 1) * tr["interval_s"] / 3600
         a1 = fig.add_subplot(gs[1, col])
         a1.step(hours, t["avg_spm"], where="pre", color="tab:blue", label="average SPM")
-        a1.set(title=f"{label} on {tr['well_id']} (seed {tr['seed']}): return {tr['reward']:.0f}",
+        # two lines: a long policy name must not run into the neighbouring panel's title
+        a1.set(title=f"{label}\non {tr['well_id']} (seed {tr['seed']}): return {tr['reward']:.0f}",
                xlabel="time (h)", ylabel="average SPM")
         tw = a1.twinx()
         tw.step(hours, t["duty"], where="pre", color="tab:orange", label="duty (-)", alpha=0.8)
