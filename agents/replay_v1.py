@@ -25,6 +25,7 @@ from typing import Any
 
 import numpy as np
 
+from .ensemble_v1 import ensemble_spec
 from .rollout_v1 import ENV_ID_V1, build_policy, make_env, run_episode
 
 FIELD_BASES = ("best_constant", "pump_off", "fillage_pi")
@@ -92,12 +93,9 @@ def policy_specs(rep: dict[str, Any], name: str, root: Path) -> list[dict[str, A
     models = pol.get("models")
     if pol.get("kind") != "agent" or not isinstance(models, list) or not models:
         raise ReplayError(f"policies.{name}: expected a baseline, or an agent with a list of models")
-    members = [_model(root, m, name) for m in models]
     res = _residual(pol.get("residual_on"), name)
-    extra = {"residual": res} if res else {}
-    if pol.get("ensemble_of"):
-        return [{"kind": "ensemble", "members": members, **extra}]
-    return [{"kind": "agent", **m, **extra} for m in members]
+    specs = [{"kind": "agent", **_model(root, m, name), **({"residual": res} if res else {})} for m in models]
+    return [ensemble_spec(specs)] if pol.get("ensemble_of") else specs
 
 
 def replay(report: str | Path, names: list[str] | None = None, episodes: int = 3,

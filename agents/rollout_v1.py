@@ -5,7 +5,7 @@ and policy:
 
 - ``{"kind": "baseline", "name": "pump_off", "params": {...}}`` (:mod:`agents.baselines_v1`),
 - ``{"kind": "agent", "path": "x.zip", "obs_norm": "x_obs_norm.npz" | None}`` (an SB3 model and the
-  observation normalisation it was trained with, stored as npz: nothing is unpickled but the SB3 zip),
+  observation normalisation it was trained with, stored as npz; both are read as data, nothing is unpickled),
   optionally with ``"residual": {"base", "params", "scale"}`` (:mod:`agents.residual_v1`),
 - ``{"kind": "ensemble", "members": [{"path", "obs_norm"}, ...], "residual": ... | None}``: the mean of the
   members' actions (:mod:`agents.ensemble_v1`).
