@@ -166,8 +166,7 @@ def run_benchmark(cfg: dict[str, Any], out_dir: str | Path, quick: bool = False,
                 agent_specs.setdefault(job["algo"], []).append(spec)
             # seed ensembles (agents/ensemble_v1.py): the mean action of every seed's model, one more policy
             for a in [a for a in agent_specs if runs[a].get("ensemble")]:
-                agent_specs[f"{a}_ensemble"] = [{**ensemble_spec(agent_specs[a]), "of": a,
-                                                 "train_summary": {"seed": "all"}}]
+                agent_specs[f"{a}_ensemble"] = [{**ensemble_spec(agent_specs[a]), "of": a}]
             wall["training"] = time.perf_counter() - t1
 
             # ---- validation (training wells) for the seed choice

@@ -14,6 +14,7 @@ from pathlib import Path
 from typing import Any
 
 from .benchmark_config import BenchmarkConfigError
+from .residual_v1 import RESIDUAL_BASES
 from .rollout_v1 import ObsNormalizer
 from .tuning import refuse_test_split
 
@@ -71,8 +72,8 @@ def residual_spec(run: dict[str, Any], tuned: dict[str, Any]) -> dict[str, Any] 
         return None
     base = res.get("base", "best_tuned")
     if base == "best_tuned":
-        base = max(("best_constant", "pump_off", "fillage_pi"), key=lambda n: tuned[n]["score"])
-    if base not in ("best_constant", "pump_off", "fillage_pi"):
+        base = max(RESIDUAL_BASES, key=lambda n: tuned[n]["score"])
+    if base not in RESIDUAL_BASES:
         raise BenchmarkConfigError(f"residual base = {base!r}: expected best_constant, pump_off, fillage_pi "
                                    "or best_tuned")
     spec = {"base": base, "params": tuned[base]["params"], "scale": float(res.get("scale", 0.3))}

@@ -14,6 +14,7 @@ from typing import Any
 import yaml
 
 from .baselines_v1 import BASELINE_NAMES
+from .residual_v1 import RESIDUAL_BASES
 from .rollout_v1 import ENV_ID_V1
 from .tuning import refuse_test_split
 
@@ -116,7 +117,7 @@ def load_benchmark_config(path: str | Path, quick: bool = False) -> dict[str, An
         refuse_test_split(tc.env_kwargs.get("scenario", "train"), "train")
         res = run.get("residual")
         if res is not None and (not isinstance(res, dict) or res.get("base", "best_tuned") not in
-                                ("best_tuned", "best_constant", "pump_off", "fillage_pi")):
+                                ("best_tuned", *RESIDUAL_BASES)):
             raise BenchmarkConfigError(f"benchmark config: agents.runs.{algo}.residual = {res!r}: expected "
                                        "{base: best_tuned | best_constant | pump_off | fillage_pi, scale: S}")
         if res is not None and res.get("shaping") not in (None, "potential"):

@@ -26,9 +26,9 @@ from typing import Any
 import numpy as np
 
 from .ensemble_v1 import ensemble_spec
+from .residual_v1 import RESIDUAL_BASES
 from .rollout_v1 import ENV_ID_V1, build_policy, make_env, run_episode
 
-FIELD_BASES = ("best_constant", "pump_off", "fillage_pi")
 MAX_REPORT_BYTES = 50_000_000
 
 
@@ -76,10 +76,10 @@ def _residual(res: Any, name: str) -> dict[str, Any] | None:
     if res is None:
         return None
     scale = res.get("scale") if isinstance(res, dict) else None
-    if not (isinstance(res, dict) and res.get("base") in FIELD_BASES and isinstance(res.get("params"), dict)
+    if not (isinstance(res, dict) and res.get("base") in RESIDUAL_BASES and isinstance(res.get("params"), dict)
             and isinstance(scale, (int, float)) and 0.0 < scale <= 2.0):
         raise ReplayError(f"policies.{name}.residual_on = {str(res)[:80]}: expected {{base: one of "
-                          f"{', '.join(FIELD_BASES)}, params: {{...}}, scale in (0, 2]}}")
+                          f"{', '.join(RESIDUAL_BASES)}, params: {{...}}, scale in (0, 2]}}")
     return {"base": res["base"], "params": res["params"], "scale": float(scale)}
 
 

@@ -18,6 +18,8 @@ import numpy as np
 from .baselines_v1 import make_baseline, obs_names_of
 
 ENV_ID = "ResidualSuckerRod-v1"
+# the tuned field baselines a residual may sit on (not the oracle: it sees hidden state)
+RESIDUAL_BASES = ("best_constant", "pump_off", "fillage_pi")
 
 
 def compose(base_action: np.ndarray, residual: np.ndarray, scale: float) -> np.ndarray:
