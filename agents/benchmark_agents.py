@@ -65,7 +65,8 @@ def _policy_part(spec: dict[str, Any]) -> dict[str, Any]:
 
 
 def residual_spec(run: dict[str, Any], tuned: dict[str, Any]) -> dict[str, Any] | None:
-    """``{base, params, scale}`` of a residual agent run (``residual: {base: NAME | best_tuned, scale}``):
+    """``{base, params, scale[, idle_scale]}`` of a residual agent run (``residual: {base: NAME | best_tuned,
+    scale, idle_scale}``):
     the base is a tuned field baseline; ``best_tuned`` = the best tuning score (training wells)."""
     res = run.get("residual")
     if not res:
@@ -77,6 +78,8 @@ def residual_spec(run: dict[str, Any], tuned: dict[str, Any]) -> dict[str, Any] 
         raise BenchmarkConfigError(f"residual base = {base!r}: expected best_constant, pump_off, fillage_pi "
                                    "or best_tuned")
     spec = {"base": base, "params": tuned[base]["params"], "scale": float(res.get("scale", 0.3))}
+    if res.get("idle_scale") is not None:
+        spec["idle_scale"] = float(res["idle_scale"])
     if res.get("shaping"):
         spec["shaping"] = res["shaping"]  # training only: evaluation drives the plain env
     return spec
@@ -93,7 +96,9 @@ def residual_overrides(res: dict[str, Any] | None, run: dict[str, Any], cfg: dic
     tc = load_train_config(run["config"])
     # potential-based shaping (agents/shaping_v1.py) wraps the env the residual acts on, for training only
     inner = SHAPED_ENV_ID if res.get("shaping") == "potential" else tc.env_id
-    return {"env_id": f"agents.residual_v1:{ENV_ID}",
-            "env_kwargs": {**tc.env_kwargs, "inner_env_id": inner, "base": res["base"],
-                           "base_params": res["params"], "scale": res["scale"]}}
+    kwargs = {**tc.env_kwargs, "inner_env_id": inner, "base": res["base"], "base_params": res["params"],
+              "scale": res["scale"]}
+    if res.get("idle_scale") is not None:
+        kwargs["idle_scale"] = res["idle_scale"]
+    return {"env_id": f"agents.residual_v1:{ENV_ID}", "env_kwargs": kwargs}
 

@@ -123,6 +123,16 @@ def load_benchmark_config(path: str | Path, quick: bool = False) -> dict[str, An
         if res is not None and res.get("shaping") not in (None, "potential"):
             raise BenchmarkConfigError(f"benchmark config: agents.runs.{algo}.residual.shaping = "
                                        f"{res.get('shaping')!r}: expected potential or nothing")
+        if res is not None:
+            extra = set(res) - {"base", "scale", "idle_scale", "shaping"}
+            if extra:
+                raise BenchmarkConfigError(f"benchmark config: agents.runs.{algo}.residual: unknown key(s) "
+                                           f"{sorted(extra)}: expected base, scale, idle_scale, shaping")
+            for key in ("scale", "idle_scale"):
+                v = res.get(key)
+                if v is not None and (isinstance(v, bool) or not isinstance(v, (int, float)) or not 0.0 < v <= 2.0):
+                    raise BenchmarkConfigError(f"benchmark config: agents.runs.{algo}.residual.{key} = {v!r}: "
+                                               "expected a number in (0, 2] (a fraction of the action box)")
     return cfg
 
 

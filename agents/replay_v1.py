@@ -75,12 +75,20 @@ def _model(root: Path, rel: Any, name: str) -> dict[str, Any]:
 def _residual(res: Any, name: str) -> dict[str, Any] | None:
     if res is None:
         return None
+    def number(v: Any) -> bool:
+        return isinstance(v, (int, float)) and not isinstance(v, bool) and 0.0 < v <= 2.0
+
     scale = res.get("scale") if isinstance(res, dict) else None
+    idle = res.get("idle_scale") if isinstance(res, dict) else None
     if not (isinstance(res, dict) and res.get("base") in RESIDUAL_BASES and isinstance(res.get("params"), dict)
-            and isinstance(scale, (int, float)) and 0.0 < scale <= 2.0):
+            and number(scale) and (idle is None or number(idle))):
         raise ReplayError(f"policies.{name}.residual_on = {str(res)[:80]}: expected {{base: one of "
-                          f"{', '.join(RESIDUAL_BASES)}, params: {{...}}, scale in (0, 2]}}")
-    return {"base": res["base"], "params": res["params"], "scale": float(scale)}
+                          f"{', '.join(RESIDUAL_BASES)}, params: {{...}}, scale in (0, 2], idle_scale in (0, 2] "
+                          "or absent}}")
+    out = {"base": res["base"], "params": res["params"], "scale": float(scale)}
+    if idle is not None:
+        out["idle_scale"] = float(idle)
+    return out
 
 
 def policy_specs(rep: dict[str, Any], name: str, root: Path) -> list[dict[str, Any]]:

@@ -2,6 +2,9 @@
 
 The agent's action ``r`` in [-1, 1]^2 moves the baseline's action ``b``: the env receives
 ``clip(b + scale * r, -1, 1)``; the agent also sees ``b`` (two observation entries appended). With
+``idle_scale`` set, the rate entry's scale is ``idle_scale`` in an interval the baseline idles (``b0 = -1``):
+``idle_scale = 2`` gives the agent the whole rate range there, so it can replace a pump-off stop by slow
+continuous pumping, while ``r0 <= 0`` still idles. With
 ``r = 0`` it IS the baseline, so training starts from the tuned controller and learns only what improves
 on it. Training uses :class:`ResidualEnv` (registered as ``agents.residual_v1:ResidualSuckerRod-v1``, so
 SB3's vectorised envs build it in any process); evaluation drives the plain env with
@@ -15,16 +18,27 @@ from typing import Any
 import gymnasium as gym
 import numpy as np
 
-from .baselines_v1 import make_baseline, obs_names_of
+from .baselines_v1 import IDLE, make_baseline, obs_names_of
 
 ENV_ID = "ResidualSuckerRod-v1"
 # the tuned field baselines a residual may sit on (not the oracle: it sees hidden state)
 RESIDUAL_BASES = ("best_constant", "pump_off", "fillage_pi")
 
 
-def compose(base_action: np.ndarray, residual: np.ndarray, scale: float) -> np.ndarray:
-    return np.clip(np.asarray(base_action, np.float32) + float(scale) * np.asarray(residual, np.float32),
-                   -1.0, 1.0).astype(np.float32)
+def check_scales(scale: float, idle_scale: float | None) -> None:
+    for name, v in (("scale", scale), ("idle_scale", idle_scale)):
+        if v is not None and not (isinstance(v, (int, float)) and 0.0 < v <= 2.0):
+            raise ValueError(f"residual {name} = {v!r}: expected a number in (0, 2]")
+
+
+def compose(base_action: np.ndarray, residual: np.ndarray, scale: float,
+            idle_scale: float | None = None) -> np.ndarray:
+    b = np.asarray(base_action, np.float32)
+    s = np.full(b.shape, float(scale), np.float32)
+    if idle_scale is not None:
+        # the rate entry of an interval the baseline idles: the agent may pump there instead
+        s[..., 0] = np.where(b[..., 0] <= IDLE, np.float32(idle_scale), s[..., 0])
+    return np.clip(b + s * np.asarray(residual, np.float32), -1.0, 1.0).astype(np.float32)
 
 
 def augment(obs: np.ndarray, base_action: np.ndarray) -> np.ndarray:
@@ -53,13 +67,13 @@ class _Base:
 class ResidualEnv(gym.Wrapper):
     """``env`` driven by ``baseline + scale * agent action``; observation = env's + the baseline action."""
 
-    def __init__(self, env: gym.Env, base: str, base_params: dict[str, Any], scale: float = 0.3) -> None:
+    def __init__(self, env: gym.Env, base: str, base_params: dict[str, Any], scale: float = 0.3,
+                 idle_scale: float | None = None) -> None:
         super().__init__(env)
-        if not 0.0 < scale <= 2.0:
-            raise ValueError(f"residual scale = {scale!r}: expected a number in (0, 2]")
+        check_scales(scale, idle_scale)
         if base == "oracle":
             raise ValueError("residual base = oracle: expected a field baseline (it would see hidden state)")
-        self.scale = float(scale)
+        self.scale, self.idle_scale = float(scale), idle_scale
         self.base = _Base(base, base_params, env)
         low = np.concatenate([env.observation_space.low, -np.ones(2, np.float32)])
         high = np.concatenate([env.observation_space.high, np.ones(2, np.float32)])
@@ -74,28 +88,31 @@ class ResidualEnv(gym.Wrapper):
         return augment(obs, self._b), info
 
     def step(self, action: np.ndarray) -> tuple[np.ndarray, float, bool, bool, dict]:
-        obs, r, term, trunc, info = self.env.step(compose(self._b, action, self.scale))
+        obs, r, term, trunc, info = self.env.step(compose(self._b, action, self.scale, self.idle_scale))
         self._b = self.base.act(obs)
         return augment(obs, self._b), r, term, trunc, info
 
 
 def make_residual_env(inner_env_id: str = "srenv/SuckerRod-v1", base: str = "fillage_pi",
                       base_params: dict[str, Any] | None = None, scale: float = 0.3,
-                      **env_kwargs: Any) -> ResidualEnv:
+                      idle_scale: float | None = None, **env_kwargs: Any) -> ResidualEnv:
     from .rollout_v1 import ENV_ID_V1, make_env
     from .shaping_v1 import SHAPED_ENV_ID
 
     # a fixed set: the id is a module path for gymnasium, and a training YAML must not choose what is imported
     if inner_env_id not in (ENV_ID_V1, SHAPED_ENV_ID):
         raise ValueError(f"residual inner_env_id = {inner_env_id!r}: expected {ENV_ID_V1} or {SHAPED_ENV_ID}")
-    return ResidualEnv(make_env(inner_env_id, **env_kwargs), base, base_params or {}, scale)
+    return ResidualEnv(make_env(inner_env_id, **env_kwargs), base, base_params or {}, scale, idle_scale)
 
 
 class ResidualAgentPolicy:
     """Evaluation twin of :class:`ResidualEnv`: baseline action + scale x the model's, on the plain env."""
 
-    def __init__(self, model_policy: Any, base: str, base_params: dict[str, Any], scale: float) -> None:
+    def __init__(self, model_policy: Any, base: str, base_params: dict[str, Any], scale: float,
+                 idle_scale: float | None = None) -> None:
+        check_scales(scale, idle_scale)
         self.model, self.base_name, self.base_params, self.scale = model_policy, base, base_params, float(scale)
+        self.idle_scale = idle_scale
         self.base: _Base | None = None
 
     def reset(self, env: Any, index: int | None = None) -> None:
@@ -112,7 +129,7 @@ class ResidualAgentPolicy:
         b = self.base.act(obs)
         r, state = self.model.predict(augment(obs, b), state=state, episode_start=episode_start,
                                       deterministic=deterministic)
-        return compose(b, np.asarray(r).reshape(b.shape), self.scale), state
+        return compose(b, np.asarray(r).reshape(b.shape), self.scale, self.idle_scale), state
 
 
 if ENV_ID not in gym.registry:

@@ -6,7 +6,7 @@ and policy:
 - ``{"kind": "baseline", "name": "pump_off", "params": {...}}`` (:mod:`agents.baselines_v1`),
 - ``{"kind": "agent", "path": "x.zip", "obs_norm": "x_obs_norm.npz" | None}`` (an SB3 model and the
   observation normalisation it was trained with, stored as npz; both are read as data, nothing is unpickled),
-  optionally with ``"residual": {"base", "params", "scale"}`` (:mod:`agents.residual_v1`),
+  optionally with ``"residual": {"base", "params", "scale"[, "idle_scale"]}`` (:mod:`agents.residual_v1`),
 - ``{"kind": "ensemble", "members": [{"path", "obs_norm"}, ...], "residual": ... | None}``: the mean of the
   members' actions (:mod:`agents.ensemble_v1`).
 
@@ -121,7 +121,7 @@ def build_policy(spec: dict[str, Any], env: Any) -> Any:
         if res:
             from .residual_v1 import ResidualAgentPolicy
 
-            return ResidualAgentPolicy(agent, res["base"], res["params"], res["scale"])
+            return ResidualAgentPolicy(agent, res["base"], res["params"], res["scale"], res.get("idle_scale"))
         return agent
     raise ValueError(f"policy spec kind = {spec.get('kind')!r}: expected baseline, agent or ensemble")
 

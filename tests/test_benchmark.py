@@ -212,7 +212,8 @@ def _quick_cfg(tmp_path: Path, env_id: str = FAKE, env_kwargs: dict | None = Non
                    "runs": {"ppo": {"config": str(tmp_path / "ppo.yaml"), "seeds": [0, 1], "ensemble": True},
                             "sac": {"config": str(tmp_path / "sac.yaml"), "seeds": [0]},
                             "ppo_residual": {"config": str(tmp_path / "ppo.yaml"), "seeds": [0],
-                                             "residual": {"base": "best_tuned", "scale": 0.3}},
+                                             "residual": {"base": "best_tuned", "scale": 0.3,
+                                                          "idle_scale": 2.0}},
                             "ppo_residual_shaped": {"config": str(tmp_path / "ppo.yaml"), "seeds": [0],
                                                     "residual": {"base": "best_tuned", "scale": 0.5,
                                                                  "shaping": "potential"}}}},
@@ -327,6 +328,63 @@ def test_residual_agent_with_zero_correction_is_its_baseline() -> None:
     b = obs[-2:]
     wrapped.step(np.ones(2, np.float32))
     assert wrapped.env.unwrapped.last_a0 == pytest.approx(min(1.0, b[0] + 0.3), abs=1e-6)
+
+
+def test_idle_scale_gives_the_agent_the_rate_only_where_the_base_idles() -> None:
+    from agents.residual_v1 import compose
+
+    base = np.array([[-1.0, 0.5], [0.1, 0.5]], np.float32)  # an idle interval, a pumping one
+    full = np.ones((2, 2), np.float32)
+    assert compose(base, full, 0.5, 2.0) == pytest.approx(np.array([[1.0, 1.0], [0.6, 1.0]]))
+    assert compose(base, full, 0.5) == pytest.approx(np.array([[-0.5, 1.0], [0.6, 1.0]]))
+    # r0 <= 0 keeps the stop; the stroke entry always keeps the plain scale; r = 0 is the baseline
+    assert compose(base[0], np.array([-0.4, -1.0]), 0.5, 2.0) == pytest.approx([-1.0, 0.0])
+    assert compose(base, np.zeros((2, 2)), 0.5, 2.0) == pytest.approx(base)
+    assert compose(base[0], np.array([0.25, 0.0]), 0.5, 2.0) == pytest.approx([-0.5, 0.5])
+
+
+def test_residual_env_and_policy_compose_the_idle_override_alike() -> None:
+    """Training wrapper and evaluation policy give the same episode when the agent overrides every stop."""
+    from agents.residual_v1 import ResidualAgentPolicy, ResidualEnv
+
+    params = {"threshold": 0.85, "idle_time_s": 600, "a_spm": 0.8, "a_stroke": 1.0}
+
+    class Pump:
+        def predict(self, obs, state=None, episode_start=None, deterministic=True):
+            return np.array([0.25 if obs[-2] <= -1.0 else 0.0, 0.0], np.float32), state
+
+    env = make_env(FAKE, scenario="train")
+    base = run_episode(env, PumpOffPolicy(NAMES, **params), seed=4)
+    ev = run_episode(env, ResidualAgentPolicy(Pump(), "pump_off", params, 0.3, idle_scale=2.0), seed=4)
+    wrapped = ResidualEnv(make_env(FAKE, scenario="train"), "pump_off", params, 0.3, idle_scale=2.0)
+    obs, _ = wrapped.reset(seed=4)
+    total, done, a0s = 0.0, False, []
+    while not done:
+        obs, r, term, trunc, _ = wrapped.step(Pump().predict(obs)[0])
+        a0s.append(wrapped.env.unwrapped.last_a0)
+        total, done = total + r, term or trunc
+    assert total == pytest.approx(ev["reward"]) and base["mean_duty"] < 1.0
+    assert -0.5 in [round(a, 6) for a in a0s] and -1.0 not in a0s  # every stop became a slow interval
+    assert ev["mean_duty"] > base["mean_duty"]
+
+
+@pytest.mark.parametrize("residual, match", [
+    ({"base": "pump_off", "scale": 0.0}, "residual.scale"),
+    ({"base": "pump_off", "scale": 2.5}, "residual.scale"),
+    ({"base": "pump_off", "scale": "wide"}, "residual.scale"),
+    ({"base": "pump_off", "scale": True}, "residual.scale"),
+    ({"base": "pump_off", "scale": 0.5, "idle_scale": -1}, "residual.idle_scale"),
+    ({"base": "pump_off", "scale": 0.5, "idle_scale": 3.0}, "residual.idle_scale"),
+    ({"base": "pump_off", "scale": 0.5, "idle_scale": [2]}, "residual.idle_scale"),
+    ({"base": "pump_off", "scale": 0.5, "idle": 2.0}, "unknown key"),
+], ids=["scale-zero", "scale-big", "scale-str", "scale-bool", "idle-neg", "idle-big", "idle-list", "unknown-key"])
+def test_benchmark_config_refuses_a_residual_out_of_its_box(tmp_path, residual, match) -> None:
+    cfg = _quick_cfg(tmp_path, env_id="srenv/SuckerRod-v1")  # training YAMLs the loader accepts
+    cfg["agents"]["runs"]["ppo_residual"]["residual"] = residual
+    p = tmp_path / "bad.yaml"
+    p.write_text(yaml.safe_dump(cfg))
+    with pytest.raises(ValueError, match=match):
+        load_benchmark_config(p)
 
 
 @pytest.mark.parametrize("history", ["one line", [1, 2], {"run": 1}])

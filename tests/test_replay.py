@@ -87,9 +87,11 @@ def test_replay_refuses_a_file_that_is_not_a_report(tmp_path, capsys, report, ne
     (_agent(["models/m.zip"], {**RES, "base": "oracle"}), "a", "residual_on"),
     (_agent(["models/m.zip"], {**RES, "scale": 5.0}), "a", "scale in (0, 2]"),
     (_agent(["models/m.zip"], {**RES, "scale": "big"}), "a", "residual_on"),
+    (_agent(["models/m.zip"], {**RES, "idle_scale": 0.0}), "a", "idle_scale in (0, 2]"),
+    (_agent(["models/m.zip"], {**RES, "idle_scale": True}), "a", "idle_scale in (0, 2]"),
     ({"kind": "baseline", "params": PUMP_OFF}, "nobody", "--policy nobody: not in the report"),
 ], ids=["absolute", "escapes", "missing-model", "not-zip", "no-models", "oracle-base", "scale-range",
-        "scale-type", "unknown-policy"])
+        "scale-type", "idle-scale-range", "idle-scale-bool", "unknown-policy"])
 def test_replay_refuses_a_policy_it_cannot_rebuild(tmp_path, capsys, policy, name, needle) -> None:
     (tmp_path / "models").mkdir()
     (tmp_path / "models" / "m.zip").write_bytes(b"not read before the checks")
