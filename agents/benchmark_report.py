@@ -91,6 +91,9 @@ def build_report(cfg: dict[str, Any], policies: dict[str, dict[str, Any]], split
                       "normalised_score": (m - base) / span if span and math.isfinite(span) else math.nan,
                       "failures": int(sum(bool(e.get("failure")) for e in eps))}
     agents = [n for n, p in policies.items() if p["kind"] == "agent"]
+    wells: dict[str, list[int]] = {}
+    for i, (w, _) in enumerate(keys):
+        wells.setdefault(w, []).append(i)
     paired: dict[str, dict[str, Any]] = {}
     for a in agents:
         paired[a] = {}
@@ -101,6 +104,12 @@ def build_report(cfg: dict[str, Any], policies: dict[str, dict[str, Any]], split
             paired[a][b] = {"mean_diff_reward": m, "ci95": [lo, hi], "n_episodes": len(keys),
                             "significant_positive": bool(lo > 0), "relative_rate_gain": m / abs(ret[b].mean())
                             if ret[b].mean() else math.nan}
+            if len(wells) < len(keys):
+                # several episodes per test well are not independent: the interval over per-well means is
+                # the conservative one (each well counts once)
+                d = ret[a] - ret[b]
+                _, wlo, whi = mean_ci(np.array([d[idx].mean() for idx in wells.values()]))
+                paired[a][b].update({"ci95_by_well": [wlo, whi], "n_wells": len(wells)})
     return {
         "schema": "srenv benchmark v1",
         "config": cfg["source"],
@@ -146,8 +155,13 @@ def verdict(report: dict[str, Any]) -> str:
         call = "agent significantly WORSE (95 % CI below zero)"
     else:
         call = "within noise (95 % CI spans zero)"
+    by_well = ""
+    if "ci95_by_well" in d:
+        wlo, whi = d["ci95_by_well"]
+        by_well = (f" (over the {d['n_wells']} wells' means, each well once: [{wlo:+.1f}, {whi:+.1f}], "
+                   f"{'above zero' if wlo > 0 else 'spans zero' if whi > 0 else 'below zero'})")
     return (f"{scale}. Best agent {best_a} vs best tuned baseline {best_b}: {d['mean_diff_reward']:+.1f} "
-            f"[{lo:+.1f}, {hi:+.1f}] per episode = {d['mean_diff_reward'] / steps:+.2f} USD/h, {call}; "
+            f"[{lo:+.1f}, {hi:+.1f}] per episode = {d['mean_diff_reward'] / steps:+.2f} USD/h, {call}{by_well}; "
             f"it beats {len(beaten)}/{len(bases)} baselines significantly; normalised score "
             f"{_fmt(s[best_a]['normalised_score'], 2)} (0 installed, 1 oracle).")
 

@@ -395,3 +395,30 @@ def test_benchmark_config_refuses_a_history_that_is_not_lines(tmp_path, history)
     p.write_text(yaml.safe_dump(cfg))
     with pytest.raises(ValueError, match="history"):
         load_benchmark_config(p)
+
+
+@pytest.mark.parametrize("per_well", [1, 2])
+def test_paired_ci_counts_each_well_once_when_wells_repeat(per_well) -> None:
+    """Two episodes of one well are not independent: the report adds the interval over per-well means."""
+    from agents.benchmark_report import build_report, mean_ci, verdict
+
+    rng = np.random.default_rng(1)
+    wells = [f"test-{w:03d}" for w in range(6) for _ in range(per_well)]
+    seeds = list(range(100, 100 + len(wells)))
+
+    def eps(shift):
+        return [{"well_id": w, "seed": s, "reward": float(shift + 10 * (i % per_well) + rng.normal()), "cost": 0.0,
+                 "reward_rate_usd_h": 0.0, "steps": 144} for i, (w, s) in enumerate(zip(wells, seeds))]
+
+    pols = {"installed": {"kind": "baseline", "episodes": eps(0.0)}, "oracle": {"kind": "baseline", "episodes": eps(9.0)},
+            "ppo": {"kind": "agent", "episodes": eps(3.0)}}
+    rep = build_report({"source": "x", "env_id": "e", "env_kwargs": {}}, pols, {}, {}, {}, {})
+    p = rep["paired"]["ppo"]["installed"]
+    d = np.array([a["reward"] - b["reward"] for a, b in zip(pols["ppo"]["episodes"], pols["installed"]["episodes"])])
+    assert p["ci95"] == pytest.approx(list(mean_ci(d)[1:]))
+    if per_well == 1:
+        assert "ci95_by_well" not in p and "each well once" not in verdict(rep)
+    else:
+        assert p["n_wells"] == 6
+        assert p["ci95_by_well"] == pytest.approx(list(mean_ci(d.reshape(6, 2).mean(axis=1))[1:]))
+        assert "over the 6 wells' means" in verdict(rep)
