@@ -54,6 +54,35 @@ def _average_episodes(per_seed: list[list[dict[str, Any]]]) -> list[dict[str, An
 
 
 # -------------------------------------------------------------------------------------------- report
+def paired_table(policies: dict[str, dict[str, Any]]) -> dict[str, dict[str, Any]]:
+    """``AGENT -> BASELINE ->`` the mean paired difference of returns over the test episodes and its 95 % CI.
+
+    When a test well has several episodes they are not independent draws, so the interval over the per-well
+    means (each well counted once) is added, and it is the one ``significant_positive`` is judged on."""
+    keys = [_key(e) for e in policies["installed"]["episodes"]]
+    ret = {n: np.array([{_key(e): e["reward"] for e in p["episodes"]}[k] for k in keys])
+           for n, p in policies.items()}
+    wells: dict[str, list[int]] = {}
+    for i, (w, _) in enumerate(keys):
+        wells.setdefault(w, []).append(i)
+    paired: dict[str, dict[str, Any]] = {}
+    for a in [n for n, p in policies.items() if p["kind"] == "agent"]:
+        paired[a] = {}
+        for b, p in policies.items():
+            if p["kind"] == "agent":
+                continue
+            d = ret[a] - ret[b]
+            m, lo, hi = mean_ci(d)
+            row = {"mean_diff_reward": m, "ci95": [lo, hi], "n_episodes": len(keys),
+                   "relative_rate_gain": m / abs(ret[b].mean()) if ret[b].mean() else math.nan}
+            if len(wells) < len(keys):
+                _, lo, whi = mean_ci(np.array([d[idx].mean() for idx in wells.values()]))
+                row.update({"ci95_by_well": [lo, whi], "n_wells": len(wells)})
+            row["significant_positive"] = bool(lo > 0)
+            paired[a][b] = row
+    return paired
+
+
 def machine() -> dict[str, Any]:
     import gymnasium
     import stable_baselines3
@@ -90,26 +119,7 @@ def build_report(cfg: dict[str, Any], policies: dict[str, dict[str, Any]], split
                       "mean_cost": float(np.mean([e["cost"] for e in eps])),
                       "normalised_score": (m - base) / span if span and math.isfinite(span) else math.nan,
                       "failures": int(sum(bool(e.get("failure")) for e in eps))}
-    agents = [n for n, p in policies.items() if p["kind"] == "agent"]
-    wells: dict[str, list[int]] = {}
-    for i, (w, _) in enumerate(keys):
-        wells.setdefault(w, []).append(i)
-    paired: dict[str, dict[str, Any]] = {}
-    for a in agents:
-        paired[a] = {}
-        for b, p in policies.items():
-            if p["kind"] == "agent":
-                continue
-            m, lo, hi = mean_ci(ret[a] - ret[b])
-            paired[a][b] = {"mean_diff_reward": m, "ci95": [lo, hi], "n_episodes": len(keys),
-                            "significant_positive": bool(lo > 0), "relative_rate_gain": m / abs(ret[b].mean())
-                            if ret[b].mean() else math.nan}
-            if len(wells) < len(keys):
-                # several episodes per test well are not independent: the interval over per-well means is
-                # the conservative one (each well counts once)
-                d = ret[a] - ret[b]
-                _, wlo, whi = mean_ci(np.array([d[idx].mean() for idx in wells.values()]))
-                paired[a][b].update({"ci95_by_well": [wlo, whi], "n_wells": len(wells)})
+    paired = paired_table(policies)
     return {
         "schema": "srenv benchmark v1",
         "config": cfg["source"],
@@ -148,6 +158,12 @@ def verdict(report: dict[str, Any]) -> str:
     best_a = max(agents, key=lambda n: s[n]["mean_reward"])
     d = report["paired"][best_a][best_b]
     lo, hi = d["ci95"]
+    by_well = ""
+    if "ci95_by_well" in d:
+        # several episodes per well: the call is made on the per-well means, each well counted once
+        lo, hi = d["ci95_by_well"]
+        by_well = (f" over the episodes; over the {d['n_wells']} wells' means, each well once, "
+                   f"[{lo / steps:+.2f}, {hi / steps:+.2f}] USD/h")
     beaten = [b for b in bases if report["paired"][best_a][b]["significant_positive"]]
     if lo > 0:
         call = "significant (95 % CI above zero)"
@@ -155,13 +171,9 @@ def verdict(report: dict[str, Any]) -> str:
         call = "agent significantly WORSE (95 % CI below zero)"
     else:
         call = "within noise (95 % CI spans zero)"
-    by_well = ""
-    if "ci95_by_well" in d:
-        wlo, whi = d["ci95_by_well"]
-        by_well = (f" (over the {d['n_wells']} wells' means, each well once: [{wlo:+.1f}, {whi:+.1f}], "
-                   f"{'above zero' if wlo > 0 else 'spans zero' if whi > 0 else 'below zero'})")
     return (f"{scale}. Best agent {best_a} vs best tuned baseline {best_b}: {d['mean_diff_reward']:+.1f} "
-            f"[{lo:+.1f}, {hi:+.1f}] per episode = {d['mean_diff_reward'] / steps:+.2f} USD/h, {call}{by_well}; "
+            f"[{d['ci95'][0]:+.1f}, {d['ci95'][1]:+.1f}] per episode = {d['mean_diff_reward'] / steps:+.2f} USD/h"
+            f"{by_well}: {call}; "
             f"it beats {len(beaten)}/{len(bases)} baselines significantly; normalised score "
             f"{_fmt(s[best_a]['normalised_score'], 2)} (0 installed, 1 oracle).")
 
@@ -184,7 +196,9 @@ def markdown_tables(report: dict[str, Any]) -> str:
                      + (" *" if d["significant_positive"] else "") for d in row.values()]
             lines.append(f"| {a} | " + " | ".join(cells) + " |")
         lines.append("")
-        lines.append("`*`: the 95 % CI is above zero.")
+        many = any("ci95_by_well" in d for row in report["paired"].values() for d in row.values())
+        lines.append("`*`: the 95 % CI is above zero" + (" (the CI over the per-well means: a test well has several "
+                                                         "episodes, which are not independent)." if many else "."))
     return "\n".join(lines)
 
 
@@ -321,9 +335,12 @@ def _fillage_gap(policies: dict[str, Any]) -> float | None:
 
 
 def rerender(out_dir: str | Path) -> None:
-    """Rewrite ``OUT/benchmark.md`` from ``OUT/benchmark.json`` (no simulation; the figure is kept)."""
+    """Recompute the paired differences from the stored episodes and rewrite ``OUT/benchmark.json`` and
+    ``OUT/benchmark.md`` (no simulation; the figure is kept)."""
     out = Path(out_dir)
     report = json.loads((out / "benchmark.json").read_text())
+    report["paired"] = _json_clean(paired_table(report["policies"]))
+    _atomic_write(out / "benchmark.json", json.dumps(report, indent=1))
     write_markdown(report, out / "benchmark.md", "figures/benchmark_v1.png")
 
 

@@ -420,5 +420,28 @@ def test_paired_ci_counts_each_well_once_when_wells_repeat(per_well) -> None:
         assert "ci95_by_well" not in p and "each well once" not in verdict(rep)
     else:
         assert p["n_wells"] == 6
-        assert p["ci95_by_well"] == pytest.approx(list(mean_ci(d.reshape(6, 2).mean(axis=1))[1:]))
+        by_well = mean_ci(d.reshape(6, 2).mean(axis=1))
+        assert p["ci95_by_well"] == pytest.approx(list(by_well[1:]))
         assert "over the 6 wells' means" in verdict(rep)
+    # significance is judged on the per-well interval when wells repeat, else on the episodes
+    assert p["significant_positive"] == ((by_well if per_well > 1 else mean_ci(d))[1] > 0)
+
+
+def test_a_lead_only_the_repeated_episodes_make_significant_is_called_within_noise() -> None:
+    from agents.benchmark_report import build_report, verdict
+
+    # 4 wells x 2 identical episodes: the per-episode CI halves in width, the per-well one does not
+    diffs = [5.0, -1.0, 4.0, 0.5]
+    wells = [f"test-{w:03d}" for w in range(4) for _ in range(2)]
+
+    def eps(d):
+        return [{"well_id": w, "seed": 100 + i, "reward": float(d[i // 2]), "cost": 0.0, "reward_rate_usd_h": 0.0,
+                 "steps": 1} for i, w in enumerate(wells)]
+
+    pols = {"installed": {"kind": "baseline", "episodes": eps([0.0] * 4)},
+            "oracle": {"kind": "baseline", "episodes": eps([9.0] * 4)},
+            "ppo": {"kind": "agent", "episodes": eps(diffs)}}
+    rep = build_report({"source": "x", "env_id": "e", "env_kwargs": {}}, pols, {}, {}, {}, {})
+    p = rep["paired"]["ppo"]["installed"]
+    assert p["ci95"][0] > 0 > p["ci95_by_well"][0] and not p["significant_positive"]
+    assert "within noise" in verdict(rep)
