@@ -14,7 +14,7 @@ from typing import Any
 import yaml
 
 from .baselines_v1 import BASELINE_NAMES
-from .residual_v1 import RESIDUAL_BASES
+from .residual_v1 import RESIDUAL_BASES, check_scales
 from .rollout_v1 import ENV_ID_V1
 from .tuning import refuse_test_split
 
@@ -128,11 +128,10 @@ def load_benchmark_config(path: str | Path, quick: bool = False) -> dict[str, An
             if extra:
                 raise BenchmarkConfigError(f"benchmark config: agents.runs.{algo}.residual: unknown key(s) "
                                            f"{sorted(extra)}: expected base, scale, idle_scale, shaping")
-            for key in ("scale", "idle_scale"):
-                v = res.get(key)
-                if v is not None and (isinstance(v, bool) or not isinstance(v, (int, float)) or not 0.0 < v <= 2.0):
-                    raise BenchmarkConfigError(f"benchmark config: agents.runs.{algo}.residual.{key} = {v!r}: "
-                                               "expected a number in (0, 2] (a fraction of the action box)")
+            try:
+                check_scales(res.get("scale"), res.get("idle_scale"))
+            except ValueError as exc:
+                raise BenchmarkConfigError(f"benchmark config: agents.runs.{algo}.{exc}") from None
     return cfg
 
 

@@ -26,7 +26,7 @@ from typing import Any
 import numpy as np
 
 from .ensemble_v1 import ensemble_spec
-from .residual_v1 import RESIDUAL_BASES
+from .residual_v1 import RESIDUAL_BASES, check_scales
 from .rollout_v1 import ENV_ID_V1, build_policy, make_env, run_episode
 
 MAX_REPORT_BYTES = 50_000_000
@@ -75,13 +75,15 @@ def _model(root: Path, rel: Any, name: str) -> dict[str, Any]:
 def _residual(res: Any, name: str) -> dict[str, Any] | None:
     if res is None:
         return None
-    def number(v: Any) -> bool:
-        return isinstance(v, (int, float)) and not isinstance(v, bool) and 0.0 < v <= 2.0
-
     scale = res.get("scale") if isinstance(res, dict) else None
     idle = res.get("idle_scale") if isinstance(res, dict) else None
+    try:
+        check_scales(scale, idle)
+        scales_ok = scale is not None
+    except ValueError:
+        scales_ok = False
     if not (isinstance(res, dict) and res.get("base") in RESIDUAL_BASES and isinstance(res.get("params"), dict)
-            and number(scale) and (idle is None or number(idle))):
+            and scales_ok):
         raise ReplayError(f"policies.{name}.residual_on = {str(res)[:80]}: expected {{base: one of "
                           f"{', '.join(RESIDUAL_BASES)}, params: {{...}}, scale in (0, 2], idle_scale in (0, 2] "
                           "or absent}}")

@@ -25,10 +25,11 @@ ENV_ID = "ResidualSuckerRod-v1"
 RESIDUAL_BASES = ("best_constant", "pump_off", "fillage_pi")
 
 
-def check_scales(scale: float, idle_scale: float | None) -> None:
+def check_scales(scale: Any, idle_scale: Any = None) -> None:
+    """The one bound on a residual's scales (wrapper, evaluation policy, benchmark config, replay)."""
     for name, v in (("scale", scale), ("idle_scale", idle_scale)):
-        if v is not None and not (isinstance(v, (int, float)) and 0.0 < v <= 2.0):
-            raise ValueError(f"residual {name} = {v!r}: expected a number in (0, 2]")
+        if v is not None and (isinstance(v, bool) or not isinstance(v, (int, float)) or not 0.0 < v <= 2.0):
+            raise ValueError(f"residual.{name} = {v!r}: expected a number in (0, 2] (a fraction of the action box)")
 
 
 def compose(base_action: np.ndarray, residual: np.ndarray, scale: float,
