@@ -193,12 +193,16 @@ def markdown_tables(report: dict[str, Any]) -> str:
                   "|---" * (1 + len(next(iter(report["paired"].values())))) + "|"]
         for a, row in report["paired"].items():
             cells = [f"{_fmt(d['mean_diff_reward'])} [{_fmt(d['ci95'][0])}, {_fmt(d['ci95'][1])}]"
+                     + (f"; wells [{_fmt(d['ci95_by_well'][0])}, {_fmt(d['ci95_by_well'][1])}]"
+                        if "ci95_by_well" in d else "")
                      + (" *" if d["significant_positive"] else "") for d in row.values()]
             lines.append(f"| {a} | " + " | ".join(cells) + " |")
         lines.append("")
         many = any("ci95_by_well" in d for row in report["paired"].values() for d in row.values())
-        lines.append("`*`: the 95 % CI is above zero" + (" (the CI over the per-well means: a test well has several "
-                                                         "episodes, which are not independent)." if many else "."))
+        lines.append("`*`: the 95 % CI is above zero" + (". A test well has several episodes, which are not "
+                                                         "independent, so each cell also gives the CI over the "
+                                                         "per-well means (`wells`), and `*` marks that one."
+                                                         if many else "."))
     return "\n".join(lines)
 
 

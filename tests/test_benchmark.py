@@ -400,7 +400,7 @@ def test_benchmark_config_refuses_a_history_that_is_not_lines(tmp_path, history)
 @pytest.mark.parametrize("per_well", [1, 2])
 def test_paired_ci_counts_each_well_once_when_wells_repeat(per_well) -> None:
     """Two episodes of one well are not independent: the report adds the interval over per-well means."""
-    from agents.benchmark_report import build_report, mean_ci, verdict
+    from agents.benchmark_report import build_report, markdown_tables, mean_ci, verdict
 
     rng = np.random.default_rng(1)
     wells = [f"test-{w:03d}" for w in range(6) for _ in range(per_well)]
@@ -423,6 +423,7 @@ def test_paired_ci_counts_each_well_once_when_wells_repeat(per_well) -> None:
         by_well = mean_ci(d.reshape(6, 2).mean(axis=1))
         assert p["ci95_by_well"] == pytest.approx(list(by_well[1:]))
         assert "over the 6 wells' means" in verdict(rep)
+    assert ("; wells [" in markdown_tables(rep)) == (per_well > 1)
     # significance is judged on the per-well interval when wells repeat, else on the episodes
     assert p["significant_positive"] == ((by_well if per_well > 1 else mean_ci(d))[1] > 0)
 
