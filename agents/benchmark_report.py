@@ -76,11 +76,16 @@ def paired_table(policies: dict[str, dict[str, Any]]) -> dict[str, dict[str, Any
             row = {"mean_diff_reward": m, "ci95": [lo, hi], "n_episodes": len(keys),
                    "relative_rate_gain": m / abs(ret[b].mean()) if ret[b].mean() else math.nan}
             if len(wells) < len(keys):
-                _, lo, whi = mean_ci(np.array([d[idx].mean() for idx in wells.values()]))
-                row.update({"ci95_by_well": [lo, whi], "n_wells": len(wells)})
-            row["significant_positive"] = bool(lo > 0)
+                _, wlo, whi = mean_ci(np.array([d[idx].mean() for idx in wells.values()]))
+                row.update({"ci95_by_well": [wlo, whi], "n_wells": len(wells)})
+            row["significant_positive"] = bool(judged_ci(row)[0] > 0)
             paired[a][b] = row
     return paired
+
+
+def judged_ci(row: dict[str, Any]) -> list[float]:
+    """The interval a paired row is judged on: over the per-well means when wells repeat, else over episodes."""
+    return row.get("ci95_by_well", row["ci95"])
 
 
 def machine() -> dict[str, Any]:
@@ -157,11 +162,9 @@ def verdict(report: dict[str, Any]) -> str:
         return f"{scale}; no agent trained; best tuned baseline {best_b}."
     best_a = max(agents, key=lambda n: s[n]["mean_reward"])
     d = report["paired"][best_a][best_b]
-    lo, hi = d["ci95"]
+    lo, hi = judged_ci(d)
     by_well = ""
     if "ci95_by_well" in d:
-        # several episodes per well: the call is made on the per-well means, each well counted once
-        lo, hi = d["ci95_by_well"]
         by_well = (f" over the episodes; over the {d['n_wells']} wells' means, each well once, "
                    f"[{lo / steps:+.2f}, {hi / steps:+.2f}] USD/h")
     beaten = [b for b in bases if report["paired"][best_a][b]["significant_positive"]]
