@@ -38,10 +38,12 @@ from .baselines_v1 import BASELINE_NAMES, interval_s_of
 from .benchmark_agents import (
     _algo_of,
     _policy_part,
+    distill_jobs,
     export_model,
-    residual_overrides,
+    model_name,
     residual_spec,
     train_job,
+    training_overrides,
 )
 from .benchmark_config import BenchmarkConfigError, load_benchmark_config
 from .benchmark_figure import figure
@@ -58,6 +60,7 @@ from .benchmark_report import (
     verdict,
     write_markdown,
 )
+from .distill_v1 import distill_job
 from .ensemble_v1 import ensemble_spec
 from .rollout_v1 import Runner, episode_jobs
 from .tuning import Evaluator, TuningSet, coordinate_search, search_best_constant
@@ -150,20 +153,35 @@ def run_benchmark(cfg: dict[str, Any], out_dir: str | Path, quick: bool = False,
             runs = cfg["agents"]["runs"]
             residuals = {a: residual_spec(r, tuned) for a, r in runs.items()}
             jobs = [{"algo": a, "seed": s, "config": r["config"], "out": str(workdir / f"{a}_seed{s}"),
-                     "overrides": {**r.get("overrides", {}), **residual_overrides(residuals[a], r, cfg)}}
+                     "overrides": {**r.get("overrides", {}), **training_overrides(r, residuals[a], cfg)}}
                     for a, r in runs.items() for s in r["seeds"]]
             bar = _Progress(len(jobs), "training")
             summaries = runner.map(jobs, progress=bar, fn=train_job) if jobs else []
             bar.close()
             models_dir = out / "models"
             agent_specs: dict[str, list[dict[str, Any]]] = {}
+            teachers: dict[str, list[dict[str, Any]]] = {}
             for job, summ in zip(jobs, summaries):
-                spec = export_model(summ, models_dir / f"{job['algo']}_v1_seed{job['seed']}.zip")
+                run = runs[job["algo"]]
+                spec = export_model(summ, models_dir / f"{model_name(job['algo'], run)}_v1_seed{job['seed']}.zip")
                 if residuals[job["algo"]]:
                     spec["residual"] = residuals[job["algo"]]
                 spec["train_summary"] = {k: summ[k] for k in ("num_timesteps", "wall_time_s", "seed",
                                                               "best_eval_mean_reward")}
-                agent_specs.setdefault(job["algo"], []).append(spec)
+                (teachers if run.get("teacher") else agent_specs).setdefault(job["algo"], []).append(spec)
+            # teacher-student runs (agents/distill_v1.py): the teachers above teach one student per seed
+            djobs = distill_jobs(runs, teachers, agent_specs, residuals, env_id, train_kwargs, models_dir)
+            if djobs:
+                bar = _Progress(len(djobs), "distillation")
+                students = runner.map(djobs, progress=bar, fn=distill_job)
+                bar.close()
+                for job, spec in zip(djobs, students):
+                    t_wall = sum(s["wall_time_s"] for s in job["teacher_summaries"]) / len(job["teacher_summaries"])
+                    spec["residual"] = residuals[job["algo"]]
+                    spec["train_summary"] = {"num_timesteps": job["teacher_summaries"][0]["num_timesteps"],
+                                             "wall_time_s": t_wall + spec["wall_time_s"], "seed": job["seed"],
+                                             "best_eval_mean_reward": None}
+                    agent_specs.setdefault(job["algo"], []).append(spec)
             # seed ensembles (agents/ensemble_v1.py): the mean action of every seed's model, one more policy
             for a in [a for a in agent_specs if runs[a].get("ensemble")]:
                 agent_specs[f"{a}_ensemble"] = [{**ensemble_spec(agent_specs[a]), "of": a}]
@@ -264,6 +282,11 @@ def run_benchmark(cfg: dict[str, Any], out_dir: str | Path, quick: bool = False,
                           "episodes": [{"well_id": e["well_id"], "seed": e["seed"], "reward": e["reward"],
                                         "cost": e["cost"]} for e in per_seed[k]]}
                          for k, (sp, m) in enumerate(zip(specs, seed_means))]}
+        if runs[a].get("teacher"):
+            training["runs"][a]["teacher"] = {
+                **runs[a]["teacher"], "observation": "privileged",
+                "models": [_rel(t["path"], out) for t in teachers[a]],
+                "distill": [{"seed": sp["train_summary"]["seed"], "iterations": sp["distill"]} for sp in specs]}
     # traces for the figure: best agent (the shipped model) and best tuned baseline
     bases = [n for n in BASELINE_NAMES if n != "oracle"]
     best_b = max(bases, key=lambda n: np.mean([e["reward"] for e in policies[n]["episodes"]]))

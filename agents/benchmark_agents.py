@@ -102,3 +102,47 @@ def residual_overrides(res: dict[str, Any] | None, run: dict[str, Any], cfg: dic
         kwargs["idle_scale"] = res["idle_scale"]
     return {"env_id": f"agents.residual_v1:{ENV_ID}", "env_kwargs": kwargs}
 
+
+
+# ------------------------------------------------------------------------ teacher-student runs
+def model_name(algo: str, run: dict[str, Any]) -> str:
+    """The exported model's stem: a teacher-student run's training jobs train its teachers."""
+    return f"{algo}_teacher" if run.get("teacher") else algo
+
+
+def training_overrides(run: dict[str, Any], res: dict[str, Any] | None, cfg: dict[str, Any]) -> dict[str, Any]:
+    """The training-YAML overrides of one run's jobs: a teacher trains on the privileged observation, with
+    the teacher's ``idle_scale`` if it has one (agents/distill_v1.py)."""
+    t = run.get("teacher")
+    if not t or not res:
+        return residual_overrides(res, run, cfg)
+    teacher_res = {**res, **({"idle_scale": float(t["idle_scale"])} if t.get("idle_scale") is not None else {})}
+    over = residual_overrides(teacher_res, run, cfg)
+    over["env_kwargs"] = {**over["env_kwargs"], "observation": "privileged"}
+    return over
+
+
+def distill_jobs(runs: dict[str, Any], teachers: dict[str, list[dict[str, Any]]],
+                 agent_specs: dict[str, list[dict[str, Any]]], residuals: dict[str, Any], env_id: str,
+                 train_kwargs: dict[str, Any], models_dir: Path) -> list[dict[str, Any]]:
+    """One :func:`agents.distill_v1.distill_job` per (teacher-student run, seed): the run's teachers teach
+    a copy of ``students_from``'s model of that seed."""
+    from .benchmark_config import distill_seeds
+
+    jobs = []
+    for a, tspecs in teachers.items():
+        t = runs[a]["teacher"]
+        src = agent_specs[t["students_from"]]
+        for k, seed in enumerate(runs[a]["seeds"]):
+            init = src[k]
+            if init["train_summary"]["seed"] != seed or {k2: init["residual"][k2] for k2 in ("base", "params",
+                                                                                         "scale")} != \
+                    {k2: residuals[a][k2] for k2 in ("base", "params", "scale")}:
+                raise BenchmarkConfigError(f"agents.runs.{a}.teacher.students_from = {t['students_from']!r}: "
+                                           f"its seed-{seed} model does not share this run's seed and residual")
+            jobs.append({"algo": a, "seed": seed, "teachers": [_policy_part(s) for s in tspecs],
+                         "student_init": _policy_part(init), "residual": residuals[a], "env_id": env_id,
+                         "env_kwargs": train_kwargs, "seeds": distill_seeds(t, seed),
+                         "iterations": t["iterations"], "dest": str(models_dir / f"{a}_v1_seed{seed}.zip"),
+                         "teacher_summaries": [s["train_summary"] for s in tspecs]})
+    return jobs

@@ -132,7 +132,62 @@ def load_benchmark_config(path: str | Path, quick: bool = False) -> dict[str, An
                 check_scales(res.get("scale"), res.get("idle_scale"))
             except ValueError as exc:
                 raise BenchmarkConfigError(f"benchmark config: agents.runs.{algo}.{exc}") from None
+    for algo, run in runs.items():
+        if run.get("teacher") is not None:
+            _check_teacher(algo, run, runs, sets["tuning"] | sets["validation"])
     return cfg
+
+
+def _int_in(value: Any, lo: int, hi: int) -> bool:
+    return isinstance(value, int) and not isinstance(value, bool) and lo <= value <= hi
+
+
+def _check_teacher(algo: str, run: dict[str, Any], runs: dict[str, Any], held: set[int]) -> None:
+    """A teacher-student run (agents/distill_v1.py): its teachers are this run's seeds on the privileged
+    observation, its students start from ``students_from``'s models of the same seeds."""
+    from .distill_v1 import DISTILL_KEYS, SEED_STRIDE
+
+    key = f"benchmark config: agents.runs.{algo}.teacher"
+    t = run["teacher"]
+    if not isinstance(t, dict) or set(t) - DISTILL_KEYS or not {"students_from", "iterations", "episodes",
+                                                                  "seed_start"} <= set(t):
+        raise BenchmarkConfigError(f"{key} = {str(t)[:120]!r}: expected {{students_from: RUN, iterations: N, "
+                                   "episodes: N, seed_start: S[, idle_scale: X]}}")
+    src = runs.get(t["students_from"]) if isinstance(t["students_from"], str) else None
+    if src is None or t["students_from"] == algo or src.get("teacher"):
+        raise BenchmarkConfigError(f"{key}.students_from = {t['students_from']!r}: expected another run of "
+                                   f"agents.runs without a teacher (one of {sorted(set(runs) - {algo})})")
+    res, src_res = run.get("residual"), src.get("residual")
+    if not res or not src_res or any(res.get(k, d) != src_res.get(k, d) for k, d in
+                                      (("base", "best_tuned"), ("scale", None), ("idle_scale", None))):
+        raise BenchmarkConfigError(f"{key}: expected a residual run whose base, scale and idle_scale are those of "
+                                   f"{t['students_from']} (the students start from its models)")
+    if src["seeds"] != run["seeds"]:
+        raise BenchmarkConfigError(f"{key}.students_from = {t['students_from']!r}: its seeds {src['seeds']} "
+                                   f"differ from this run's {run['seeds']}: expected the same (one student each)")
+    for name, lo, hi in (("iterations", 1, 20), ("episodes", 1, 500), ("seed_start", 0, 10**9)):
+        if not _int_in(t[name], lo, hi):
+            raise BenchmarkConfigError(f"{key}.{name} = {t[name]!r}: expected an integer in [{lo}, {hi}]")
+    if t["iterations"] * t["episodes"] > SEED_STRIDE:
+        raise BenchmarkConfigError(f"{key}: iterations x episodes = {t['iterations'] * t['episodes']}: expected "
+                                   f"at most {SEED_STRIDE} (each student's episodes are seeds "
+                                   f"seed_start + {SEED_STRIDE} x seed + 0, 1, ...)")
+    try:
+        check_scales(res.get("scale"), t.get("idle_scale"))
+    except ValueError as exc:
+        raise BenchmarkConfigError(f"{key}.{str(exc).removeprefix('residual.')}") from None
+    used = {s for seed in run["seeds"] for s in distill_seeds(t, seed)}
+    if used & held:
+        raise BenchmarkConfigError(f"{key}.seed_start = {t['seed_start']!r}: its episodes share seeds "
+                                   f"{sorted(used & held)[:5]} with tuning or validation: expected disjoint seeds")
+
+
+def distill_seeds(teacher: dict[str, Any], seed: int) -> list[int]:
+    """The training-split episodes one student's DAgger rolls out (agents/distill_v1.py)."""
+    from .distill_v1 import SEED_STRIDE
+
+    start = teacher["seed_start"] + SEED_STRIDE * seed
+    return list(range(start, start + teacher["iterations"] * teacher["episodes"]))
 
 
 def _resolve(path: str | Path) -> Path:

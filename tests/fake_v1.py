@@ -20,6 +20,7 @@ CARD = [f"card_up_{i:02d}" for i in range(32)] + [f"card_down_{i:02d}" for i in 
 FIELD_OBS_NAMES = tuple(CARD + ["spm", "avg_spm", "stroke", "duty", "idle_s", "fillage_est", "power_mean",
                                 "power_peak", "pprl", "mprl", "time_remaining", "level_shot",
                                 "level_shot_age"])
+PRIVILEGED_OBS_NAMES = (*FIELD_OBS_NAMES, "level", "inflow")  # the field names, then the hidden truth
 N_WELLS = {"train": 20, "test": 10}
 
 
@@ -47,9 +48,11 @@ class FakeSuckerRodV1(gym.Env):
     def __init__(self, scenario: str = "train", observation: str = "field") -> None:
         if scenario not in N_WELLS:
             raise ValueError(f"scenario = {scenario!r}: expected train or test")
-        self.scenario = scenario
-        self.obs_names = FIELD_OBS_NAMES
-        self.observation_space = gym.spaces.Box(-2.0, 2.0, (len(FIELD_OBS_NAMES),), np.float32)
+        if observation not in ("field", "privileged"):
+            raise ValueError(f"observation = {observation!r}: expected field or privileged")
+        self.scenario, self.observation = scenario, observation
+        self.obs_names = FIELD_OBS_NAMES if observation == "field" else PRIVILEGED_OBS_NAMES
+        self.observation_space = gym.spaces.Box(-2.0, 2.0, (len(self.obs_names),), np.float32)
         self.action_space = gym.spaces.Box(-1.0, 1.0, (2,), np.float32)
         self.well = _well(scenario, 0)
         self.cfg = self.well.cfg
@@ -79,6 +82,9 @@ class FakeSuckerRodV1(gym.Env):
                 self._last["duty"], self._last["idle"] / 3600, self.fill, 0.3, 0.5, 0.6, 0.2,
                 1 - self.k / self.horizon, self.stored_m3 / 10, 0.0]
         o[64:] = vals
+        if self.observation == "privileged":
+            q = self.well.hidden["inflow_m3_day"] * self.inflow_multiplier(self.time_s)
+            o = np.concatenate([o, np.array([self.stored_m3 / 10, q / 40], np.float32)])
         return o
 
     def step(self, action):
