@@ -237,6 +237,11 @@ def _has_v1() -> bool:
 def test_quick_benchmark_writes_the_schema_on_disjoint_splits_same_episodes(tmp_path, real) -> None:
     """``benchmark --quick`` end to end (the real v1 env with 1-hour episodes, or the fake one)."""
     cfg = _quick_cfg(tmp_path, "srenv/SuckerRod-v1", {"task__episode_hours": 1.0}) if real else _quick_cfg(tmp_path)
+    shaped = cfg["agents"]["runs"]["ppo_residual_shaped"]
+    cfg["agents"]["runs"]["distilled"] = {  # a teacher-student run (agents/distill_v1.py)
+        "config": shaped["config"], "seeds": [0], "residual": dict(shaped["residual"]),
+        "teacher": {"students_from": "ppo_residual_shaped", "iterations": 1, "episodes": 1, "seed_start": 40000,
+                    "idle_scale": 1.0}}
     cfg_path = tmp_path / "bench.yaml"
     cfg_path.write_text(yaml.safe_dump(cfg))
     out = tmp_path / "out"
@@ -256,7 +261,17 @@ def test_quick_benchmark_writes_the_schema_on_disjoint_splits_same_episodes(tmp_
     d = json.loads((out / "benchmark.json").read_text())
     P = d["policies"]
     assert set(P) == {"installed", "best_constant", "pump_off", "fillage_pi", "oracle", "ppo", "sac",
-                      "ppo_residual", "ppo_residual_shaped", "ppo_ensemble"}
+                      "ppo_residual", "ppo_residual_shaped", "ppo_ensemble", "distilled"}
+    # the teacher-student run ships its student (the shaped run's seed-0 zip with new weights) and its teacher
+    assert P["distilled"]["kind"] == "agent" and P["distilled"]["residual_on"] == P["ppo_residual_shaped"]["residual_on"]
+    teacher = d["training"]["runs"]["distilled"]["teacher"]
+    assert teacher["observation"] == "privileged" and teacher["distill"][0]["iterations"][0]["labels"] == 12
+    assert teacher["models"] == ["models/distilled_teacher_v1_seed0.zip"] and (out / teacher["models"][0]).is_file()
+    import zipfile
+
+    with zipfile.ZipFile(out / "models" / "distilled_v1_seed0.zip") as a, \
+            zipfile.ZipFile(out / "models" / "ppo_residual_shaped_v1_seed0.zip") as b:
+        assert [n for n in a.namelist() if a.read(n) != b.read(n)] == ["policy.pth"]
     assert {P[n]["kind"] for n in ("ppo", "sac", "ppo_residual", "ppo_residual_shaped", "ppo_ensemble")} == {"agent"}
     # the seed ensemble is one more policy, made of the run's own models
     assert P["ppo_ensemble"]["ensemble_of"] == "ppo" and P["ppo_ensemble"]["models"] == P["ppo"]["models"]

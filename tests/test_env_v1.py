@@ -103,6 +103,21 @@ def test_same_seed_same_well_and_trajectory() -> None:
     assert other.reset(seed=4)[1]["well_id"] != runs[0][1]
 
 
+@pytest.mark.parametrize("kwargs, hours, interval", [
+    ({}, 12.0, 300.0),
+    ({"episode_hours": 2.0}, 2.0, 300.0),
+    ({"task__episode_hours": 1.0}, 1.0, 300.0),
+    ({"task__interval_s": 600.0}, 12.0, 600.0),
+    ({"overrides": {"task.episode_hours": 0.5, "task.interval_s": 900.0}}, 0.5, 900.0),
+], ids=["spec", "kwarg", "section-field-hours", "section-field-interval", "overrides"])
+def test_a_task_override_is_not_shadowed_by_the_specs_defaults(kwargs, hours, interval) -> None:
+    """The spec passes episode_hours and interval_s always; an override of the same field must win."""
+    env = gym.make("srenv/SuckerRod-v1", **kwargs).unwrapped
+    env.reset(seed=0)
+    assert env.cfg.task.episode_hours == pytest.approx(hours) and env.cfg.task.interval_s == pytest.approx(interval)
+    assert env.horizon_s == pytest.approx(hours * 3600.0)
+
+
 def test_train_and_test_splits_are_disjoint_and_test_is_refused_to_tuning() -> None:
     train = {wf.well_seed("train", k) for k in range(wf.N_TRAIN)}
     test = {wf.well_seed("test", k) for k in range(wf.N_TEST)}

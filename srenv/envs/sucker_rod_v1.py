@@ -14,8 +14,8 @@ Constructor
 |---|---|---|
 | ``scenario`` | ``"train"`` | ``"train"`` / ``"test"``: the split's wells (200 / 50); or a shipped well name / YAML path |
 | ``observation`` | ``"field"`` | ``"field"`` (what a controller measures) or ``"privileged"`` (adds the hidden truth) |
-| ``episode_hours`` | ``12.0`` (spec) | horizon in hours of well time (``task.episode_hours``); ``None`` keeps the config's |
-| ``interval_s`` | ``300.0`` (spec) | control interval in s of well time (``task.interval_s``); ``None`` keeps the config's |
+| ``episode_hours`` | ``12.0`` (spec) | horizon in hours of well time (``task.episode_hours``); ``None`` keeps the config's; an override of ``task.episode_hours`` wins |
+| ``interval_s`` | ``300.0`` (spec) | control interval in s of well time (``task.interval_s``); ``None`` keeps the config's; an override of ``task.interval_s`` wins |
 | ``render_mode`` | ``None`` | ``"rgb_array"`` or ``"human"`` (surface and pump cards of the last stroke) |
 | ``overrides`` | ``None`` | ``{"key.path": value}`` applied to every well's config (e.g. ``economics.oil_price_usd_m3``) |
 | ``**kwargs`` | | further overrides as ``section__field=value`` (e.g. ``task__interval_s=600``) |
@@ -141,10 +141,11 @@ class SuckerRodV1Env(CardWindow, gym.Env):
         self.render_mode = render_mode
         self.overrides = dict(overrides or {})
         self.overrides.update(_overrides_from_kwargs(kwargs))
-        if episode_hours is not None:
-            self.overrides["task.episode_hours"] = episode_hours
-        if interval_s is not None:
-            self.overrides["task.interval_s"] = interval_s
+        # the registered spec always passes episode_hours and interval_s; an override of the same field
+        # (``overrides={"task.interval_s": ...}`` or ``task__interval_s=...``) is the more specific request
+        for key, value in (("task.episode_hours", episode_hours), ("task.interval_s", interval_s)):
+            if value is not None:
+                self.overrides.setdefault(key, value)
         self.split = self.scenario if self.scenario in wf.SPLITS else None
         self._fixed: wf.WellSpec | None = None
         if self.split is None:
