@@ -133,13 +133,8 @@ def distill_jobs(runs: dict[str, Any], teachers: dict[str, list[dict[str, Any]]]
     for a, tspecs in teachers.items():
         t = runs[a]["teacher"]
         src = agent_specs[t["students_from"]]
-        for k, seed in enumerate(runs[a]["seeds"]):
-            init = src[k]
-            if init["train_summary"]["seed"] != seed or {k2: init["residual"][k2] for k2 in ("base", "params",
-                                                                                         "scale")} != \
-                    {k2: residuals[a][k2] for k2 in ("base", "params", "scale")}:
-                raise BenchmarkConfigError(f"agents.runs.{a}.teacher.students_from = {t['students_from']!r}: "
-                                           f"its seed-{seed} model does not share this run's seed and residual")
+        # the config loader checked that students_from has this run's seeds (in order) and residual
+        for init, seed in zip(src, runs[a]["seeds"]):
             jobs.append({"algo": a, "seed": seed, "teachers": [_policy_part(s) for s in tspecs],
                          "student_init": _policy_part(init), "residual": residuals[a], "env_id": env_id,
                          "env_kwargs": train_kwargs, "seeds": distill_seeds(t, seed),

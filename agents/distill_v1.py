@@ -63,7 +63,8 @@ def rollout_labels(env: Any, teacher: Any, student: Any, residual: dict[str, Any
         while not done:
             b = base.act(obs)
             label = np.clip(np.asarray(teacher.predict(augment(obs, b))[0], np.float32).reshape(2), -1.0, 1.0)
-            x = student.norm(augment(obs[:n_field], b)) if student.norm is not None else augment(obs[:n_field], b)
+            x = augment(obs[:n_field], b)
+            x = student.norm(x) if student.norm is not None else x
             own = np.asarray(student.model.predict(x, deterministic=True)[0], np.float32).reshape(2)
             xs.append(x)
             ys.append(label)
