@@ -44,13 +44,6 @@ DISTILL_KEYS = {"students_from", "iterations", "episodes", "seed_start", "idle_s
 SEED_STRIDE = 1000  # student k rolls out seeds seed_start + SEED_STRIDE * k + 0, 1, ...
 
 
-def _teacher(specs: Sequence[dict[str, Any]]) -> Any:
-    from .ensemble_v1 import EnsemblePolicy
-    from .rollout_v1 import AgentPolicy
-
-    return EnsemblePolicy([AgentPolicy(s["path"], s.get("obs_norm")) for s in specs])
-
-
 def rollout_labels(env: Any, teacher: Any, student: Any, residual: dict[str, Any], seeds: Sequence[int],
                    beta: float, rng: np.random.Generator, n_field: int) -> tuple[np.ndarray, np.ndarray, float]:
     """One DAgger iteration: (student inputs, teacher labels, mean episode return) over ``seeds``."""
@@ -117,11 +110,12 @@ def distill(teachers: Sequence[dict[str, Any]], student_init: dict[str, Any], re
     """DAgger from the teacher models' mean correction into a copy of ``student_init``; the student's spec."""
     import torch
 
-    from .rollout_v1 import AgentPolicy, make_env
+    from .rollout_v1 import AgentPolicy, build_policy, make_env
 
     refuse_test_split(env_kwargs.get("scenario", "train"), "train")
     torch.set_num_threads(1)
-    teacher = _teacher(teachers)
+    # the teachers' mean correction: the same ensemble policy the benchmark evaluates (agents/ensemble_v1.py)
+    teacher = build_policy({"kind": "ensemble", "members": list(teachers)}, None)
     student = AgentPolicy(student_init["path"], student_init.get("obs_norm"))
     student.model.set_training_mode(True)
     env = make_env(env_id, **{**env_kwargs, "observation": "privileged"})
