@@ -38,8 +38,8 @@ def test_every_flat_name_is_the_moved_module(old: str) -> None:
 
 def test_a_moved_subpackage_aliases_its_modules() -> None:
     import srenv.laws.valve as old_valve
-
     from srenv.laws import rod_friction
+
     from srenv.physics.laws import valve
 
     assert old_valve is valve and rod_friction is importlib.import_module("srenv.physics.laws.rod_friction")
