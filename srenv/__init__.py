@@ -12,6 +12,7 @@ __version__ = "0.1.0"
 
 ENV_ID = "srenv/SuckerRod-v0"
 ENV_ID_V1 = "srenv/SuckerRod-v1"
+ENV_ID_V2 = "srenv/SuckerRod-v2"
 
 # Every env srenv registers: id -> (entry point, default kwargs shown by gymnasium.spec(id)). Adding an env
 # is one line here. No TimeLimit (max_episode_steps) and no reward_threshold are registered on purpose:
@@ -25,7 +26,11 @@ ENVS: dict[str, tuple[str, dict]] = {
     # kwargs (or None to keep a config's own task section) changes it
     ENV_ID_V1: ("srenv.envs.sucker_rod_v1:SuckerRodV1Env",
                 {"scenario": "train", "observation": "field", "episode_hours": 12.0, "interval_s": 300.0}),
+    ENV_ID_V2: ("srenv.envs.sucker_rod_v2:SuckerRodV2Env",
+                {"scenario": "train", "observation": "field", "episode_hours": 12.0, "interval_s": 300.0}),
 }
+# gymnasium.make_vec(..., vectorization_mode="vector_entry_point") for the envs that have one
+VECTOR_ENTRY_POINTS = {ENV_ID_V2: "srenv.envs.sucker_rod_v2:make_vector_env"}
 
 
 def register_envs() -> None:
@@ -36,15 +41,17 @@ def register_envs() -> None:
         if env_id not in gymnasium.registry:
             # entry point by string: importing srenv stays light (the kernel compiles only when an env is made)
             gymnasium.register(id=env_id, entry_point=entry_point, kwargs=dict(kwargs),
+                               vector_entry_point=VECTOR_ENTRY_POINTS.get(env_id),
                                max_episode_steps=None, reward_threshold=None, nondeterministic=False)
     # v1 is another task, not an upgrade of v0 (kept on purpose, for reproducibility). gymnasium would warn
     # "v0 is out of date, upgrade to v1" on every make of v0 -- wrong advice, and a warning that breaks
     # warnings-as-errors checks -- because it takes the highest registered version of a name as its successor.
     # Its lookup skips specs without a version: so v1's spec is left out of that lookup (its id, kwargs and
     # make are unchanged; only EnvSpec.version reads None).
-    spec_v1 = gymnasium.registry.get(ENV_ID_V1)
-    if spec_v1 is not None:
-        spec_v1.version = None
+    for later in (ENV_ID_V1, ENV_ID_V2):  # (v2 likewise: v1 is no outdated v2)
+        spec = gymnasium.registry.get(later)
+        if spec is not None:
+            spec.version = None
 
 
 register_envs()

@@ -176,6 +176,14 @@ class SuckerRodV1Env(CardWindow, gym.Env):
         cfg = load_config(spec.cfg, self.overrides)
         return wf.WellSpec(spec.well_id, spec.params, cfg, spec.nominal_rate_m3_day, spec.design)
 
+    def _episode_spec(self, seed: int | None, rng: np.random.Generator) -> wf.WellSpec:
+        """The episode's well: number ``seed mod N`` of the split (drawn when no seed), or the fixed well."""
+        if self.split is None:
+            return self._fixed
+        n = wf.split_size(self.split)
+        index = seed % n if seed is not None else int(rng.integers(n))
+        return self._apply(_spec(self.split, int(index)))
+
     def inflow_multiplier(self, t_s: float) -> float:
         """The reservoir's deliverability relative to the well's IPR at well time t_s since the episode start."""
         days = t_s / 86400.0
@@ -188,12 +196,7 @@ class SuckerRodV1Env(CardWindow, gym.Env):
     def reset(self, *, seed: int | None = None, options: dict | None = None) -> tuple[np.ndarray, dict]:
         super().reset(seed=seed)
         rng = self.np_random
-        if self.split is not None:
-            n = wf.split_size(self.split)
-            index = seed % n if seed is not None else int(rng.integers(n))
-            spec = self._apply(_spec(self.split, int(index)))
-        else:
-            spec = self._fixed
+        spec = self._episode_spec(seed, rng)
         self.well = spec
         cfg = spec.cfg
         self.cfg = cfg
@@ -244,6 +247,7 @@ class SuckerRodV1Env(CardWindow, gym.Env):
             avg = float(np.clip(avg, self._avg_spm - ctl.spm_rate_limit, self._avg_spm + ctl.spm_rate_limit))
         d_avg = avg - self._avg_spm
         self.sim.annulus.rate_multiplier = self.inflow_multiplier(self._elapsed())
+        self._before_interval()
         failure = None
         duration = min(self.cfg.task.interval_s, self.horizon_s - self._elapsed())
         duration = max(duration, 1e-3)
@@ -263,11 +267,12 @@ class SuckerRodV1Env(CardWindow, gym.Env):
             r.duration_s - r.pumping_s)
         terms = self.econ.terms(r, d_avg, failed=failure is not None)
         costs = self.econ.costs(r)
+        ended = self._after_interval(r, terms, costs)
         reward = float(sum(terms.values()))
         if self._elapsed() - self._shot_time >= self.cfg.task.level_shot_interval_h * 3600.0 - 1e-6:
             self._shot_level, self._shot_time = self.sim.annulus.level_m, self._elapsed()
         self._result = r
-        terminated = failure is not None
+        terminated = failure is not None or ended
         truncated = not terminated and self._elapsed() >= self.horizon_s - 1e-6
         info = self._info(r, terms, costs)
         if failure:
@@ -275,6 +280,14 @@ class SuckerRodV1Env(CardWindow, gym.Env):
         if self.render_mode == "human":
             self.render()
         return self._observe(), reward, terminated, truncated, info
+
+    # hooks for later versions (v2's conditions); v1 has none
+    def _before_interval(self) -> None:
+        """Called before each interval is run."""
+
+    def _after_interval(self, r: IntervalResult, terms: dict, costs: dict) -> bool:
+        """Called with the interval's reward terms and costs (may add to both); True ends the episode."""
+        return False
 
     # ------------------------------------------------------------------------------------------ obs / info
     def _observe(self) -> np.ndarray:

@@ -23,7 +23,11 @@ designs the rest as an engineer would for that depth and pump:
 
 Splits: the train split is well seeds ``TRAIN_SEED0 + k`` (k < ``N_TRAIN``), the test split
 ``TEST_SEED0 + k`` (k < ``N_TEST``); the two seed ranges are disjoint and :func:`check_split` refuses the
-test split to every tuning or training caller.
+test split to every tuning or training caller. For v2 (:data:`V2_SPLITS`) a fixed ``validation`` split
+(``VALIDATION_SEED0 + k``, k < ``N_VALIDATION``) is for model selection only, and :func:`family_spec` draws well
+SEED of the family from a separate random stream (``family:SEED``, id ``family-SEED``): outside every split
+whatever SEED is, so a user can draw any number of wells nobody has seen. Both are refused to tuning and
+training (:func:`check_split`; ``family`` also to selection).
 """
 
 from __future__ import annotations
@@ -38,7 +42,10 @@ from ..physics.rod import GRAVITY_M_S2
 
 N_TRAIN, N_TEST = 200, 50
 TRAIN_SEED0, TEST_SEED0 = 0, 1_000_000
-SPLITS = ("train", "test")
+SPLITS = ("train", "test")  # v1's scenarios
+N_VALIDATION, VALIDATION_SEED0 = 50, 2_000_000
+V2_SPLITS = ("train", "validation", "test")
+FAMILY_STREAM = 0xFA  # family wells: a third entropy word, so no family seed reproduces a split's well
 
 STEEL_E_PA, STEEL_RHO = 2.0e11, 7850.0
 OIL_RHO, WATER_RHO = 850.0, 1030.0
@@ -101,28 +108,43 @@ class WellSpec:
 
 
 def check_split(split: str, purpose: str) -> None:
-    """Refuse the test split to tuning and training: its wells are for the final evaluation only."""
-    if split not in SPLITS:
-        raise ValueError(f"split = {split!r}: expected one of {SPLITS}")
-    if split == "test" and purpose in ("tune", "train", "select"):
-        raise ValueError(f"split = 'test' refused for {purpose}: test wells are only for the final evaluation; "
-                         "tune and train on split 'train'")
+    """Refuse the test split (and v2's validation and family wells) to tuning and training: the test and
+    family wells are for the final evaluation only, the validation wells for model selection."""
+    if split not in V2_SPLITS + ("family",):
+        raise ValueError(f"split = {split!r}: expected one of {V2_SPLITS + ('family',)}")
+    if split in ("test", "family") and purpose in ("tune", "train", "select"):
+        raise ValueError(f"split = {split!r} refused for {purpose}: {split} wells are only for the final "
+                         "evaluation; tune and train on split 'train'")
+    if split == "validation" and purpose in ("tune", "train"):
+        raise ValueError(f"split = 'validation' refused for {purpose}: validation wells are for model selection "
+                         "only; tune and train on split 'train'")
+
+
+_SPLIT_SEEDS = {"train": (N_TRAIN, TRAIN_SEED0), "test": (N_TEST, TEST_SEED0),
+                "validation": (N_VALIDATION, VALIDATION_SEED0)}
 
 
 def well_seed(split: str, index: int) -> int:
-    n = N_TRAIN if split == "train" else N_TEST
+    n, seed0 = _SPLIT_SEEDS[split]
     if not 0 <= index < n:
         raise ValueError(f"well index = {index}: expected 0 <= index < {n} for split {split!r}")
-    return (TRAIN_SEED0 if split == "train" else TEST_SEED0) + index
+    return seed0 + index
 
 
 def split_size(split: str) -> int:
     check_split(split, "evaluate")
-    return N_TRAIN if split == "train" else N_TEST
+    return _SPLIT_SEEDS[split][0]
 
 
-def draw_params(seed: int) -> WellParams:
-    rng = np.random.default_rng([seed, 0x5e11])
+def family_spec(seed: int) -> WellSpec:
+    """Well SEED of the family outside every split (``scenario="family:SEED"``), deterministic per seed."""
+    if not (isinstance(seed, (int, np.integer)) and 0 <= int(seed) < 2**63):
+        raise ValueError(f"family seed = {seed!r}: expected an integer 0 <= seed < 2**63")
+    return spec_from_params(draw_params(int(seed), stream=FAMILY_STREAM), f"family-{int(seed)}")
+
+
+def draw_params(seed: int, stream: int | None = None) -> WellParams:
+    rng = np.random.default_rng([seed, 0x5e11] if stream is None else [seed, 0x5e11, stream])
     lo_hi = PARAM_RANGES
 
     def u(name: str) -> float:

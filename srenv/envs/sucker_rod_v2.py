@@ -1,0 +1,213 @@
+"""``srenv/SuckerRod-v2``: run a beam-pumped well for profit while the conditions real wells develop come and go.
+
+v2 is the v1 task (:mod:`srenv.envs.sucker_rod_v1`: the well family, in-episode inflow changes, intermittent
+pumping, the USD/h reward, the constraint cost) plus **field conditions as events within an episode**
+(:mod:`srenv.task.events`: gas slugs, valve leaks that develop, a tubing leak, tagging after a spacing drift,
+heavy-oil periods, flow through the pump, rods that part), a reward that prices what each does, the
+classifier's label probabilities in the field observation, the true condition in the privileged one, a fixed
+``validation`` split and ``family:SEED`` wells outside every split.
+
+Constructor
+-----------
+| kwarg | default | meaning |
+|---|---|---|
+| ``scenario`` | ``"train"`` | ``"train"`` / ``"validation"`` / ``"test"`` (200 / 50 / 50 wells; validation for model selection, test for the final evaluation), ``"family:SEED"`` (well SEED of the family, outside every split; id ``family-SEED``), or a shipped well name / YAML path |
+| ``observation`` | ``"field"`` | ``"field"`` or ``"privileged"`` |
+| ``episode_hours`` | ``12.0`` (spec) | horizon in hours of well time (``task.episode_hours``) |
+| ``interval_s`` | ``300.0`` (spec) | control interval in s of well time (``task.interval_s``) |
+| ``event_rate_scale`` | ``1.0`` | multiplies every condition's rate (0: no conditions, the v1 task on v2's spaces) |
+| ``classifier`` | ``None`` | callable(trace dict of the last stroke) -> 12 label probabilities in :data:`LABELS` order; ``None``: :func:`default_classifier` |
+| ``render_mode`` | ``None`` | ``"rgb_array"`` or ``"human"`` |
+| ``overrides`` / ``**kwargs`` | ``None`` | config overrides, as v1 |
+
+``reset(seed=S)``: on a split, well ``S mod N`` of the split; the episode's inflow schedule and its conditions
+(:func:`srenv.task.events.draw_schedule`) from the seeded ``np_random``. ``info["well_id"]`` names the well
+(``"validation-004"``, ``"family-7777777"``); the ``family-`` ids cannot collide with a split's.
+
+Conditions (rates per hour of well time while the well runs normally; severities in [0, 1] drawn per episode)
+------------------------------------------------------------------------------------------------------------
+| condition | rate (1/h) | severity | lasts |
+|---|---|---|---|
+| ``gas_interference`` (gas slug) | 0.020 | 0.2-1.0 | 0.5-3 h |
+| ``heavy_oil`` (period) | 0.008 | 0.3-1.0 | 1-4 h |
+| ``flowing`` (flow through the pump) | 0.004 | 0.3-1.0 | 0.5-2 h |
+| ``travelling_valve_leak`` / ``standing_valve_leak`` | 0.008 / 0.006 | 0.1-0.6 | to the end, developing over 4 h |
+| ``tubing_leak`` | 0.004 | 0.05-0.4 | to the end |
+| ``tagging_down`` (after a spacing drift) | 0.008 | 0.2-1.0 | to the end |
+| ``parted_rods`` | 0.006 | 1 | ends the episode (a workover) |
+
+They change the physics at interval boundaries (the conditions branch's overrides; today gas and heavy oil);
+the rest are booked by the env (:data:`srenv.task.events.BOOKED`, see there).
+
+Action space
+------------
+As v1: ``Box(-1, 1, (2,), float32)``, average stroke rate and stroke length.
+
+Observation space
+-----------------
+Flat float32 ``Box(-10, 10)``; names in ``FIELD_OBS_NAMES`` / ``PRIVILEGED_OBS_NAMES``. Field (89): v1's field
+observation (77: the last stroke's surface card and the controller's figures) + the classifier's probabilities
+of the 12 labels for the last card (``prob_<label>``; uniform 1/12 until the conditions branch's classifier
+is wired into :func:`default_classifier`). Privileged (113): v1's privileged (88) + the 12 probabilities + the
+true condition of the last interval one-hot (``true_<label>``; ``full`` / ``fluid_pound`` by the true fillage
+when no event is active) + its severity.
+
+Reward
+------
+USD per hour of well time, the sum of ``info["reward_*"]``: v1's terms (:data:`srenv.task.economics.REWARD_TERMS`,
+revenue, inventory, energy, fatigue, stick-slip, peak load, fluid pound, ramp, failure) and
+
+| term | USD/h | meaning |
+|---|---|---|
+| ``reward_lost_production`` | ``-v V_lost / h`` | liquid a leak (valves, tubing) or parted rods lose; it falls back to the annulus |
+| ``reward_tagging`` | ``-workover_usd d_tag / h`` | tagging damage, ``d_tag`` = 2e-5 workovers per stroke at severity 1 |
+| ``reward_workover`` | ``-workover_usd / h`` | the rod job after parted rods (the interval they part in) |
+
+with ``v`` the net value of a m3 of liquid and ``h`` the interval in hours; pounding damage is v1's
+``reward_pound`` (continuous in the impact speed). ``info["cost"]`` >= 0 sums v1's parts and
+``cost_tagging`` (severity x fraction of the interval pumped) and ``cost_parted_rods`` (1 in the interval they
+part). ``info["condition"]`` and ``info["condition_severity"]`` name the interval's true condition.
+
+Episode end
+-----------
+terminated: parted rods, a rod failure or an unrecoverable step-QP failure (as v1). truncated: the horizon.
+
+Version history
+---------------
+* v2: conditions as events with their costs, classifier probabilities and the true condition in the
+  observations, the validation split and ``family:`` wells; a SyncVectorEnv vector entry point (to be replaced
+  by the speed branch's native vector env, same results). Planned before release: the realism branch's
+  physics (damping, unit geometry per well), the conditions branch's physics of every condition and its
+  classifier, the speed branch's stepping.
+* v1 / v0: unchanged (see their modules).
+"""
+
+from __future__ import annotations
+
+from typing import Any, Callable
+
+import gymnasium as gym
+import numpy as np
+from gymnasium import spaces
+
+from ..task import events as ev
+from ..task import well_family as wf
+from ..task.interval import IntervalResult
+from .sucker_rod_v1 import FIELD_OBS_NAMES as V1_FIELD
+from .sucker_rod_v1 import OBS_BOUND
+from .sucker_rod_v1 import PRIVILEGED_OBS_NAMES as V1_PRIVILEGED
+from .sucker_rod_v1 import SuckerRodV1Env
+
+LABELS = ev.LABELS
+PROB_NAMES = tuple(f"prob_{k}" for k in LABELS)
+TRUE_NAMES = tuple(f"true_{k}" for k in LABELS) + ("true_severity",)
+FIELD_OBS_NAMES = V1_FIELD + PROB_NAMES
+PRIVILEGED_OBS_NAMES = V1_PRIVILEGED + PROB_NAMES + TRUE_NAMES
+V2_REWARD_TERMS = ("reward_lost_production", "reward_tagging", "reward_workover")
+V2_COST_TERMS = ("cost_tagging", "cost_parted_rods")
+Classifier = Callable[[dict], np.ndarray]
+
+
+def default_classifier() -> Classifier | None:
+    """The conditions branch's card classifier, when it is installed; ``None`` gives the uniform vector.
+
+    The lead wires it here (one place) when ``srenv classify`` lands: a callable taking the last stroke's trace
+    (``polished_rod_position_m``, ``polished_rod_load_n``, ``t_s``) and returning 12 probabilities in
+    :data:`LABELS` order."""
+    return None
+
+
+def _uniform(_: dict) -> np.ndarray:
+    return np.full(len(LABELS), 1.0 / len(LABELS))
+
+
+class SuckerRodV2Env(SuckerRodV1Env):
+    def __init__(self, scenario: str = "train", observation: str = "field", render_mode: str | None = None,
+                 overrides: dict | None = None, episode_hours: float | None = None, interval_s: float | None = None,
+                 event_rate_scale: float = 1.0, classifier: Classifier | None = None, **kwargs: Any) -> None:
+        scenario = str(scenario)
+        family = scenario.startswith("family:")
+        v2_only = family or scenario == "validation"
+        rate = float(event_rate_scale)
+        if not 0.0 <= rate <= 1e3:
+            raise ValueError(f"event_rate_scale = {event_rate_scale!r}: expected a number in [0, 1000]")
+        super().__init__("train" if v2_only else scenario, observation, render_mode, overrides, episode_hours,
+                         interval_s, **kwargs)
+        self.scenario = scenario
+        if family:
+            text = scenario.partition(":")[2]
+            if not text.isdigit():
+                raise ValueError(f"scenario = {scenario!r}: expected family:SEED with SEED a non-negative integer")
+            self._fixed = self._apply(wf.family_spec(int(text)))
+            self.split = "family"
+        elif scenario == "validation":
+            self.split = "validation"
+        self.event_rate_scale = rate
+        self.classifier = classifier or default_classifier() or _uniform
+        self.obs_names = FIELD_OBS_NAMES if observation == "field" else PRIVILEGED_OBS_NAMES
+        self.observation_space = spaces.Box(-OBS_BOUND, OBS_BOUND, (len(self.obs_names),), np.float32)
+
+    # ------------------------------------------------------------------------------------------ episode
+    def _episode_spec(self, seed: int | None, rng: np.random.Generator) -> wf.WellSpec:
+        spec = self._fixed if self.split == "family" else super()._episode_spec(seed, rng)
+        # the conditions from their own stream, seeded by the episode's: v1's draws keep their meaning
+        self._schedule = ev.draw_schedule(np.random.default_rng(int(rng.integers(2**63))),
+                                          spec.cfg.task.episode_hours, self.event_rate_scale)
+        self._condition: tuple[str | None, float] = (None, 0.0)
+        self._true = ("full", 0.0)
+        return spec
+
+    def _before_interval(self) -> None:
+        label, sev = self._schedule.active(self._elapsed() / 3600.0)
+        if (label, sev) != self._condition:
+            ev.apply_condition(self.sim, self.cfg, label, sev)
+            self._condition = (label, sev)
+
+    def _after_interval(self, r: IntervalResult, terms: dict, costs: dict) -> bool:
+        label, sev = self._condition
+        b = ev.bookkeeping(label, sev, r.lifted_m3, r.strokes)
+        if b.lost_m3 > 0 and self.sim.annulus is not None:
+            self.sim.annulus.volume_m3 += b.lost_m3  # the lost liquid falls back: it can be pumped again
+        hours = r.duration_s / 3600.0
+        workover = self.cfg.economics.workover_usd
+        parted = label == "parted_rods"
+        terms["reward_lost_production"] = -self.econ.net_value_usd_m3 * b.lost_m3 / hours
+        terms["reward_tagging"] = -workover * b.tag_damage / hours
+        terms["reward_workover"] = -workover / hours if parted else 0.0
+        tagging = label in ("tagging_down", "tagging_up")
+        costs["cost_tagging"] = sev * r.pumping_fraction if tagging else 0.0
+        costs["cost_parted_rods"] = 1.0 if parted else 0.0
+        fill = r.fillage if r.displaced_m3 > 0 else self._last.fillage
+        self._true = (ev.true_label(label, fill), sev)
+        return parted
+
+    # ------------------------------------------------------------------------------------------ obs / info
+    def _observe(self) -> np.ndarray:
+        base = super()._observe()
+        probs = np.asarray(self.classifier(self._last.trace), dtype=np.float64).reshape(-1)
+        if probs.shape != (len(LABELS),) or not np.all(np.isfinite(probs)):
+            raise ValueError(f"classifier returned {probs.shape} values: expected {len(LABELS)} finite probabilities")
+        parts = [base, probs.astype(np.float32)]
+        if self.observation == "privileged":
+            onehot = np.zeros(len(LABELS) + 1, np.float32)
+            onehot[LABELS.index(self._true[0])] = 1.0
+            onehot[-1] = self._true[1]
+            parts.append(onehot)
+        return np.clip(np.concatenate(parts), -OBS_BOUND, OBS_BOUND).astype(np.float32)
+
+    def _info(self, r: IntervalResult | None, terms: dict, costs: dict) -> dict:
+        info = super()._info(r, terms, costs)
+        info.update({k: float(terms.get(k, 0.0)) for k in V2_REWARD_TERMS})
+        info.update({k: float(costs.get(k, 0.0)) for k in V2_COST_TERMS})
+        info["cost"] += sum(info[k] for k in V2_COST_TERMS)
+        info["condition"], info["condition_severity"] = self._true[0], float(self._true[1])
+        return info
+
+
+def make_vector_env(num_envs: int = 1, **kwargs: Any) -> gym.vector.VectorEnv:
+    """The vector entry point: ``num_envs`` v2 envs stepped in turn (gymnasium's SyncVectorEnv), each equal to
+    a single env with the same seed. The speed branch's native vector env replaces it (same results)."""
+    kwargs.pop("max_episode_steps", None)
+    if not (isinstance(num_envs, int) and num_envs >= 1):
+        raise ValueError(f"num_envs = {num_envs!r}: expected a positive integer")
+    return gym.vector.SyncVectorEnv([lambda: SuckerRodV2Env(**kwargs) for _ in range(num_envs)])

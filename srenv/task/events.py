@@ -1,0 +1,189 @@
+"""Field conditions as events within a ``srenv/SuckerRod-v2`` episode: when they start, how severe, what they do.
+
+An episode's schedule is drawn at reset (:func:`draw_schedule`) from the episode's ``np_random``: the well
+runs *normally* until a condition starts; the hazard of each condition while the well runs normally is its
+rate in :data:`EVENTS` (per hour of well time, competing exponential clocks). A *transient* condition (gas
+slug, heavy-oil period, flowing) lasts a drawn time and the well returns to normal; a *persistent* one (valve
+leaks, tubing leak, tagging) lasts to the end of the episode, a *developing* one (valve leaks) growing
+linearly from 0 to its drawn severity over ``ramp_h``; parted rods end the episode (a workover). Severities
+are drawn per episode, uniform in ``severity``, in [0, 1] (what 1 means is each condition's, in
+:func:`condition_overrides`). One condition at a time: the privileged observation shows it one-hot.
+
+Conditions change the physics at interval boundaries only (:func:`apply_condition`): the config overrides of
+:func:`condition_overrides` are applied to the running simulator, its state (rod, annulus) kept. The
+``conditions`` branch supplies the field-true ``srenv.physics.conditions.condition_overrides`` for all 12
+labels; until it lands the local fallback here covers what the physics has today (gas interference through the
+intake gas fraction; heavy oil through plunger friction and rod damping), and the env books the rest
+(:func:`bookkeeping`): the liquid a leak loses falls back to the annulus (lost production, priced), tagging
+costs a share of a workover per stroke, parted rods lift nothing. When a label's physics lands, its bookkeeping
+must go (one place: :data:`BOOKED`), or the loss would count twice.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+LABELS = ("full", "fluid_pound", "gas_interference", "travelling_valve_leak", "standing_valve_leak",
+          "both_valves_leak", "parted_rods", "tagging_up", "tagging_down", "tubing_leak", "heavy_oil", "flowing")
+NORMAL = ("full", "fluid_pound")  # no event: the label the operation itself gives (fillage below POUND_FILLAGE)
+POUND_FILLAGE = 0.85
+
+
+@dataclass(frozen=True)
+class EventSpec:
+    rate_per_h: float                      # hazard while the well runs normally (1/h of well time)
+    severity: tuple[float, float]          # drawn per episode, uniform
+    duration_h: tuple[float, float] | None = None  # transient: drawn length; None: to the episode's end
+    ramp_h: float = 0.0                    # developing: hours from 0 to the drawn severity
+    ends_episode: bool = False
+
+
+# Rates: a 12-h episode sees about one condition in two episodes (sum of rates 0.064/h -> 1 - exp(-0.77) = 54 %).
+EVENTS: dict[str, EventSpec] = {
+    "gas_interference": EventSpec(0.020, (0.2, 1.0), duration_h=(0.5, 3.0)),        # gas slug
+    "heavy_oil": EventSpec(0.008, (0.3, 1.0), duration_h=(1.0, 4.0)),               # cold / emulsion period
+    "flowing": EventSpec(0.004, (0.3, 1.0), duration_h=(0.5, 2.0)),                 # the well flows through the pump
+    "travelling_valve_leak": EventSpec(0.008, (0.1, 0.6), ramp_h=4.0),              # develops
+    "standing_valve_leak": EventSpec(0.006, (0.1, 0.6), ramp_h=4.0),                # develops
+    "tubing_leak": EventSpec(0.004, (0.05, 0.4)),
+    "tagging_down": EventSpec(0.008, (0.2, 1.0)),                                   # after a spacing drift
+    "parted_rods": EventSpec(0.006, (1.0, 1.0), ends_episode=True),
+}
+
+# Bookkeeping until the physics lands: fraction of the lifted liquid lost at severity 1 (falls back to the
+# annulus), and the tagging damage. BOOKED lists the labels the env books itself (remove one when
+# condition_overrides gives it physics).
+LOST_FRACTION_AT_1 = {"travelling_valve_leak": 0.5, "standing_valve_leak": 0.5, "both_valves_leak": 0.7,
+                      "tubing_leak": 1.0, "parted_rods": 1.0}
+TAG_WORKOVER_SHARE_PER_STROKE = 2e-5  # of economics.workover_usd per stroke at severity 1 (~0.3 workover a month)
+BOOKED = frozenset(LOST_FRACTION_AT_1) | {"tagging_down", "tagging_up"}
+
+
+@dataclass
+class Event:
+    label: str
+    start_h: float
+    end_h: float          # inf for persistent
+    severity: float       # the drawn (final) severity
+    ramp_h: float = 0.0
+
+    def severity_at(self, t_h: float) -> float:
+        if not self.start_h <= t_h < self.end_h:
+            return 0.0
+        if self.ramp_h > 0:
+            return self.severity * min(1.0, (t_h - self.start_h) / self.ramp_h)
+        return self.severity
+
+
+@dataclass
+class Schedule:
+    events: list[Event] = field(default_factory=list)
+
+    def active(self, t_h: float) -> tuple[str | None, float]:
+        """The condition at well time t_h (h since the episode start) and its severity; (None, 0) if normal."""
+        for ev in self.events:
+            if ev.start_h <= t_h < ev.end_h:
+                return ev.label, ev.severity_at(t_h)
+        return None, 0.0
+
+
+def draw_schedule(rng: np.random.Generator, horizon_h: float, rate_scale: float = 1.0) -> Schedule:
+    """One episode's conditions: competing exponential clocks while normal (see the module docstring)."""
+    names = list(EVENTS)
+    rates = np.array([EVENTS[n].rate_per_h for n in names]) * rate_scale
+    total = float(rates.sum())
+    sched = Schedule()
+    t = 0.0
+    while total > 0:
+        t += float(rng.exponential(1.0 / total))
+        if t >= horizon_h:
+            break
+        name = names[int(rng.choice(len(names), p=rates / total))]
+        spec = EVENTS[name]
+        sev = float(rng.uniform(*spec.severity))
+        if spec.duration_h is not None:
+            end = t + float(rng.uniform(*spec.duration_h))
+        else:
+            end = math.inf
+        sched.events.append(Event(name, t, end, sev, spec.ramp_h))
+        if not math.isfinite(end):
+            break  # persistent (or the end of the episode): nothing else starts
+        t = end
+    return sched
+
+
+# ------------------------------------------------------------------------------------------- physics
+def condition_overrides(label: str, severity: float, cfg: Any) -> dict[str, Any]:
+    """Config overrides of a condition at a severity on the well ``cfg`` (its base, normal config).
+
+    The conditions branch's ``srenv.physics.conditions.condition_overrides`` wins when it exists; the fallback
+    covers what the physics has today."""
+    try:
+        from ..physics import conditions  # the conditions branch
+    except ImportError:
+        conditions = None
+    if conditions is not None and hasattr(conditions, "condition_overrides"):
+        return dict(conditions.condition_overrides(label, severity, cfg))
+    if label == "gas_interference":
+        return {"pump.intake_gas_fraction": round(0.1 + 0.5 * severity, 4)}
+    if label == "heavy_oil":  # viscous drag on the rods and the plunger
+        return {"damping.damping_factor": cfg.damping.damping_factor * (1.0 + 2.0 * severity),
+                "pump.plunger_friction_n": cfg.pump.plunger_friction_n * (1.0 + 4.0 * severity)}
+    return {}
+
+
+def booked(label: str | None) -> bool:
+    """Whether the env books this condition itself (no physics for it yet)."""
+    if label is None:
+        return False
+    try:
+        from ..physics import conditions
+    except ImportError:
+        return label in BOOKED
+    return label in BOOKED and not hasattr(conditions, "condition_overrides")
+
+
+def apply_condition(sim: Any, base_cfg: Any, label: str | None, severity: float) -> None:
+    """Put the simulator on the config of a condition (or back on ``base_cfg``), keeping its state."""
+    from ..config import load_config
+
+    over = condition_overrides(label, severity, base_cfg) if label is not None else {}
+    cfg = load_config(base_cfg, over) if over else base_cfg
+    if cfg is sim.cfg or cfg == sim.cfg:
+        return
+    ann = sim.annulus
+    sim.cfg = cfg
+    sim._assemble()  # rebuilds the matrices, loads and valve law from cfg; the rod state is not touched
+    if ann is not None and sim.annulus is not None and cfg.inflow == base_cfg.inflow:
+        sim.annulus = ann  # the same reservoir: the liquid in the annulus and its bookkeeping carry on
+
+
+@dataclass
+class Booking:
+    lost_m3: float = 0.0       # liquid lifted but lost (falls back to the annulus)
+    tag_damage: float = 0.0    # workovers' worth of tagging damage
+    tag_strokes: float = 0.0
+
+
+def bookkeeping(label: str | None, severity: float, lifted_m3: float, strokes: float) -> Booking:
+    """What the env books for a condition without physics, over one interval (see :data:`BOOKED`)."""
+    b = Booking()
+    if not booked(label):
+        return b
+    if label in LOST_FRACTION_AT_1:
+        b.lost_m3 = lifted_m3 * min(1.0, LOST_FRACTION_AT_1[label] * severity)
+    if label in ("tagging_down", "tagging_up"):
+        b.tag_strokes = strokes * severity
+        b.tag_damage = TAG_WORKOVER_SHARE_PER_STROKE * b.tag_strokes
+    return b
+
+
+def true_label(label: str | None, fillage: float) -> str:
+    """The condition label of an interval: the event's, else full or fluid pound by the true fillage."""
+    if label is not None:
+        return label
+    return "fluid_pound" if np.isfinite(fillage) and fillage < POUND_FILLAGE else "full"
