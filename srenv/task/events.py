@@ -129,7 +129,7 @@ def condition_overrides(label: str, severity: float, cfg: Any) -> dict[str, Any]
     if conditions is not None and hasattr(conditions, "condition_overrides"):
         return dict(conditions.condition_overrides(label, severity, cfg))
     if label == "gas_interference":
-        return {"pump.intake_gas_fraction": round(0.1 + 0.5 * severity, 4)}
+        return {"pump.intake_gas_fraction": round(0.2 + 0.7 * severity, 4)}
     if label == "heavy_oil":  # viscous drag on the rods and the plunger
         return {"damping.damping_factor": cfg.damping.damping_factor * (1.0 + 2.0 * severity),
                 "pump.plunger_friction_n": cfg.pump.plunger_friction_n * (1.0 + 4.0 * severity)}

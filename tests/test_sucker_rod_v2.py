@@ -1,0 +1,120 @@
+"""srenv/SuckerRod-v2: condition events at their documented rates, their effect on the physics and the reward,
+family and validation wells, and the reward / cost bookkeeping."""
+
+import math
+
+import gymnasium as gym
+import numpy as np
+import pytest
+
+import srenv  # noqa: F401
+from srenv.envs.sucker_rod_v2 import FIELD_OBS_NAMES, PRIVILEGED_OBS_NAMES
+from srenv.task import events as ev
+from srenv.task import well_family as wf
+
+ID = "srenv/SuckerRod-v2"
+
+
+def test_events_occur_at_their_documented_rates():
+    rng = np.random.default_rng(0)
+    counts = dict.fromkeys(ev.EVENTS, 0)
+    exposure_h = 0.0  # hours of normal running, when every clock ticks
+    horizon = 12.0
+    for _ in range(4000):
+        sched = ev.draw_schedule(rng, horizon)
+        t = 0.0
+        for e in sched.events:
+            exposure_h += e.start_h - t
+            counts[e.label] += 1
+            t = e.end_h
+        if math.isfinite(t):
+            exposure_h += max(0.0, horizon - t)
+    for name, spec in ev.EVENTS.items():
+        expected = spec.rate_per_h * exposure_h
+        assert abs(counts[name] - expected) < 4.0 * math.sqrt(expected) + 1, (name, counts[name], expected)
+
+
+def test_schedule_severity_develops_and_one_condition_at_a_time():
+    e = ev.Event("travelling_valve_leak", 1.0, math.inf, 0.4, ramp_h=4.0)
+    assert e.severity_at(0.5) == 0.0 and e.severity_at(3.0) == pytest.approx(0.2) and e.severity_at(9.0) == 0.4
+    sched = ev.draw_schedule(np.random.default_rng(3), 500.0)
+    ends = [(x.start_h, x.end_h) for x in sched.events]
+    assert all(b[0] >= a[1] for a, b in zip(ends, ends[1:]))  # no overlap
+
+
+def _forced(label, severity, hours=0.5, **kw):
+    env = gym.make(ID, scenario="train", episode_hours=hours, **kw).unwrapped
+    env.reset(seed=3)
+    env._schedule = ev.Schedule([ev.Event(label, 0.0, math.inf, severity)])
+    return env
+
+
+def test_gas_slug_changes_the_card_and_is_reported():
+    a = np.array([0.5, 1.0], np.float32)
+    clean = gym.make(ID, scenario="train", episode_hours=0.5, event_rate_scale=0.0).unwrapped
+    clean.reset(seed=3)
+    o_clean, _, _, _, i_clean = clean.step(a)
+    gas = _forced("gas_interference", 1.0)
+    o_gas, r, _, _, info = gas.step(a)
+    assert info["condition"] == "gas_interference" and info["condition_severity"] == 1.0
+    assert gas.sim.cfg.pump.intake_gas_fraction > 0
+    # the gas takes pump volume (the fillage and the production drop) and shows on the surface card
+    assert info["fillage"] < i_clean["fillage"] - 0.05
+    assert info["production_m3_day"] < 0.95 * i_clean["production_m3_day"]
+    assert np.abs(o_gas[:64] - o_clean[:64]).max() > 0.002
+    # the slug ends: the well is back on its own config
+    gas._schedule = ev.Schedule([])
+    gas.step(a)
+    assert gas.sim.cfg is gas.cfg and gas.sim.gas is None
+    assert r == pytest.approx(sum(v for k, v in info.items() if k.startswith("reward_")), rel=1e-12, abs=1e-9)
+
+
+def test_tubing_leak_prices_the_lost_production():
+    env = _forced("tubing_leak", 0.4)
+    _, r, _, _, info = env.step(np.array([0.5, 1.0], np.float32))
+    v = env.econ.net_value_usd_m3
+    assert info["reward_lost_production"] == pytest.approx(-0.4 * info["reward_revenue"], rel=1e-9)
+    assert info["reward_lost_production"] < 0 and v > 0
+    assert r == pytest.approx(sum(v for k, v in info.items() if k.startswith("reward_")), rel=1e-12, abs=1e-9)
+
+
+def test_parted_rods_end_the_episode_with_a_workover():
+    env = _forced("parted_rods", 1.0)
+    _, r, term, trunc, info = env.step(np.array([0.5, 1.0], np.float32))
+    h = env.cfg.task.interval_s / 3600.0
+    assert term and not trunc and info["condition"] == "parted_rods"
+    assert info["reward_workover"] == pytest.approx(-env.cfg.economics.workover_usd / h)
+    assert info["cost_parted_rods"] == 1.0 and info["cost"] >= 1.0
+    assert info["reward_revenue"] + info["reward_lost_production"] == pytest.approx(0.0, abs=1e-9)
+
+
+def test_tagging_costs_and_privileged_truth():
+    env = _forced("tagging_down", 0.5, observation="privileged")
+    o, _, _, _, info = env.step(np.array([0.5, 1.0], np.float32))
+    assert info["reward_tagging"] < 0 and info["cost_tagging"] == pytest.approx(0.5 * info["duty"])
+    names = PRIVILEGED_OBS_NAMES
+    assert o[names.index("true_tagging_down")] == 1.0 and o[names.index("true_severity")] == 0.5
+    assert len(o) == len(names) and len(FIELD_OBS_NAMES) == 77 + 12
+
+
+def test_family_wells_are_deterministic_and_outside_the_splits():
+    a, b = wf.family_spec(12), wf.family_spec(12)
+    assert a.params == b.params and a.well_id == "family-12"
+    split_params = {wf.draw_params(wf.well_seed(s, k)) for s in wf.V2_SPLITS for k in range(3)}
+    assert a.params not in split_params
+    assert wf.draw_params(0) != wf.family_spec(0).params  # the same seed, another stream
+    env = gym.make(ID, scenario="family:12", episode_hours=0.25)
+    o1, i1 = env.reset(seed=4)
+    o2, i2 = env.reset(seed=4)
+    assert np.array_equal(o1, o2) and i1["well_id"] == "family-12"
+    with pytest.raises(ValueError, match="family:SEED"):
+        gym.make(ID, scenario="family:x")
+
+
+def test_validation_split_is_for_selection_only():
+    assert gym.make(ID, scenario="validation").reset(seed=7)[1]["well_id"] == "validation-007"
+    wf.check_split("validation", "select")
+    for split, purpose in (("validation", "tune"), ("validation", "train"), ("family", "select"),
+                           ("test", "train")):
+        with pytest.raises(ValueError, match="refused"):
+            wf.check_split(split, purpose)
