@@ -96,12 +96,17 @@ def build_parser() -> argparse.ArgumentParser:
                        "evaluation reads without unpickling")
     c.add_argument("pickles", nargs="+", help="VecNormalize pickles you made yourself (they are unpickled)")
 
-    q = sub.add_parser("quickstart", help="the v1 benchmark on a small scale: tuned baselines vs PPO/SAC")
-    q.add_argument("--config", default=str(QUICK_BENCHMARK), help="benchmark YAML (default v1_quick.yaml)")
+    q = sub.add_parser("quickstart", help="the shipped benchmarked agent vs the tuned baselines on a few test "
+                       "wells, with a verdict; --train: a short training demo instead")
+    q.add_argument("--train", action="store_true", help="the training demo: the v1 benchmark on a small scale "
+                   "(tune baselines, train PPO/SAC for a minute)")
+    q.add_argument("--config", default=str(QUICK_BENCHMARK), help="--train: benchmark YAML (default v1_quick.yaml)")
     q.add_argument("--out", default="runs/quickstart")
-    q.add_argument("--total-timesteps", type=_positive_int, help="override every agent run's n_timesteps")
-    q.add_argument("--episodes", type=_positive_int, help="override the number of test episodes")
-    q.add_argument("--seed", type=_nonneg_int, help="first test seed (episodes use S..S+N-1)")
+    q.add_argument("--total-timesteps", type=_positive_int, help="--train: override every agent run's n_timesteps")
+    q.add_argument("--episodes", type=_positive_int, help="number of test episodes (default 3; --train: the "
+                   "config's)")
+    q.add_argument("--seed", type=_nonneg_int, help="--train: first test seed (episodes use S..S+N-1)")
+    q.add_argument("--workers", type=_positive_int, default=2, help="processes (default 2)")
 
     b = sub.add_parser("benchmark", help="tune baselines, train PPO/SAC, test all on unseen wells (v1)")
     b.add_argument("config", help="benchmark YAML, e.g. configs/benchmark/v1.yaml")
@@ -182,6 +187,11 @@ def cmd_convert_stats(args: argparse.Namespace) -> dict:
 
 
 def cmd_quickstart(args: argparse.Namespace) -> dict:
+    if not args.train:  # prints its table, verdict and file locations itself: no JSON after them
+        from .quickstart_shipped import quickstart_shipped
+
+        quickstart_shipped(args.out, args.episodes or 3, workers=args.workers)
+        return {"_printed": True}
     from .benchmark import quickstart
 
     return quickstart(args.config, args.out, args.total_timesteps, args.episodes, args.seed)
@@ -212,7 +222,8 @@ def main(argv: list[str] | None = None) -> int:
     except (ConfigError, TrainConfigError, ValueError, FileNotFoundError) as exc:
         print(f"agents: error: {exc}", file=sys.stderr)
         return EXIT_BAD_INPUT
-    _print_json(result)
+    if not result.pop("_printed", False):
+        _print_json(result)
     return 1 if result.get("reproduced") is False else 0  # replay: a return differs from the report's
 
 

@@ -272,6 +272,14 @@ def make_baseline(name: str, params: dict[str, Any], obs_names: Sequence[str]) -
         return PumpOffPolicy(obs_names, **p)
     if name == "fillage_pi":
         return FillagePIPolicy(obs_names, **p)
+    if name == "alarm_pump_off":  # v2's baselines, in their own modules
+        from .alarms_v2 import AlarmPumpOffPolicy
+
+        return AlarmPumpOffPolicy(obs_names, **p)
+    if name == "causal_oracle":
+        from .causal_oracle import CausalOraclePolicy
+
+        return CausalOraclePolicy(**p)
     if name == "oracle":
         from .oracle_v1 import OraclePolicy  # it builds baselines itself: imported here, not at the top
 
