@@ -112,6 +112,11 @@ def build_parser() -> argparse.ArgumentParser:
     b.add_argument("config", help="benchmark YAML, e.g. configs/benchmark/v1.yaml")
     b.add_argument("--quick", action="store_true", help="apply the config's quick: block (minutes, for CI)")
     b.add_argument("--out-dir", help="output directory (default docs, or runs/benchmark_quick with --quick)")
+    b.add_argument("--evaluate-only", action="store_true", help="no training or tuning: the shipped models and "
+                   "tuned baselines on --episodes fresh family wells drawn from --fresh-seed")
+    b.add_argument("--fresh-seed", type=_nonneg_int, help="--evaluate-only: seed of the fresh wells (recorded)")
+    b.add_argument("--episodes", type=_positive_int, help="--evaluate-only: number of fresh wells")
+    b.add_argument("--workers", type=_positive_int, help="--evaluate-only: processes (default the config's)")
 
     r = sub.add_parser("replay", help="re-run a benchmark report's test episodes from its own record (v1); "
                        "exit 1 if a return differs")
@@ -198,6 +203,13 @@ def cmd_quickstart(args: argparse.Namespace) -> dict:
 
 
 def cmd_benchmark(args: argparse.Namespace) -> dict:
+    if args.evaluate_only or args.fresh_seed is not None or args.episodes:
+        if not (args.evaluate_only and args.fresh_seed is not None and args.episodes and not args.quick):
+            raise ValueError("--evaluate-only, --fresh-seed S and --episodes N go together (and without --quick)")
+        from .evaluate_fresh import evaluate_fresh
+
+        return evaluate_fresh(args.config, args.fresh_seed, args.episodes, args.out_dir or "runs/fresh",
+                              args.workers)
     from .benchmark import benchmark_main
 
     return benchmark_main(args.config, args.quick, args.out_dir)

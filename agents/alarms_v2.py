@@ -14,8 +14,8 @@ partly with gas, and pounding the gas wastes strokes). It reads only the field o
 
 Actions: a shut-in alarm (parted rods or tubing leak) idles the well for the rest of the episode; the gas alarm
 runs at ``a_spm - gas_slowdown`` while it holds; otherwise :class:`agents.baselines_v1.PumpOffPolicy`.
-Every threshold is a parameter, tuned like pump-off's on the training wells only (:func:`check_tuning_split`
-refuses the test, validation and fresh ``family:`` wells).
+Every threshold is a parameter, tuned like pump-off's on the training wells only
+(:func:`agents.tuning.refuse_test_split` refuses the test, validation and fresh ``family:`` wells).
 
 ``state`` per row: (idle intervals left, pumped last, shut in, reference load range).
 """
@@ -28,14 +28,6 @@ from typing import Any
 import numpy as np
 
 from .baselines_v1 import IDLE, PumpOffPolicy, _batch, _out, _starts, name_index
-
-
-def check_tuning_split(scenario: str, purpose: str = "tune") -> None:
-    """Tuning and training run on the training wells only: test, validation and ``family:`` wells are refused."""
-    s = str(scenario).strip().lower()
-    if s in ("test", "validation") or s.startswith("family"):
-        raise ValueError(f"{purpose}: scenario {scenario!r} is held out (test and family wells for the final "
-                         "evaluation, validation wells for model selection); tune on scenario 'train'")
 
 
 class AlarmPumpOffPolicy(PumpOffPolicy):

@@ -317,6 +317,10 @@ def run_benchmark(cfg: dict[str, Any], out_dir: str | Path, quick: bool = False,
     report["tuning_history"] = {n: t.get("evaluated", []) for n, t in tuned.items()}
     fig_rel = "figures/benchmark_v1.png"
     figure(report, traces, out / fig_rel)
+    if cfg["env_id"] != "srenv/SuckerRod-v1":  # v2 on: the rliable figures (agents/rliable_report.py)
+        from .rliable_report import rliable_section
+
+        report["rliable"] = rliable_section(report)
     report = _json_clean(report)
     _atomic_write(out / "benchmark.json", json.dumps(report, indent=1))
     write_markdown(report, out / "benchmark.md", fig_rel)

@@ -74,6 +74,8 @@ class SB3Policy:
 def detect_algo(model_path: str | Path) -> str:
     """The algorithm a saved zip was trained with, from its JSON hyperparameters (nothing unpickled)."""
     data = read_data(model_path)
+    if "recurrent" in str(data.get("policy_class", "")).lower():  # sb3-contrib's LSTM policies (v2 designs)
+        return "recurrent_ppo"
     # keys that only one supported algorithm stores
     for key, algo in (("clip_range", "ppo"), ("target_entropy", "sac"), ("policy_delay", "td3"),
                       ("normalize_advantage", "a2c")):

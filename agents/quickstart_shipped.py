@@ -51,7 +51,10 @@ def quickstart_shipped(out_dir: str | Path, episodes: int = 3, agent: str | None
     """Run the shipped agent and the tuned baselines on ``episodes`` test episodes; print table and verdict."""
     from .shipped_models import shipped_report
 
+    from .evaluate_fresh import check_out_dir
+
     t0 = time.perf_counter()
+    check_out_dir("--out", Path(out_dir), ("quickstart.json", "episode.png"))
     path = Path(report) if report else shipped_report("v1")
     rep = load_report(path)
     root = path.resolve().parent

@@ -101,8 +101,9 @@ def make_residual_env(inner_env_id: str = "srenv/SuckerRod-v1", base: str = "fil
     from .shaping_v1 import SHAPED_ENV_ID
 
     # a fixed set: the id is a module path for gymnasium, and a training YAML must not choose what is imported
-    if inner_env_id not in (ENV_ID_V1, SHAPED_ENV_ID):
-        raise ValueError(f"residual inner_env_id = {inner_env_id!r}: expected {ENV_ID_V1} or {SHAPED_ENV_ID}")
+    allowed = (ENV_ID_V1, SHAPED_ENV_ID, "srenv/SuckerRod-v2")  # v2 (configs/benchmark/v2.yaml): unshaped
+    if inner_env_id not in allowed:
+        raise ValueError(f"residual inner_env_id = {inner_env_id!r}: expected one of {', '.join(allowed)}")
     return ResidualEnv(make_env(inner_env_id, **env_kwargs), base, base_params or {}, scale, idle_scale)
 
 

@@ -43,9 +43,10 @@ _HARNESS_KEYS = {"algo", "env_id", "env_kwargs", "n_envs", "n_timesteps", "polic
 
 def algorithms() -> dict[str, type]:
     """Supported SB3 algorithms by YAML name (imported lazily: torch is slow to import)."""
+    from sb3_contrib import RecurrentPPO
     from stable_baselines3 import A2C, PPO, SAC, TD3
 
-    return {"ppo": PPO, "sac": SAC, "a2c": A2C, "td3": TD3}
+    return {"ppo": PPO, "sac": SAC, "a2c": A2C, "td3": TD3, "recurrent_ppo": RecurrentPPO}
 
 
 def allowed_env_ids() -> list[str]:

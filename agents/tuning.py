@@ -33,8 +33,9 @@ def refuse_test_split(scenario: str, purpose: str = "tune") -> None:
         from srenv.task.well_family import check_split
     except ImportError:  # an env without the family module (the tests' fake): our guard alone
         check_split = None
-    if check_split is not None and scenario in ("train", "test"):  # a fixed well name is no split
-        check_split(scenario, purpose)
+    split = str(scenario).partition(":")[0]  # family:SEED -> family (v2's fresh wells)
+    if check_split is not None and split in ("train", "test", "validation", "family"):  # a well name is no split
+        check_split(split, purpose)
     if str(scenario).strip().lower() == "test":
         raise ValueError(f"{purpose}: scenario 'test' is the held-out test split; tuning and training "
                          "on it are refused (use scenario 'train')")
