@@ -66,7 +66,7 @@ class CausalOraclePolicy(OraclePolicy):
 
     def predict(self, observation: Any, state: Any = None, episode_start: Any = None,
                 deterministic: bool = True) -> tuple[np.ndarray, Any]:
-        obs, n, batched = _batch(observation)
+        _, n, batched = _batch(observation)
         if n != 1 or self._env is None:
             raise RuntimeError("CausalOraclePolicy: one env only, and call reset(env) after env.reset")
         if self._since % self.replan_every == 0:

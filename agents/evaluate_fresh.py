@@ -196,8 +196,9 @@ def _write(report: dict[str, Any], out: Path) -> dict[str, Any]:
     if "causal_oracle" in pol or "oracle" in pol:
         report["rliable"] = rliable_section(report)
     report = _json_clean(report)
-    md = [f"# Evaluate-only on {len(report['fresh']['family_seeds'])} fresh family wells "
-          f"(fresh seed {report['fresh']['seed']})", "", markdown_tables(report), "", verdict(report)]
+    title = (f"# Evaluate-only on {len(report['fresh']['family_seeds'])} fresh family wells "
+             f"(fresh seed {report['fresh']['seed']})")
+    md = [title, "", markdown_tables(report), "", verdict(report)]
     if "rliable" in report:
         md += ["", rliable_md(report["rliable"])]
     _atomic_write(out / "benchmark.json", json.dumps(report, indent=1))

@@ -49,9 +49,8 @@ def quickstart_shipped(out_dir: str | Path, episodes: int = 3, agent: str | None
                        baselines: tuple[str, ...] = LIVE_BASELINES, workers: int = 2,
                        report: str | Path | None = None) -> dict[str, Any]:
     """Run the shipped agent and the tuned baselines on ``episodes`` test episodes; print table and verdict."""
-    from .shipped_models import shipped_report
-
     from .evaluate_fresh import check_out_dir
+    from .shipped_models import shipped_report
 
     t0 = time.perf_counter()
     check_out_dir("--out", Path(out_dir), ("quickstart.json", "episode.png"))
@@ -88,7 +87,7 @@ def quickstart_shipped(out_dir: str | Path, episodes: int = 3, agent: str | None
               "policies": {n: {"episodes": p["episodes"]} for n, p in policies.items()}}
     _atomic_write(out / "quickstart.json", json.dumps(_json_clean(result), indent=1))
     print(_table(mini, diffs, live), flush=True)
-    print("", flush=True)
+    print(flush=True)
     print(f"This run ({len(seeds)} test wells): {verdict(mini)}", flush=True)
     print(f"The shipped report ({len(rep['test']['seeds'])} test episodes, docs/benchmark.md): {verdict(rep)}",
           flush=True)

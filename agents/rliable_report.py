@@ -146,8 +146,9 @@ def _poi(x: np.ndarray, y: np.ndarray, reps: int, rng: np.random.Generator, metr
 
 def markdown(section: dict[str, Any]) -> str:
     """The block as markdown tables."""
-    lines = [f"Normalised score: {section['score']} (rliable; 95 % stratified-bootstrap intervals, "
-             f"{section['reps']} resamples, episodes resampled too).", "",
+    head = (f"Normalised score: {section['score']} (rliable; 95 % stratified-bootstrap intervals, "
+            f"{section['reps']} resamples, episodes resampled too).")
+    lines = [head, "",
              "| policy | IQM normalised score (95 % CI) | runs x episodes |", "|---|---|---|"]
     iq = section["iqm"]
     for n in sorted(iq, key=lambda n: -iq[n]["iqm"]):

@@ -1,6 +1,7 @@
 """srenv/SuckerRod-v2: condition events at their documented rates, their effect on the physics and the reward,
 family and validation wells, and the reward / cost bookkeeping."""
 
+import itertools
 import math
 
 import gymnasium as gym
@@ -39,7 +40,7 @@ def test_schedule_severity_develops_and_one_condition_at_a_time():
     assert e.severity_at(0.5) == 0.0 and e.severity_at(3.0) == pytest.approx(0.2) and e.severity_at(9.0) == 0.4
     sched = ev.draw_schedule(np.random.default_rng(3), 500.0)
     ends = [(x.start_h, x.end_h) for x in sched.events]
-    assert all(b[0] >= a[1] for a, b in zip(ends, ends[1:]))  # no overlap
+    assert all(b[0] >= a[1] for a, b in itertools.pairwise(ends))  # no overlap
 
 
 def _forced(label, severity, hours=0.5, **kw):
@@ -80,7 +81,7 @@ def test_tubing_leak_prices_the_lost_production():
 
 def test_parted_rods_end_the_episode_with_a_workover():
     env = _forced("parted_rods", 1.0)
-    _, r, term, trunc, info = env.step(np.array([0.5, 1.0], np.float32))
+    _, _, term, trunc, info = env.step(np.array([0.5, 1.0], np.float32))
     h = env.cfg.task.interval_s / 3600.0
     assert term and not trunc and info["condition"] == "parted_rods"
     assert info["reward_workover"] == pytest.approx(-env.cfg.economics.workover_usd / h)
@@ -105,7 +106,7 @@ def test_family_wells_are_deterministic_and_outside_the_splits():
     assert wf.draw_params(0) != wf.family_spec(0).params  # the same seed, another stream
     env = gym.make(ID, scenario="family:12", episode_hours=0.25)
     o1, i1 = env.reset(seed=4)
-    o2, i2 = env.reset(seed=4)
+    o2, _ = env.reset(seed=4)
     assert np.array_equal(o1, o2) and i1["well_id"] == "family-12"
     with pytest.raises(ValueError, match="family:SEED"):
         gym.make(ID, scenario="family:x")

@@ -84,7 +84,8 @@ Version history
 
 from __future__ import annotations
 
-from typing import Any, Callable
+from collections.abc import Callable
+from typing import Any
 
 import gymnasium as gym
 import numpy as np
@@ -94,9 +95,8 @@ from ..task import events as ev
 from ..task import well_family as wf
 from ..task.interval import IntervalResult
 from .sucker_rod_v1 import FIELD_OBS_NAMES as V1_FIELD
-from .sucker_rod_v1 import OBS_BOUND
+from .sucker_rod_v1 import OBS_BOUND, SuckerRodV1Env
 from .sucker_rod_v1 import PRIVILEGED_OBS_NAMES as V1_PRIVILEGED
-from .sucker_rod_v1 import SuckerRodV1Env
 
 LABELS = ev.LABELS
 PROB_NAMES = tuple(f"prob_{k}" for k in LABELS)
