@@ -102,7 +102,10 @@ def _specs(cfg: dict[str, Any], rep: dict[str, Any], root: Path) -> dict[str, li
     for name in ("causal_oracle", "oracle"):  # null: not run
         params = (ev.get("references") or {}).get(name)
         if params is not None:
-            specs[name] = [{"kind": "baseline", "name": name, "params": dict(params)}]
+            params = dict(params)
+            if name == "causal_oracle":  # it also weighs following each tuned field baseline (its docstring)
+                params.setdefault("policies", [[b, rep["policies"][b]["params"]] for b in ("pump_off", "fillage_pi")])
+            specs[name] = [{"kind": "baseline", "name": name, "params": params}]
     return specs
 
 
