@@ -35,6 +35,28 @@ def test_events_occur_at_their_documented_rates():
         assert abs(counts[name] - expected) < 4.0 * math.sqrt(expected) + 1, (name, counts[name], expected)
 
 
+def test_rods_part_at_the_documented_rate_scaled_by_the_loading():
+    rng = np.random.default_rng(1)
+    t_mean = 1.0 / ev.PARTING_RATE_PER_H
+    # pumping t_mean hours at the reference loading parts 1 - 1/e of the strings (exponential with that rate)
+    parted = [ev.PartingClock.draw(rng).advance(t_mean, 1.0, ev.PARTING_REFERENCE_GOODMAN_PCT) for _ in range(4000)]
+    assert np.mean(parted) == pytest.approx(1.0 - math.exp(-1.0), abs=0.025)
+    clock = ev.PartingClock(budget=1.0)
+    clock.advance(1.0, 1.0, 2 * ev.PARTING_REFERENCE_GOODMAN_PCT)
+    assert clock.used == pytest.approx(16 * ev.PARTING_RATE_PER_H)  # twice the loading, 2^4 the hazard
+    idle = ev.PartingClock(budget=1e-12)
+    assert not idle.advance(1.0, 0.0, 90.0)  # a well that does not pump does not part its rods
+
+
+def test_parting_clock_ends_a_v2_episode():
+    env = gym.make(ID, scenario="train", episode_hours=0.5).unwrapped
+    env.reset(seed=3)
+    env._parting = ev.PartingClock(budget=0.0)
+    _, _, term, _, info = env.step(np.array([0.5, 1.0], np.float32))
+    assert term and info["condition"] == "parted_rods" and info["reward_workover"] < 0
+    assert info["reward_lost_production"] == 0.0  # they parted at the end of the interval
+
+
 def test_schedule_severity_develops_and_one_condition_at_a_time():
     e = ev.Event("travelling_valve_leak", 1.0, math.inf, 0.4, ramp_h=4.0)
     assert e.severity_at(0.5) == 0.0 and e.severity_at(3.0) == pytest.approx(0.2) and e.severity_at(9.0) == 0.4

@@ -34,7 +34,10 @@ Conditions (rates per hour of well time while the well runs normally; severities
 | ``travelling_valve_leak`` / ``standing_valve_leak`` | 0.008 / 0.006 | 0.1-0.6 | to the end, developing over 4 h |
 | ``tubing_leak`` | 0.004 | 0.05-0.4 | to the end |
 | ``tagging_down`` (after a spacing drift) | 0.008 | 0.2-1.0 | to the end |
-| ``parted_rods`` | 0.006 | 1 | ends the episode (a workover) |
+| ``parted_rods`` | 1e-4 x (G / 60 %)^4 x fraction pumped | 1 | ends the episode (a workover) |
+
+G is the interval's peak Goodman loading of the rods: how hard a controller runs them moves the parting hazard
+(:class:`srenv.task.events.PartingClock`).
 
 They change the physics at interval boundaries (the conditions branch's overrides; today gas and heavy oil);
 the rest are booked by the env (:data:`srenv.task.events.BOOKED`, see there).
@@ -151,8 +154,9 @@ class SuckerRodV2Env(SuckerRodV1Env):
     def _episode_spec(self, seed: int | None, rng: np.random.Generator) -> wf.WellSpec:
         spec = self._fixed if self.split == "family" else super()._episode_spec(seed, rng)
         # the conditions from their own stream, seeded by the episode's: v1's draws keep their meaning
-        self._schedule = ev.draw_schedule(np.random.default_rng(int(rng.integers(2**63))),
-                                          spec.cfg.task.episode_hours, self.event_rate_scale)
+        erng = np.random.default_rng(int(rng.integers(2**63)))
+        self._schedule = ev.draw_schedule(erng, spec.cfg.task.episode_hours, self.event_rate_scale)
+        self._parting = ev.PartingClock.draw(erng)
         self._condition: tuple[str | None, float] = (None, 0.0)
         self._true = ("full", 0.0)
         return spec
@@ -165,7 +169,13 @@ class SuckerRodV2Env(SuckerRodV1Env):
 
     def _after_interval(self, r: IntervalResult, terms: dict, costs: dict) -> bool:
         label, sev = self._condition
-        b = ev.bookkeeping(label, sev, r.lifted_m3, r.strokes)
+        if label != "parted_rods" and self._parting.advance(r.duration_s / 3600.0, r.pumping_fraction,
+                                                            r.goodman_max_pct, self.event_rate_scale):
+            label, sev = "parted_rods", 1.0  # they part at the end of this interval: its liquid was lifted
+            self._condition = (label, sev)
+            b = ev.Booking()
+        else:
+            b = ev.bookkeeping(label, sev, r.lifted_m3, r.strokes)
         if b.lost_m3 > 0 and self.sim.annulus is not None:
             self.sim.annulus.volume_m3 += b.lost_m3  # the lost liquid falls back: it can be pumped again
         hours = r.duration_s / 3600.0

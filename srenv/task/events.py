@@ -5,7 +5,10 @@ runs *normally* until a condition starts; the hazard of each condition while the
 rate in :data:`EVENTS` (per hour of well time, competing exponential clocks). A *transient* condition (gas
 slug, heavy-oil period, flowing) lasts a drawn time and the well returns to normal; a *persistent* one (valve
 leaks, tubing leak, tagging) lasts to the end of the episode, a *developing* one (valve leaks) growing
-linearly from 0 to its drawn severity over ``ramp_h``; parted rods end the episode (a workover). Severities
+linearly from 0 to its drawn severity over ``ramp_h``. Rods part by fatigue, not by a clock of their own
+(:class:`PartingClock`): their hazard is ``PARTING_RATE_PER_H`` x ``(G / 60 %)^4`` x the fraction of the hour
+pumped, with G the interval's peak Goodman loading, so how hard a controller runs the rods moves it; they end
+the episode (a workover). Severities
 are drawn per episode, uniform in ``severity``, in [0, 1] (what 1 means is each condition's, in
 :func:`condition_overrides`). One condition at a time: the privileged observation shows it one-hot.
 
@@ -39,10 +42,9 @@ class EventSpec:
     severity: tuple[float, float]          # drawn per episode, uniform
     duration_h: tuple[float, float] | None = None  # transient: drawn length; None: to the episode's end
     ramp_h: float = 0.0                    # developing: hours from 0 to the drawn severity
-    ends_episode: bool = False
 
 
-# Rates: a 12-h episode sees about one condition in two episodes (sum of rates 0.064/h -> 1 - exp(-0.77) = 54 %).
+# Rates: a 12-h episode sees about one condition in two episodes (sum of rates 0.058/h -> 1 - exp(-0.70) = 50 %).
 EVENTS: dict[str, EventSpec] = {
     "gas_interference": EventSpec(0.020, (0.2, 1.0), duration_h=(0.5, 3.0)),        # gas slug
     "heavy_oil": EventSpec(0.008, (0.3, 1.0), duration_h=(1.0, 4.0)),               # cold / emulsion period
@@ -51,8 +53,31 @@ EVENTS: dict[str, EventSpec] = {
     "standing_valve_leak": EventSpec(0.006, (0.1, 0.6), ramp_h=4.0),                # develops
     "tubing_leak": EventSpec(0.004, (0.05, 0.4)),
     "tagging_down": EventSpec(0.008, (0.2, 1.0)),                                   # after a spacing drift
-    "parted_rods": EventSpec(0.006, (1.0, 1.0), ends_episode=True),
 }
+# Rods part at this hazard when pumping at the reference Goodman loading: about once in 10^4 h (a year and a
+# bit), the field's order; expected workover cost 3 USD/h at 60 % (30 000 USD), 15 USD/h at 90 % loading.
+# Rare in a 12-h episode on purpose: a visible rate would make the workover dominate every return.
+PARTING_RATE_PER_H = 1.0e-4
+PARTING_REFERENCE_GOODMAN_PCT = 60.0
+PARTING_EXPONENT = 4.0
+
+
+@dataclass
+class PartingClock:
+    """Rods part when the accumulated hazard crosses a unit-exponential budget drawn per episode."""
+
+    budget: float
+    used: float = 0.0
+
+    @classmethod
+    def draw(cls, rng: np.random.Generator) -> PartingClock:
+        return cls(float(rng.exponential(1.0)))
+
+    def advance(self, hours: float, pumping_fraction: float, goodman_pct: float, rate_scale: float = 1.0) -> bool:
+        """Add one interval's hazard; True when the rods part in it."""
+        load = max(goodman_pct, 0.0) / PARTING_REFERENCE_GOODMAN_PCT
+        self.used += rate_scale * PARTING_RATE_PER_H * hours * pumping_fraction * load ** PARTING_EXPONENT
+        return self.used >= self.budget
 
 # Bookkeeping until the physics lands: fraction of the lifted liquid lost at severity 1 (falls back to the
 # annulus), and the tagging damage. BOOKED lists the labels the env books itself (remove one when
