@@ -15,9 +15,24 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from agents.baselines import FillagePolicy, RockingMachinePolicy, action_from_setpoints, setpoints_from_action
-from agents.evaluate import evaluate, fillage_index, load_model, make_policy, policy_label, run_episode
-from agents.train import ENV_ID, checkpoints, make_env, parse_train_config, train
+from agents.envs import ENV_ID_V0, make_env
+from agents.evaluation.evaluate import (
+    evaluate,
+    fillage_index,
+    load_model,
+    make_policy,
+    policy_label,
+    run_episode,
+)
+from agents.policies.v0 import (
+    FillagePolicy,
+    RockingMachinePolicy,
+    action_from_setpoints,
+    setpoints_from_action,
+)
+from agents.training.config import parse_train_config
+from agents.training.sb3.checkpoints import checkpoints
+from agents.training.sb3.train import train
 from srenv.config import load_config
 
 SHORT = {"control__max_episode_steps": 8}  # env override: 8-stroke episodes keep the tests fast
@@ -33,7 +48,7 @@ def smoke_config(**over: object) -> dict:
 
 @pytest.fixture(scope="module")
 def env():
-    e = make_env(ENV_ID, config="default", **SHORT)
+    e = make_env(ENV_ID_V0, config="default", **SHORT)
     yield e
     e.close()
 
@@ -162,7 +177,7 @@ def test_train_config_errors_name_the_key() -> None:
 
 def test_shipped_train_configs_parse() -> None:
     root = Path(__file__).resolve().parent.parent / "configs" / "train"
-    from agents.train import load_train_config
+    from agents.training.config import load_train_config
 
     for name in ("ppo_default.yaml", "sac_default.yaml", "ppo_quick.yaml"):
         cfg = load_train_config(root / name)
@@ -189,7 +204,7 @@ def test_cli_bad_model_path_exits_2() -> None:
 
 
 def test_episode_production_is_time_weighted() -> None:
-    from agents.evaluate import Episode
+    from agents.evaluation.evaluate import Episode
 
     ep = Episode(seed=0, rewards=[1.0, 1.0])
     ep.steps.update(production_m3_day=[10.0, 0.0], spm=[10.0, 5.0], pprl_n=[40e3, 50e3],

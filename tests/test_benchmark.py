@@ -19,17 +19,19 @@ import numpy as np
 import pytest
 import yaml
 
-from agents.baselines_v1 import (
+from agents.benchmark.config import load_benchmark_config
+from agents.benchmark.report import mean_ci
+from agents.envs import make_env
+from agents.evaluation.rollout import Runner, run_episode
+from agents.policies.field import (
     ConstantPolicy,
     FillagePIPolicy,
     InstalledPolicy,
     PumpOffPolicy,
     action_from_setpoints,
 )
-from agents.benchmark import load_benchmark_config, mean_ci
-from agents.oracle_v1 import OraclePolicy
-from agents.rollout_v1 import Runner, make_env, run_episode
-from agents.tuning import Evaluator, TuningSet, refuse_test_split, search_best_constant
+from agents.policies.oracle import OraclePolicy
+from agents.training.tuning import Evaluator, TuningSet, refuse_test_split, search_best_constant
 
 FAKE = "fake_v1:" + fake_v1.ENV_ID
 NAMES = fake_v1.FIELD_OBS_NAMES
@@ -238,7 +240,7 @@ def test_quick_benchmark_writes_the_schema_on_disjoint_splits_same_episodes(tmp_
     """``benchmark --quick`` end to end (the real v1 env with 1-hour episodes, or the fake one)."""
     cfg = _quick_cfg(tmp_path, "srenv/SuckerRod-v1", {"task__episode_hours": 1.0}) if real else _quick_cfg(tmp_path)
     shaped = cfg["agents"]["runs"]["ppo_residual_shaped"]
-    cfg["agents"]["runs"]["distilled"] = {  # a teacher-student run (agents/distill_v1.py)
+    cfg["agents"]["runs"]["distilled"] = {  # a teacher-student run (agents/training/distill.py)
         "config": shaped["config"], "seeds": [0], "residual": dict(shaped["residual"]),
         "teacher": {"students_from": "ppo_residual_shaped", "iterations": 1, "episodes": 1, "seed_start": 40000,
                     "idle_scale": 1.0}}
@@ -318,7 +320,8 @@ def test_quick_benchmark_writes_the_schema_on_disjoint_splits_same_episodes(tmp_
 
 def test_residual_agent_with_zero_correction_is_its_baseline() -> None:
     """Training wrapper and evaluation policy compose the same way: r = 0 reproduces the baseline exactly."""
-    from agents.residual_v1 import ResidualAgentPolicy, ResidualEnv
+    from agents.policies.residual import ResidualAgentPolicy
+    from agents.training.residual_env import ResidualEnv
 
     params = {"threshold": 0.85, "idle_time_s": 600, "a_spm": 0.8, "a_stroke": 1.0}
 
@@ -346,7 +349,7 @@ def test_residual_agent_with_zero_correction_is_its_baseline() -> None:
 
 
 def test_idle_scale_gives_the_agent_the_rate_only_where_the_base_idles() -> None:
-    from agents.residual_v1 import compose
+    from agents.policies.residual import compose
 
     base = np.array([[-1.0, 0.5], [0.1, 0.5]], np.float32)  # an idle interval, a pumping one
     full = np.ones((2, 2), np.float32)
@@ -360,7 +363,8 @@ def test_idle_scale_gives_the_agent_the_rate_only_where_the_base_idles() -> None
 
 def test_residual_env_and_policy_compose_the_idle_override_alike() -> None:
     """Training wrapper and evaluation policy give the same episode when the agent overrides every stop."""
-    from agents.residual_v1 import ResidualAgentPolicy, ResidualEnv
+    from agents.policies.residual import ResidualAgentPolicy
+    from agents.training.residual_env import ResidualEnv
 
     params = {"threshold": 0.85, "idle_time_s": 600, "a_spm": 0.8, "a_stroke": 1.0}
 
@@ -415,7 +419,7 @@ def test_benchmark_config_refuses_a_history_that_is_not_lines(tmp_path, history)
 @pytest.mark.parametrize("per_well", [1, 2])
 def test_paired_ci_counts_each_well_once_when_wells_repeat(per_well) -> None:
     """Two episodes of one well are not independent: the report adds the interval over per-well means."""
-    from agents.benchmark_report import build_report, markdown_tables, mean_ci, verdict
+    from agents.benchmark.report import build_report, markdown_tables, mean_ci, verdict
 
     rng = np.random.default_rng(1)
     wells = [f"test-{w:03d}" for w in range(6) for _ in range(per_well)]
@@ -444,7 +448,7 @@ def test_paired_ci_counts_each_well_once_when_wells_repeat(per_well) -> None:
 
 
 def test_a_lead_only_the_repeated_episodes_make_significant_is_called_within_noise() -> None:
-    from agents.benchmark_report import build_report, verdict
+    from agents.benchmark.report import build_report, verdict
 
     # 4 wells x 2 identical episodes: the per-episode CI halves in width, the per-well one does not
     diffs = [5.0, -1.0, 4.0, 0.5]

@@ -1,4 +1,4 @@
-"""Teacher-student distillation (agents/distill_v1.py) and its benchmark config, on the fake v1 env.
+"""Teacher-student distillation (agents/training/distill.py) and its benchmark config, on the fake v1 env.
 
 The teacher is a residual PPO model on the fake env's privileged observation whose action head is set so that
 its correction is clearly not the student's; distillation must move the student's correction towards it,
@@ -17,10 +17,11 @@ import pytest
 import torch
 import yaml
 
-from agents.benchmark import load_benchmark_config
-from agents.distill_v1 import distill
-from agents.residual_v1 import ResidualEnv
-from agents.rollout_v1 import AgentPolicy, make_env
+from agents.benchmark.config import load_benchmark_config
+from agents.envs import make_env
+from agents.evaluation.agent import AgentPolicy
+from agents.training.distill import distill
+from agents.training.residual_env import ResidualEnv
 
 FAKE = "fake_v1:" + fake_v1.ENV_ID
 PARAMS = {"threshold": 0.85, "idle_time_s": 600, "a_spm": 0.5, "a_stroke": 1.0}
@@ -46,7 +47,7 @@ def models(tmp_path):
 
 def _gap(spec: dict, teacher: dict, seeds) -> float:
     """Mean squared gap between the student's and the teacher's corrections along the student's episodes."""
-    from agents.residual_v1 import _Base, augment, compose
+    from agents.policies.residual import _Base, augment, compose
 
     s, t = AgentPolicy(spec["path"]), AgentPolicy(teacher["path"])
     env = make_env(FAKE, scenario="train", observation="privileged")

@@ -1,4 +1,4 @@
-"""Seed ensembles (agents/ensemble_v1.py): the mean action of several models, plain and residual."""
+"""Seed ensembles (agents/policies/ensemble.py): the mean action of several models, plain and residual."""
 
 from __future__ import annotations
 
@@ -10,10 +10,11 @@ import pytest
 import yaml
 from test_benchmark import _quick_cfg
 
-from agents.benchmark import load_benchmark_config
-from agents.ensemble_v1 import EnsemblePolicy, ensemble_spec
-from agents.residual_v1 import augment, compose
-from agents.rollout_v1 import AgentPolicy, build_policy, make_env
+from agents.benchmark.config import load_benchmark_config
+from agents.envs import make_env
+from agents.evaluation.agent import AgentPolicy, build_policy
+from agents.policies.ensemble import EnsemblePolicy, ensemble_spec
+from agents.policies.residual import augment, compose
 
 FAKE = "fake_v1:" + fake_v1.ENV_ID
 
@@ -50,7 +51,7 @@ def _models(tmp_path, env, n):
                                                                           "a_spm": 0.2, "a_stroke": 1.0},
                                              "scale": 0.5}], ids=["plain", "residual"])
 def test_a_built_ensemble_composes_the_mean_correction_once(tmp_path, residual) -> None:
-    from agents.residual_v1 import ResidualEnv
+    from agents.training.residual_env import ResidualEnv
 
     env = make_env(FAKE, scenario="train")
     train_env = ResidualEnv(make_env(FAKE, scenario="train"), "pump_off", residual["params"], 0.5) if residual else env

@@ -407,7 +407,7 @@ def test_a_pickle_payload_in_a_model_file_never_runs_without_trust(tmp_path: Pat
 
 
 def _agents(argv: list[str], capsys: pytest.CaptureFixture) -> tuple[int, str]:
-    from agents.__main__ import main as agents_main
+    from agents.cli import main as agents_main
 
     try:
         rc = agents_main(argv)
@@ -462,7 +462,7 @@ def test_bad_model_file_is_one_line_exit_2(kind: str, tmp_path: Path, capsys: py
 
 def test_resume_survives_a_truncated_history_and_keeps_the_better_best(tmp_path: Path,
                                                                        capsys: pytest.CaptureFixture) -> None:
-    from agents.train import BEST_RECORD, _recorded_best, _restore_eval_history
+    from agents.training.sb3.callbacks import BEST_RECORD, _recorded_best, _restore_eval_history
 
     class Cb:
         def __init__(self) -> None:
@@ -487,7 +487,9 @@ def test_resume_survives_a_truncated_history_and_keeps_the_better_best(tmp_path:
 
 
 def test_a_resumed_run_does_not_replace_a_better_best_model(tmp_path: Path) -> None:
-    from agents.train import BEST_RECORD, parse_train_config, train
+    from agents.training.config import parse_train_config
+    from agents.training.sb3.callbacks import BEST_RECORD
+    from agents.training.sb3.train import train
 
     best = tmp_path / "best"
     best.mkdir()
@@ -504,7 +506,7 @@ def test_a_resumed_run_does_not_replace_a_better_best_model(tmp_path: Path) -> N
 
 
 def test_verbose_and_device_given_once_override_the_harness_defaults() -> None:
-    from agents.train import parse_train_config
+    from agents.training.config import parse_train_config
 
     cfg = parse_train_config({"algo": "ppo", "verbose": 1, "device": "cpu"})
     assert cfg.algo_kwargs == {"verbose": 1, "device": "cpu"}

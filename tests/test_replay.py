@@ -7,7 +7,7 @@ from pathlib import Path
 
 import pytest
 
-from agents.__main__ import main
+from agents.cli import main
 
 REPO = Path(__file__).resolve().parent.parent
 DOCS = REPO / "docs" / "benchmark.json"

@@ -1,7 +1,7 @@
 """RLlib backend: PPO through ``python -m agents train`` with the plain env id and two env runners, its
 checkpoint evaluated next to a baseline, resume; the observation normaliser (its statistics saved, applied
 by evaluate, restored on resume, merged exactly over runners); the three registration patterns of
-:mod:`srenv.rllib`.
+:mod:`agents.training.rllib.registry`.
 
 Smoke-sized (64-step iterations, 8-stroke episodes): plumbing, not learning.
 """
@@ -21,12 +21,12 @@ import yaml
 
 pytest.importorskip("ray.rllib")
 
-from agents.evaluate import evaluate, make_policy
-from agents.rllib_backend import start_ray
-from agents.rllib_checkpoints import POLICY_JSON
-from agents.rllib_config import parse_rllib_config
-from agents.rllib_policy import RLlibPolicy
-from agents.train import TrainConfigError, make_env
+from agents.envs import make_env
+from agents.evaluation.evaluate import evaluate, make_policy
+from agents.evaluation.rllib_model import POLICY_JSON, RLlibPolicy
+from agents.training.config import TrainConfigError
+from agents.training.rllib.backend import start_ray
+from agents.training.rllib.config import parse_rllib_config
 
 ROOT = Path(__file__).resolve().parents[1]
 SHIPPED = ROOT / "configs" / "train" / "ppo_rllib.yaml"
@@ -153,7 +153,7 @@ def test_runner_statistics_merge_exactly_over_iterations() -> None:
     from ray.rllib.env.single_agent_episode import SingleAgentEpisode
     from ray.rllib.utils.filter import RunningStat
 
-    from agents.rllib_obs_filter import ObsMeanStdFilter
+    from agents.training.rllib.obs_filter import ObsMeanStdFilter
 
     space = gym.spaces.Box(-100, 100, (3,), np.float32)
     rng = np.random.default_rng(0)
@@ -208,15 +208,15 @@ def test_bad_rllib_config_is_one_line(tmp_path: Path) -> None:
 
 
 def test_registration_patterns() -> None:
-    """srenv.rllib.register() + plain id, ``module:id`` and the creator: each makes srenv envs in a runner."""
+    """registry.register() + plain id, ``module:id`` and the creator: each makes srenv envs in a runner."""
     import ray
     from ray.rllib.algorithms.ppo import PPOConfig
     from ray.tune.registry import register_env
 
-    import srenv.rllib
+    from agents.training.rllib import registry
 
-    srenv.rllib.register()
-    register_env("any-name", srenv.rllib.env_creator)
+    registry.register()
+    register_env("any-name", registry.env_creator)
     started = start_ray(None, None, 1)
     try:
         # the plain id first: fresh runner processes, which never imported srenv (Ray reuses workers)
@@ -234,7 +234,7 @@ def test_registration_patterns() -> None:
         if started:
             ray.shutdown()
     with pytest.raises(ValueError, match="CartPole-v1"):
-        srenv.rllib.register(["CartPole-v1"])
+        registry.register(["CartPole-v1"])
 
 
 def test_pickle_only_checkpoint_needs_trust(run: tuple[Path, Path, dict], tmp_path: Path) -> None:

@@ -1,4 +1,4 @@
-"""Potential-based reward shaping (agents/shaping_v1.py) on the real ``srenv/SuckerRod-v1``: the shaped return
+"""Potential-based reward shaping (agents/training/shaping.py) on the real ``srenv/SuckerRod-v1``: the shaped return
 telescopes to the true return minus the first state's potential (so no policy ranking changes), the potential
 is the value of the present inflow for the time left, and the residual env imports only the two inner envs."""
 
@@ -10,11 +10,12 @@ import numpy as np
 import pytest
 import yaml
 
-from agents.baselines_v1 import make_baseline, obs_names_of
-from agents.benchmark_config import load_benchmark_config
-from agents.residual_v1 import make_residual_env
-from agents.rollout_v1 import make_env
-from agents.shaping_v1 import SHAPED_ENV_ID, potential
+from agents.benchmark.config import load_benchmark_config
+from agents.envs import make_env
+from agents.policies.factory import make_baseline
+from agents.policies.field import obs_names_of
+from agents.training.residual_env import make_residual_env
+from agents.training.shaping import SHAPED_ENV_ID, potential
 
 REPO = Path(__file__).resolve().parent.parent
 PUMP_OFF = {"threshold": 0.95, "idle_time_s": 3600, "a_spm": 0.1, "a_stroke": 1.0}
@@ -62,7 +63,7 @@ def test_potential_falls_faster_than_time_when_the_level_rises(shaped) -> None:
     assert phi1 / phi0 < t1 / t0 - 1e-6
 
 
-@pytest.mark.parametrize("inner", ["os:system", "srenv/SuckerRod-v0", "agents.shaping_v1:Other-v1"])
+@pytest.mark.parametrize("inner", ["os:system", "srenv/SuckerRod-v0", "agents.training.shaping:Other-v1"])
 def test_residual_env_refuses_other_inner_envs(inner) -> None:
     with pytest.raises(ValueError, match="inner_env_id"):
         make_residual_env(inner_env_id=inner, base="pump_off", base_params=PUMP_OFF, scale=0.5)
@@ -70,7 +71,7 @@ def test_residual_env_refuses_other_inner_envs(inner) -> None:
 
 @pytest.mark.parametrize("inner", ["os:system", "srenv/SuckerRod-v0"])
 def test_shaped_env_refuses_other_inner_envs(inner) -> None:
-    from agents.shaping_v1 import make_shaped_env
+    from agents.training.shaping import make_shaped_env
 
     with pytest.raises(ValueError, match="inner_env_id"):
         make_shaped_env(inner_env_id=inner)
