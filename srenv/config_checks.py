@@ -112,7 +112,7 @@ MAX_RUN_SAMPLES = 1_000_000  # recorded time steps of one CLI run / sweep case (
 
 
 def node_count(cfg: WellConfig) -> int:
-    """Nodes of the FE mesh :func:`srenv.rod.build_mesh` builds (whole elements per taper, plus the top)."""
+    """Nodes of the FE mesh :func:`srenv.physics.rod.build_mesh` builds (whole elements per taper, plus the top)."""
     h = cfg.simulation.element_length_m
     return 1 + sum(max(1, math.ceil(t.length_m / h - 1e-9)) for t in cfg.rod.tapers)
 

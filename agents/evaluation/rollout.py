@@ -17,13 +17,15 @@ import math
 from collections.abc import Callable, Iterable, Sequence
 from concurrent.futures import ProcessPoolExecutor
 from multiprocessing import get_context
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
-from typing_extensions import Self
 
 from ..envs import make_env
 from .agent import build_policy
+
+if TYPE_CHECKING:
+    from typing_extensions import Self  # typing.Self from Python 3.11 only
 
 # info keys averaged over an episode's intervals (the env's units, in their names)
 MEAN_KEYS = ("production_m3_day", "oil_m3_day", "inflow_m3_day", "avg_spm", "duty", "stroke_length_m",

@@ -4,7 +4,7 @@ Every candidate is scored on the same fixed evaluation set - ``reset(seed=S)`` f
 the training split, i.e. fixed (train well x inflow schedule) episodes - so candidates are compared on
 common random numbers and a rerun finds the same answer. The score is the mean episode return.
 Building a :class:`TuningSet` on ``scenario="test"`` raises ``ValueError``: the test wells are for the
-final evaluation only (``srenv.well_family.check_split`` when the env provides it, and our own guard).
+final evaluation only (``srenv.task.well_family.check_split`` when the env provides it, and our own guard).
 
 - :func:`search_best_constant` - grid over the WHOLE action box, then a pattern search (step halving)
   around the grid's best.

@@ -1,5 +1,5 @@
 """How a sweep's cases run: in this process, in a local pool of processes (pipes only, no listener), or as Ray
-tasks on a cluster named by ``--address``; every backend gives the same rows (see :mod:`srenv.sweep`)."""
+tasks on a cluster named by ``--address``; every backend gives the same rows (see :mod:`srenv.tools.sweep`)."""
 
 from __future__ import annotations
 

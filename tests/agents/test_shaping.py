@@ -17,7 +17,7 @@ from agents.policies.field import obs_names_of
 from agents.training.residual_env import make_residual_env
 from agents.training.shaping import SHAPED_ENV_ID, potential
 
-REPO = Path(__file__).resolve().parent.parent
+REPO = Path(__file__).resolve().parents[2]
 PUMP_OFF = {"threshold": 0.95, "idle_time_s": 3600, "a_spm": 0.1, "a_stroke": 1.0}
 
 

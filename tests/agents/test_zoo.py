@@ -16,7 +16,7 @@ from pathlib import Path
 import pytest
 import yaml
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 ZOO_FILE = ROOT / "configs" / "train" / "zoo_ppo.yml"
 ENV_ID = "srenv/SuckerRod-v0"
 

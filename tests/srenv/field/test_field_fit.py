@@ -56,7 +56,7 @@ def test_fit_on_a_noisy_card_is_within_its_uncertainty(synthetic_card, tmp_path)
 def test_cli_fit_writes_a_loadable_fitted_config(synthetic_card, tmp_path):
     path, _ = synthetic_card
     out = tmp_path / "fitted.yaml"
-    p = subprocess.run([sys.executable, "-m", "srenv.cli", "fit", str(path), "--config", "default", "--set",
+    p = subprocess.run([sys.executable, "-m", "srenv.tools.cli", "fit", str(path), "--config", "default", "--set",
                         "inflow.model=none", "--param", "damping.damping_factor", "--param", "friction.coefficient",
                         "--set", "pump.intake_pressure_pa=1.5e6", "--out", str(out)],
                        check=False, capture_output=True, text=True)
@@ -76,7 +76,7 @@ def test_cli_fit_writes_a_loadable_fitted_config(synthetic_card, tmp_path):
 def test_cli_fit_bad_param_is_one_line_exit_2(synthetic_card, tmp_path, param, expect):
     path, _ = synthetic_card
     out = tmp_path / "fitted.yaml"
-    p = subprocess.run([sys.executable, "-m", "srenv.cli", "fit", str(path), "--config", "default", "--param", param,
+    p = subprocess.run([sys.executable, "-m", "srenv.tools.cli", "fit", str(path), "--config", "default", "--param", param,
                         "--out", str(out)], check=False, capture_output=True, text=True)
     assert p.returncode == 2
     lines = p.stderr.strip().splitlines()

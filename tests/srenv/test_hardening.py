@@ -29,7 +29,7 @@ from srenv.config import CONFIG_DIR, MAX_YAML_BYTES
 from srenv.errors import VALUE_REPR_CHARS, NumericFailure, short_repr
 from srenv.tools.cli import check_finite, main
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 FIG3 = "paper_fig3_vertical"
 ENV = {**os.environ, "PYTHONPATH": str(ROOT), "MPLBACKEND": "Agg"}
 MEMORY_LIMIT_BYTES = 3 * 2**30
@@ -142,7 +142,7 @@ def test_bad_simulate_input_is_one_line_exit_2(args: list[str], needles: list[st
                                                monkeypatch: pytest.MonkeyPatch) -> None:
     if subproc:
         t0 = time.perf_counter()
-        p = subprocess.run([sys.executable, "-m", "srenv.cli", *_argv(args)], check=False, cwd=workdir, env=ENV,
+        p = subprocess.run([sys.executable, "-m", "srenv.tools.cli", *_argv(args)], check=False, cwd=workdir, env=ENV,
                            capture_output=True, text=True, timeout=60, preexec_fn=_limited)
         assert time.perf_counter() - t0 < 60
         _assert_refused(p.returncode, p.stderr, workdir, *needles)
@@ -229,7 +229,7 @@ def test_non_finite_results_are_a_numeric_failure() -> None:
 
 def test_sigterm_during_the_write_leaves_no_temporary_file(tmp_path: Path) -> None:
     """400 strokes = 800 000 CSV rows: seconds of writing, during which the temporary file exists."""
-    p = subprocess.Popen([sys.executable, "-m", "srenv.cli", "simulate", FIG3, "--strokes", "400", "--out",
+    p = subprocess.Popen([sys.executable, "-m", "srenv.tools.cli", "simulate", FIG3, "--strokes", "400", "--out",
                           "big.csv"], cwd=tmp_path, env=ENV, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
                          text=True)
     try:
@@ -311,7 +311,7 @@ def _listeners() -> list[tuple[str, int]]:
 
 @pytest.mark.skipif(shutil.which("ss") is None, reason="needs ss (iproute2) to list listeners")
 def test_local_sweep_listens_on_nothing_beyond_loopback_and_leaves_no_process(tmp_path: Path) -> None:
-    p = subprocess.Popen([sys.executable, "-m", "srenv.cli", "sweep", "paper_fig7_pullout", "--param",
+    p = subprocess.Popen([sys.executable, "-m", "srenv.tools.cli", "sweep", "paper_fig7_pullout", "--param",
                           "surface.pull_velocity_m_s", "--values", "0.5,3", "--duration-s", "5", "--workers",
                           "2", "--out", str(tmp_path / "sweep.csv")], env=ENV, stdout=subprocess.PIPE,
                          stderr=subprocess.PIPE, text=True)

@@ -42,5 +42,5 @@ def test_strokes_follow_spm_and_always_qp_counts(tmp_path: Path, capsys: pytest.
 
 
 def test_config_doc_is_current() -> None:
-    doc = Path(__file__).resolve().parents[1] / "docs" / "config.md"
+    doc = Path(__file__).resolve().parents[3] / "docs" / "config.md"
     assert config_doc() in doc.read_text(), "regenerate docs/config.md with `srenv config-doc`"

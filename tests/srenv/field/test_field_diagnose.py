@@ -9,7 +9,7 @@ import sys
 
 import numpy as np
 import pytest
-from cli_refusal import assert_cli_refuses
+from conftest import assert_cli_refuses
 
 from srenv.analysis.diagnose import diagnose_card, march
 from srenv.analysis.pump_card import analyse_pump_card
@@ -92,7 +92,7 @@ def test_cli_diagnose_writes_the_pump_card_and_one_json_line(tmp_path):
     np.savetxt(card, np.c_[tr["t_s"], tr["polished_rod_position_m"], tr["polished_rod_load_n"]], delimiter=",",
                header="t_s,polished_rod_position_m,polished_rod_load_n", comments="")
     out, png = tmp_path / "pump.csv", tmp_path / "cards.png"
-    p = subprocess.run([sys.executable, "-m", "srenv.cli", "diagnose", str(card), "--config", "paper_fig3_vertical",
+    p = subprocess.run([sys.executable, "-m", "srenv.tools.cli", "diagnose", str(card), "--config", "paper_fig3_vertical",
                         "--out", str(out), "--plot", str(png)], check=False, capture_output=True, text=True)
     assert p.returncode == 0, p.stderr
     lines = p.stdout.strip().splitlines()

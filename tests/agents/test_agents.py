@@ -176,7 +176,7 @@ def test_train_config_errors_name_the_key() -> None:
 
 
 def test_shipped_train_configs_parse() -> None:
-    root = Path(__file__).resolve().parent.parent / "configs" / "train"
+    root = Path(__file__).resolve().parents[2] / "configs" / "train"
     from agents.training.config import load_train_config
 
     for name in ("ppo_default.yaml", "sac_default.yaml", "ppo_quick.yaml"):

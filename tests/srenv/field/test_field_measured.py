@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from cli_refusal import assert_cli_refuses
+from conftest import assert_cli_refuses
 
 from srenv.config import load_config
 from srenv.errors import ConfigError

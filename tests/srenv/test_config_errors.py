@@ -1,6 +1,6 @@
 """Bad configs are refused with one clear line naming the field, the value and the unit.
 
-Every case goes through the CLI (``srenv.cli.main`` in-process, a few through a real subprocess): exit
+Every case goes through the CLI (``srenv.tools.cli.main`` in-process, a few through a real subprocess): exit
 status 2, exactly one line on stderr, no traceback, and neither the ``--out`` CSV nor the ``--plot`` PNG
 (nor a temporary file of the atomic writer) left behind.
 """
@@ -360,7 +360,7 @@ def test_shipped_configs_all_load() -> None:
 ], ids=["nan", "code-string", "solver"])
 def test_subprocess_exit_status_and_no_traceback(sets: list[str], field: str, tmp_path: Path) -> None:
     out, plot = tmp_path / "o.csv", tmp_path / "o.png"
-    argv = [sys.executable, "-m", "srenv.cli", "simulate", FIG3, "--strokes", "1", "--out", str(out),
+    argv = [sys.executable, "-m", "srenv.tools.cli", "simulate", FIG3, "--strokes", "1", "--out", str(out),
             "--plot", str(plot)]
     for s in sets:
         argv += ["--set", s]
@@ -377,7 +377,7 @@ def test_subprocess_python_tag_file(tmp_path: Path) -> None:
     cfg = tmp_path / "evil.yaml"
     cfg.write_text(f'name: !!python/object/apply:os.system ["touch {marker}"]\n')
     out = tmp_path / "o.csv"
-    p = subprocess.run([sys.executable, "-m", "srenv.cli", "simulate", str(cfg), "--out", str(out)],
+    p = subprocess.run([sys.executable, "-m", "srenv.tools.cli", "simulate", str(cfg), "--out", str(out)],
                        check=False, capture_output=True, text=True, timeout=300)
     assert p.returncode == 2 and "Traceback" not in p.stderr and str(cfg) in p.stderr
     assert not out.exists() and not marker.exists()

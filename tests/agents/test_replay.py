@@ -9,7 +9,7 @@ import pytest
 
 from agents.cli import main
 
-REPO = Path(__file__).resolve().parent.parent
+REPO = Path(__file__).resolve().parents[2]
 DOCS = REPO / "docs" / "benchmark.json"
 PUMP_OFF = {"threshold": 0.95, "idle_time_s": 3600, "a_spm": 0.1, "a_stroke": 1.0}
 

@@ -4,10 +4,10 @@ from __future__ import annotations
 
 import copy
 
-import fake_v1
 import numpy as np
 import pytest
 import yaml
+from conftest import FAKE_ENV
 from test_benchmark import _quick_cfg
 
 from agents.benchmark.config import load_benchmark_config
@@ -16,7 +16,7 @@ from agents.evaluation.agent import AgentPolicy, build_policy
 from agents.policies.ensemble import EnsemblePolicy, ensemble_spec
 from agents.policies.residual import augment, compose
 
-FAKE = "fake_v1:" + fake_v1.ENV_ID
+FAKE = FAKE_ENV
 
 
 class Const:

@@ -11,11 +11,11 @@ import copy
 import zipfile
 from pathlib import Path
 
-import fake_v1
 import numpy as np
 import pytest
 import torch
 import yaml
+from conftest import FAKE_ENV, FIELD_OBS_NAMES
 
 from agents.benchmark.config import load_benchmark_config
 from agents.envs import make_env
@@ -23,7 +23,7 @@ from agents.evaluation.agent import AgentPolicy
 from agents.training.distill import distill
 from agents.training.residual_env import ResidualEnv
 
-FAKE = "fake_v1:" + fake_v1.ENV_ID
+FAKE = FAKE_ENV
 PARAMS = {"threshold": 0.85, "idle_time_s": 600, "a_spm": 0.5, "a_stroke": 1.0}
 RESIDUAL = {"base": "pump_off", "params": PARAMS, "scale": 0.5}
 
@@ -59,7 +59,7 @@ def _gap(spec: dict, teacher: dict, seeds) -> float:
         done = False
         while not done:
             b = base.act(obs)
-            rs = s.predict(augment(obs[:len(fake_v1.FIELD_OBS_NAMES)], b))[0]
+            rs = s.predict(augment(obs[:len(FIELD_OBS_NAMES)], b))[0]
             rt = np.clip(t.predict(augment(obs, b))[0], -1, 1)
             gaps.append(float(np.mean((rs - rt) ** 2)))
             obs, _, term, trunc, _ = env.step(compose(b, rs, 0.5))
@@ -78,7 +78,7 @@ def test_distillation_moves_the_student_to_the_teacher_and_only_its_weights(tmp_
         assert a.namelist() == b.namelist()
         changed = [n for n in a.namelist() if a.read(n) != b.read(n)]
     assert changed == ["policy.pth"]
-    assert AgentPolicy(out["path"]).observation_space.shape == (len(fake_v1.FIELD_OBS_NAMES) + 2,)
+    assert AgentPolicy(out["path"]).observation_space.shape == (len(FIELD_OBS_NAMES) + 2,)
 
 
 def test_distillation_is_reproducible(tmp_path, models) -> None:

@@ -1,15 +1,22 @@
-"""A tiny stand-in for ``srenv/SuckerRod-v1`` that implements only its contract (docs: notes/v1_contract):
-the field observation's names, the action map, ``info`` keys, the train/test splits by ``reset(seed)``,
-``env.unwrapped.cfg`` / ``well`` / ``inflow_multiplier`` / ``time_s``, deep-copyable.
+"""The tests' shared doubles, for every test file under tests/ (import them: ``from conftest import ...``).
 
-The physics is a tank: the annulus fills from an inflow that falls with the level and steps once per
-episode; the pump lifts ``k * SPM * stroke`` while there is liquid. Fast enough for unit tests of the
-harness (thousands of steps per second); it says nothing about the real well.
+1. :class:`FakeSuckerRodV1` (:data:`FAKE_ENV`, the id with its module for worker processes): a tiny stand-in
+   for ``srenv/SuckerRod-v1`` that implements only its contract (docs: notes/v1_contract): the field
+   observation's names, the action map, ``info`` keys, the train/test splits by ``reset(seed)``,
+   ``env.unwrapped.cfg`` / ``well`` / ``inflow_multiplier`` / ``time_s``, deep-copyable. The physics is a tank:
+   the annulus fills from an inflow that falls with the level and steps once per episode; the pump lifts
+   ``k * SPM * stroke`` while there is liquid. Fast enough for unit tests of the harness (thousands of steps per
+   second); it says nothing about the real well.
+2. :func:`assert_cli_refuses`: one check for the CLI's bad-input contract, shared by the tests of each command
+   that reads a file.
 """
 
 from __future__ import annotations
 
+import subprocess
+import sys
 from dataclasses import dataclass, field
+from pathlib import Path
 from types import SimpleNamespace
 
 import gymnasium as gym
@@ -122,3 +129,15 @@ class FakeSuckerRodV1(gym.Env):
 
 if ENV_ID not in gym.registry:
     gym.register(ENV_ID, entry_point=FakeSuckerRodV1)
+
+FAKE_ENV = f"{__name__}:{ENV_ID}"  # gymnasium's module:id form: a spawned worker imports this module to find it
+
+
+def assert_cli_refuses(args: list[str], out: Path, *needles: str) -> str:
+    """``python -m srenv.tools.cli ARGS`` exits 2 with one stderr line holding every needle, and writes no ``out``."""
+    p = subprocess.run([sys.executable, "-m", "srenv.tools.cli", *args], check=False, capture_output=True, text=True)
+    assert p.returncode == 2
+    lines = p.stderr.strip().splitlines()
+    assert len(lines) == 1 and all(n in lines[0] for n in needles), p.stderr
+    assert not out.exists()
+    return lines[0]

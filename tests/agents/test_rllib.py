@@ -28,7 +28,7 @@ from agents.training.config import TrainConfigError
 from agents.training.rllib.backend import start_ray
 from agents.training.rllib.config import parse_rllib_config
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 SHIPPED = ROOT / "configs" / "train" / "ppo_rllib.yaml"
 SHORT = {"control__max_episode_steps": 8}
 

@@ -175,7 +175,7 @@ def test_env_ends_episode_on_solver_failure_and_reset_works(monkeypatch: pytest.
 
 def test_soak_script_smoke() -> None:
     """scripts/soak.py on a few hundred strokes: every check passes and memory is sampled as asked."""
-    spec = importlib.util.spec_from_file_location("soak", Path(__file__).parents[1] / "scripts" / "soak.py")
+    spec = importlib.util.spec_from_file_location("soak", Path(__file__).parents[2] / "scripts" / "soak.py")
     soak = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(soak)
     summary = soak.soak(strokes=250, seed=0, checkpoint=50, config=None)

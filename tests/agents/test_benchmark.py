@@ -1,6 +1,6 @@
 """The v1 benchmark harness: baselines' logic, the tuning guard and search, and the ``--quick`` run's JSON.
 
-Most tests drive ``tests/fake_v1.py``, a tank model implementing only the v1 env contract (names, info
+Most tests drive the fake env of ``tests/conftest.py``, a tank model implementing only the v1 env contract (names, info
 keys, splits), so they check the harness in milliseconds; what the real env scores is in
 docs/benchmark.md.
 """
@@ -14,10 +14,10 @@ import subprocess
 import sys
 from pathlib import Path
 
-import fake_v1
 import numpy as np
 import pytest
 import yaml
+from conftest import FAKE_ENV, FIELD_OBS_NAMES
 
 from agents.benchmark.config import load_benchmark_config
 from agents.benchmark.report import mean_ci
@@ -33,10 +33,10 @@ from agents.policies.field import (
 from agents.policies.oracle import OraclePolicy
 from agents.training.tuning import Evaluator, TuningSet, refuse_test_split, search_best_constant
 
-FAKE = "fake_v1:" + fake_v1.ENV_ID
-NAMES = fake_v1.FIELD_OBS_NAMES
+FAKE = FAKE_ENV
+NAMES = FIELD_OBS_NAMES
 I_FILL = NAMES.index("fillage_est")
-REPO = Path(__file__).resolve().parent.parent
+REPO = Path(__file__).resolve().parents[2]
 
 
 @pytest.fixture()
@@ -247,7 +247,7 @@ def test_quick_benchmark_writes_the_schema_on_disjoint_splits_same_episodes(tmp_
     cfg_path = tmp_path / "bench.yaml"
     cfg_path.write_text(yaml.safe_dump(cfg))
     out = tmp_path / "out"
-    tests_dir = str(Path(__file__).resolve().parent)
+    tests_dir = str(Path(__file__).resolve().parents[1])  # tests/: conftest.py, the fake env's module
     import agents
     import srenv
 

@@ -1,4 +1,4 @@
-"""Unit tests of srenv.metrics against constructed traces with analytic answers."""
+"""Unit tests of srenv.analysis.metrics against constructed traces with analytic answers."""
 
 from __future__ import annotations
 
