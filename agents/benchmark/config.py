@@ -76,6 +76,32 @@ def load_benchmark_config(path: str | Path, quick: bool = False) -> dict[str, An
     w = cfg.setdefault("workers", 2)
     if not (isinstance(w, int) and w >= 1):
         raise BenchmarkConfigError(f"benchmark config: workers = {w!r}: expected a positive integer")
+    sets = _check_splits(cfg)
+    bl = cfg.setdefault("baselines", {})
+    for name in bl:
+        if name not in BASELINE_NAMES:
+            raise BenchmarkConfigError(f"benchmark config: baselines.{name}: expected one of {BASELINE_NAMES}")
+    ag = cfg.setdefault("agents", {})
+    sel = ag.setdefault("selection", "mean")
+    if sel not in ("mean", "best_on_validation"):
+        raise BenchmarkConfigError(f"benchmark config: agents.selection = {sel!r}: expected mean or "
+                                   "best_on_validation")
+    if sel == "best_on_validation" and not cfg["validation"]["seeds"]:
+        raise BenchmarkConfigError("benchmark config: agents.selection = best_on_validation needs "
+                                   "validation.seeds")
+    runs = ag.setdefault("runs", {})
+    if not isinstance(runs, dict):
+        raise BenchmarkConfigError(f"benchmark config: agents.runs = {runs!r}: expected a mapping algo -> run")
+    for algo, run in runs.items():
+        _check_run(algo, run)
+    for algo, run in runs.items():
+        if run.get("teacher") is not None:
+            _check_teacher(algo, run, runs, sets["tuning"] | sets["validation"])
+    return cfg
+
+
+def _check_splits(cfg: dict[str, Any]) -> dict[str, set[int]]:
+    """The tuning, validation and test seeds, resolved in ``cfg`` and checked disjoint; their sets."""
     for part in ("tuning", "test"):
         if not isinstance(cfg.get(part), dict) or "seeds" not in cfg[part]:
             raise BenchmarkConfigError(f"benchmark config: {part}: expected a mapping with seeds")
@@ -89,54 +115,39 @@ def load_benchmark_config(path: str | Path, quick: bool = False) -> dict[str, An
         if sets[a] & sets[b]:
             raise BenchmarkConfigError(f"benchmark config: {a}.seeds and {b}.seeds share "
                                        f"{sorted(sets[a] & sets[b])[:5]}: expected disjoint seed sets")
-    bl = cfg.setdefault("baselines", {})
-    for name in bl:
-        if name not in BASELINE_NAMES:
-            raise BenchmarkConfigError(f"benchmark config: baselines.{name}: expected one of {BASELINE_NAMES}")
-    ag = cfg.setdefault("agents", {})
-    sel = ag.setdefault("selection", "mean")
-    if sel not in ("mean", "best_on_validation"):
-        raise BenchmarkConfigError(f"benchmark config: agents.selection = {sel!r}: expected mean or "
-                                   "best_on_validation")
-    if sel == "best_on_validation" and not val["seeds"]:
-        raise BenchmarkConfigError("benchmark config: agents.selection = best_on_validation needs "
-                                   "validation.seeds")
-    runs = ag.setdefault("runs", {})
-    if not isinstance(runs, dict):
-        raise BenchmarkConfigError(f"benchmark config: agents.runs = {runs!r}: expected a mapping algo -> run")
+    return sets
+
+
+def _check_run(algo: str, run: Any) -> None:
+    """One ``agents.runs`` entry: its training YAML (read now, not after the tuning), seeds and residual."""
     from ..training.config import load_train_config
 
-    for algo, run in runs.items():
-        if not isinstance(run, dict) or "config" not in run:
-            raise BenchmarkConfigError(f"benchmark config: agents.runs.{algo}: expected {{config: YAML, seeds: [...]}}")
-        run["config"] = str(_resolve(run["config"]))
-        run["seeds"] = _seeds(run.get("seeds", [0, 1, 2]), f"agents.runs.{algo}.seeds")
-        if not isinstance(run.get("ensemble", False), bool) or (run.get("ensemble") and len(run["seeds"]) < 2):
-            raise BenchmarkConfigError(f"benchmark config: agents.runs.{algo}.ensemble = {run.get('ensemble')!r}: "
-                                       "expected true or false (true needs >= 2 seeds)")
-        tc = load_train_config(run["config"])  # checks the YAML now, not after the tuning
-        refuse_test_split(tc.env_kwargs.get("scenario", "train"), "train")
-        res = run.get("residual")
-        if res is not None and (not isinstance(res, dict) or res.get("base", "best_tuned") not in
-                                ("best_tuned", *RESIDUAL_BASES)):
-            raise BenchmarkConfigError(f"benchmark config: agents.runs.{algo}.residual = {res!r}: expected "
-                                       "{base: best_tuned | best_constant | pump_off | fillage_pi, scale: S}")
-        if res is not None and res.get("shaping") not in (None, "potential"):
-            raise BenchmarkConfigError(f"benchmark config: agents.runs.{algo}.residual.shaping = "
-                                       f"{res.get('shaping')!r}: expected potential or nothing")
-        if res is not None:
-            extra = set(res) - {"base", "scale", "idle_scale", "shaping"}
-            if extra:
-                raise BenchmarkConfigError(f"benchmark config: agents.runs.{algo}.residual: unknown key(s) "
-                                           f"{sorted(extra)}: expected base, scale, idle_scale, shaping")
-            try:
-                check_scales(res.get("scale"), res.get("idle_scale"))
-            except ValueError as exc:
-                raise BenchmarkConfigError(f"benchmark config: agents.runs.{algo}.{exc}") from None
-    for algo, run in runs.items():
-        if run.get("teacher") is not None:
-            _check_teacher(algo, run, runs, sets["tuning"] | sets["validation"])
-    return cfg
+    if not isinstance(run, dict) or "config" not in run:
+        raise BenchmarkConfigError(f"benchmark config: agents.runs.{algo}: expected {{config: YAML, seeds: [...]}}")
+    run["config"] = str(_resolve(run["config"]))
+    run["seeds"] = _seeds(run.get("seeds", [0, 1, 2]), f"agents.runs.{algo}.seeds")
+    if not isinstance(run.get("ensemble", False), bool) or (run.get("ensemble") and len(run["seeds"]) < 2):
+        raise BenchmarkConfigError(f"benchmark config: agents.runs.{algo}.ensemble = {run.get('ensemble')!r}: "
+                                   "expected true or false (true needs >= 2 seeds)")
+    tc = load_train_config(run["config"])  # checks the YAML now, not after the tuning
+    refuse_test_split(tc.env_kwargs.get("scenario", "train"), "train")
+    res = run.get("residual")
+    if res is not None and (not isinstance(res, dict) or res.get("base", "best_tuned") not in
+                            ("best_tuned", *RESIDUAL_BASES)):
+        raise BenchmarkConfigError(f"benchmark config: agents.runs.{algo}.residual = {res!r}: expected "
+                                   "{base: best_tuned | best_constant | pump_off | fillage_pi, scale: S}")
+    if res is not None and res.get("shaping") not in (None, "potential"):
+        raise BenchmarkConfigError(f"benchmark config: agents.runs.{algo}.residual.shaping = "
+                                   f"{res.get('shaping')!r}: expected potential or nothing")
+    if res is not None:
+        extra = set(res) - {"base", "scale", "idle_scale", "shaping"}
+        if extra:
+            raise BenchmarkConfigError(f"benchmark config: agents.runs.{algo}.residual: unknown key(s) "
+                                       f"{sorted(extra)}: expected base, scale, idle_scale, shaping")
+        try:
+            check_scales(res.get("scale"), res.get("idle_scale"))
+        except ValueError as exc:
+            raise BenchmarkConfigError(f"benchmark config: agents.runs.{algo}.{exc}") from None
 
 
 def _int_in(value: Any, lo: int, hi: int) -> bool:
