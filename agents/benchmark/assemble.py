@@ -17,37 +17,34 @@ from .runs import _algo_of
 Episodes = dict[tuple[str, int], list[dict[str, Any]]]
 
 
-def rel(path: str, root: Path) -> str:
-    """``path`` relative to the report's folder ``root`` (as the report records it), else as given."""
-    try:
-        return str(Path(path).resolve().relative_to(root.resolve()))
-    except ValueError:
-        return str(path)
+def model_ref(path: str | Path) -> str:
+    """How the report names a model file: ``models/<file>``, looked up by
+    :func:`agents.evaluation.replay.locate_model` (the report's folder, then the repository's ``models/``)."""
+    return f"models/{Path(path).name}"
 
 
-def _ensemble_record(a: str, spec: dict[str, Any], runs: dict[str, Any], eps: list[dict[str, Any]],
-                     out: Path) -> dict[str, Any]:
+def _ensemble_record(spec: dict[str, Any], runs: dict[str, Any], eps: list[dict[str, Any]]) -> dict[str, Any]:
     of = spec["of"]
     return {"kind": "agent", "algo": _algo_of(runs[of]), "ensemble_of": of,
             "selection": f"one policy: the mean action of {of}'s {len(spec['members'])} seeds' models",
-            "residual_on": spec.get("residual"), "models": [rel(m["path"], out) for m in spec["members"]],
+            "residual_on": spec.get("residual"), "models": [model_ref(m["path"]) for m in spec["members"]],
             "episodes": eps}
 
 
-def _ship(specs: list[dict[str, Any]], pick: int, a: str, out: Path) -> Path:
+def _ship(specs: list[dict[str, Any]], pick: int, a: str, models_dir: Path) -> Path:
     """The shipped single model of run ``a``: the validation pick (training wells), else seed 0."""
-    shipped = out / "models" / f"{a}_v1.zip"
+    shipped = models_dir / f"{a}_v1.zip"
     shutil.copyfile(specs[pick]["path"], shipped)
     if specs[pick].get("obs_norm"):
         shutil.copyfile(specs[pick]["obs_norm"], shipped.with_name(f"{a}_v1_obs_norm.npz"))
     return shipped
 
 
-def _run_record(a: str, run: dict[str, Any], specs: list[dict[str, Any]], per_seed: list[list[dict[str, Any]]],
-                val: list[float] | None, pick: int, shipped: Path, out: Path) -> dict[str, Any]:
+def _run_record(run: dict[str, Any], specs: list[dict[str, Any]], per_seed: list[list[dict[str, Any]]],
+                val: list[float] | None, pick: int, shipped: Path) -> dict[str, Any]:
     seed_means = [float(np.mean([e["reward"] for e in eps])) for eps in per_seed]
     return {
-        "config": run["config"], "seeds": run["seeds"], "shipped_model": rel(str(shipped), out),
+        "config": run["config"], "seeds": run["seeds"], "shipped_model": model_ref(str(shipped)),
         "shipped_seed": specs[pick]["train_summary"]["seed"],
         "iqm_test_reward": iqm([e["reward"] for ep in per_seed for e in ep]),
         "per_seed": [{"seed": sp["train_summary"]["seed"], "mean_test_reward": m,
@@ -61,8 +58,8 @@ def _run_record(a: str, run: dict[str, Any], specs: list[dict[str, Any]], per_se
 
 def policy_records(cfg: dict[str, Any], tuned: dict[str, Any], agent_specs: dict[str, list[dict[str, Any]]],
                    teachers: dict[str, list[dict[str, Any]]], by_entry: Episodes,
-                   val_scores: dict[str, list[float]], out: Path) -> tuple[dict[str, Any], dict[str, Any]]:
-    """(policies, training) of the report; copies each run's shipped model into ``out/models``."""
+                   val_scores: dict[str, list[float]], models_dir: Path) -> tuple[dict[str, Any], dict[str, Any]]:
+    """(policies, training) of the report; copies each run's shipped model into ``models_dir``."""
     runs = cfg["agents"]["runs"]
     policies: dict[str, dict[str, Any]] = {
         n: {"kind": "baseline", "params": tuned[n]["params"], "episodes": by_entry[(n, -1)]} for n in BASELINE_NAMES}
@@ -71,7 +68,7 @@ def policy_records(cfg: dict[str, Any], tuned: dict[str, Any], agent_specs: dict
         per_seed = [by_entry[(a, k)] for k in range(len(specs))]
         val = val_scores.get(a)
         if specs[0]["kind"] == "ensemble":
-            policies[a] = _ensemble_record(a, specs[0], runs, per_seed[0], out)
+            policies[a] = _ensemble_record(specs[0], runs, per_seed[0])
             training.setdefault("ensembles", {})[a] = {
                 "of": specs[0]["of"], "models": policies[a]["models"],
                 "iqm_test_reward": iqm([e["reward"] for e in per_seed[0]]), "validation_reward": val[0] if val else None}
@@ -81,15 +78,15 @@ def policy_records(cfg: dict[str, Any], tuned: dict[str, Any], agent_specs: dict
             eps, how = per_seed[pick], f"best_on_validation: seed {specs[pick]['train_summary']['seed']}"
         else:
             eps, how = _average_episodes(per_seed), "mean over training seeds' models, per test episode"
-        shipped = _ship(specs, pick, a, out)
+        shipped = _ship(specs, pick, a, models_dir)
         policies[a] = {"kind": "agent", "algo": _algo_of(runs[a]), "selection": how,
                        "residual_on": specs[0].get("residual"),
-                       "models": [rel(sp["path"], out) for sp in specs], "episodes": eps}
-        training["runs"][a] = _run_record(a, runs[a], specs, per_seed, val, pick, shipped, out)
+                       "models": [model_ref(sp["path"]) for sp in specs], "episodes": eps}
+        training["runs"][a] = _run_record(runs[a], specs, per_seed, val, pick, shipped)
         if runs[a].get("teacher"):
             training["runs"][a]["teacher"] = {
                 **runs[a]["teacher"], "observation": "privileged",
-                "models": [rel(t["path"], out) for t in teachers[a]],
+                "models": [model_ref(t["path"]) for t in teachers[a]],
                 "distill": [{"seed": sp["train_summary"]["seed"], "iterations": sp["distill"]} for sp in specs]}
     return policies, training
 

@@ -16,7 +16,8 @@ The protocol (one YAML under ``configs/benchmark/``; :func:`load_benchmark_confi
    seeds (disjoint from every tuning and validation seed).
 4. **Report**: ``OUT/benchmark.json`` (schema in :func:`build_report`), ``OUT/benchmark.md`` (tables,
    verdict, figure ``OUT/figures/benchmark_v1.png``), models in ``OUT/models/<algo>_v1*.zip`` with the
-   observation normalisation as ``.npz``. Files are written atomically, nothing partial is left behind.
+   observation normalisation as ``.npz`` (the shipped run, ``OUT`` = docs: in the repository's ``models/``
+   with its ``MANIFEST.json``). Files are written atomically, nothing partial is left behind.
 
 ``--quick`` deep-merges the config's ``quick:`` block (tiny training, fewer episodes) and writes, by
 default, to ``runs/benchmark_quick`` instead of ``docs``.
@@ -33,6 +34,7 @@ from pathlib import Path
 from typing import Any
 
 from ..envs import make_env
+from ..evaluation.manifest import MODELS_HOME, write_manifest
 from ..evaluation.rollout import Runner
 from ..policies.field import interval_s_of
 from .assemble import figure_traces, policy_records
@@ -53,11 +55,13 @@ __all__ = ["benchmark_main", "quickstart", "run_benchmark"]
 
 
 def run_benchmark(cfg: dict[str, Any], out_dir: str | Path, quick: bool = False,
-                  log: Any = None) -> dict[str, Any]:
+                  log: Any = None, models_dir: str | Path | None = None) -> dict[str, Any]:
     """The protocol of the module doc: tune, train, validate, test (:mod:`.stages`), then the report, its
-    markdown and figure in ``out_dir``; returns the report."""
+    markdown and figure in ``out_dir``, the models in ``models_dir`` (default ``out_dir/models``); returns
+    the report."""
     log = log or (lambda m: print(m, file=sys.stderr, flush=True))
     out = Path(out_dir)
+    models = Path(models_dir) if models_dir is not None else out / "models"
     t_start = time.perf_counter()
     wall: dict[str, float] = {}
     test_seeds = cfg["test"]["seeds"]
@@ -68,7 +72,7 @@ def run_benchmark(cfg: dict[str, Any], out_dir: str | Path, quick: bool = False,
             tuned, tuning_split = tune_baselines(cfg, runner, log)
             wall["tuning"] = time.perf_counter() - t_start
             t = time.perf_counter()
-            agent_specs, teachers, _ = train_agents(cfg, runner, tuned, workdir, out / "models")
+            agent_specs, teachers, _ = train_agents(cfg, runner, tuned, workdir, models)
             wall["training"] = time.perf_counter() - t
             t = time.perf_counter()
             val_scores, val_wells = validate(cfg, runner, agent_specs)
@@ -78,7 +82,7 @@ def run_benchmark(cfg: dict[str, Any], out_dir: str | Path, quick: bool = False,
             wall["test"] = time.perf_counter() - t
     finally:
         shutil.rmtree(workdir, ignore_errors=True)
-    policies, training = policy_records(cfg, tuned, agent_specs, teachers, by_entry, val_scores, out)
+    policies, training = policy_records(cfg, tuned, agent_specs, teachers, by_entry, val_scores, models)
     test_kwargs = {**cfg["env_kwargs"], "scenario": "test"}
     traces = figure_traces(policies, agent_specs, by_entry, val_scores, fig_seed,
                            _interval_s(cfg["env_id"], test_kwargs, fig_seed))
@@ -119,7 +123,11 @@ def benchmark_main(config: str, quick: bool = False, out_dir: str | None = None)
     """``python -m agents benchmark``: the whole protocol; prints the table and returns the JSON summary."""
     cfg = load_benchmark_config(config, quick=quick)
     out = Path(out_dir or ("runs/benchmark_quick" if quick else "docs"))
-    report = run_benchmark(cfg, out, quick=quick)
+    # the shipped run: its report in docs/, its models in the repository's models/ (with the manifest)
+    shipped = out_dir is None and not quick
+    report = run_benchmark(cfg, out, quick=quick, models_dir=MODELS_HOME if shipped else None)
+    if shipped:
+        write_manifest(MODELS_HOME, out / "benchmark.json")
     print(markdown_tables(report), flush=True)
     print(verdict(report), flush=True)
     print(f"benchmark: wall time {report['wall_time_s']['total']:.0f} s; wrote {out / 'benchmark.json'}, "

@@ -8,8 +8,10 @@ episodes from ``reset(seed=S)`` on ``scenario="test"``, and puts every return be
 - An agent entry that is the mean over its seeds' models is replayed as such: every model plays the episode,
   and the mean of their returns is compared.
 - A ``*_ensemble`` entry is one policy (:mod:`agents.policies.ensemble`).
-- Model zips are read as data (:class:`agents.evaluation.agent.AgentPolicy`). Their paths must be relative to the
-  report's folder and stay inside it, so a report cannot point the loader anywhere else.
+- Model zips are read as data (:class:`agents.evaluation.agent.AgentPolicy`). A report names each as
+  ``models/<file>.zip``; :func:`locate_model` looks for it in the report's own folder (a fresh run's
+  ``OUT/models``), then in the repository's ``models/`` (:data:`MODELS_HOME`, where the shipped report's
+  models live, beside their ``MANIFEST.json``), and nowhere else.
 - The oracle re-plans each episode, about 20 episodes of simulation each; it runs only when named.
 
 It returns True when every return matches to ``tol`` (relative, default 1e-9). The CLI then exits 0, and 1 on a
@@ -29,6 +31,7 @@ from ..envs import ENV_ID_V1, make_env
 from ..policies.ensemble import ensemble_spec
 from ..policies.residual import RESIDUAL_BASES, check_scales
 from .agent import build_policy
+from .manifest import MODELS_HOME
 from .rollout import run_episode
 
 MAX_REPORT_BYTES = 50_000_000
@@ -61,15 +64,24 @@ def load_report(path: str | Path) -> dict[str, Any]:
     return rep
 
 
-def _model(root: Path, rel: Any, name: str) -> dict[str, Any]:
-    """``{"path", "obs_norm"}`` of one model named in the report, confined to the report's folder."""
+def locate_model(root: Path, rel: Any, name: str) -> Path:
+    """The one place a report's model is looked up: ``rel`` (``models/<file>.zip``, relative to the report)
+    in the report's folder ``root``, else ``<file>.zip`` in :data:`MODELS_HOME`; each confined to its folder."""
     if not isinstance(rel, str) or not rel.endswith(".zip") or Path(rel).is_absolute():
         raise ReplayError(f"policies.{name}.models: {rel!r}, expected a .zip path relative to the report")
     path = (root / rel).resolve()
     if root.resolve() not in path.parents:
         raise ReplayError(f"policies.{name}.models: {rel!r} leaves the report's folder {root}")
-    if not path.is_file():
-        raise ReplayError(f"policies.{name}.models: {path}: no such model file")
+    home = MODELS_HOME / Path(rel).name
+    for candidate in (path, home) if Path(rel).parent == Path("models") else (path,):
+        if candidate.is_file():
+            return candidate
+    raise ReplayError(f"policies.{name}.models: {rel!r}: no such model file in {root} or {MODELS_HOME}")
+
+
+def _model(root: Path, rel: Any, name: str) -> dict[str, Any]:
+    """``{"path", "obs_norm"}`` of one model named in the report."""
+    path = locate_model(root, rel, name)
     norm = path.with_name(f"{path.stem}_obs_norm.npz")
     return {"path": str(path), "obs_norm": str(norm) if norm.is_file() else None}
 

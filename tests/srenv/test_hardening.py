@@ -338,7 +338,7 @@ def test_local_sweep_listens_on_nothing_beyond_loopback_and_leaves_no_process(tm
 
 
 # ------------------------------------------------------------------------------ model files are data
-SHIPPED = ROOT / "docs" / "models" / "ppo_default.zip"
+SHIPPED = ROOT / "models" / "ppo_default.zip"
 
 
 class _Payload:
