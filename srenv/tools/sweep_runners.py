@@ -126,9 +126,12 @@ def run_ray(cases: list[Case], duration_s: float, settle_fraction: float, worker
     connecting. No local Ray is ever started here (module docstring: it would listen on every interface)."""
     import logging
 
-    import ray
     from tqdm import tqdm
 
+    try:
+        import ray
+    except ModuleNotFoundError:  # the core install has no Ray: one line, exit 2
+        raise ConfigError("--address", address, "an installed Ray (pip install 'srenv[rllib]')") from None
     if not address:
         raise ConfigError("--address", address, "the address of a running Ray cluster (local runs use "
                           "run_local, which opens no network port)")
