@@ -16,6 +16,7 @@ from typing import Any
 
 import yaml
 
+from srenv.cli_types import nonneg_int, positive_int
 from srenv.shipped import shipped_dir
 
 EXIT_BAD_INPUT = 2
@@ -26,18 +27,6 @@ class _Parser(argparse.ArgumentParser):
     def error(self, message: str) -> None:  # one line, status 2, no usage dump
         print(f"agents: error: {message}", file=sys.stderr)
         sys.exit(EXIT_BAD_INPUT)
-
-
-def _nonneg_int(text: str) -> int:
-    if not text.isdigit():
-        raise argparse.ArgumentTypeError(f"{text!r}: expected a non-negative integer")
-    return int(text)
-
-
-def _positive_int(text: str) -> int:
-    if not text.isdigit() or int(text) == 0:
-        raise argparse.ArgumentTypeError(f"{text!r}: expected a positive integer")
-    return int(text)
 
 
 def _key_value(text: str) -> tuple[str, Any]:
@@ -70,10 +59,11 @@ def build_parser() -> argparse.ArgumentParser:
 
     t = sub.add_parser("train", help="train PPO/SAC from a hyperparameter YAML (SB3, or RLlib with backend: rllib)")
     t.add_argument("config", help="training YAML, e.g. configs/train/ppo_default.yaml")
-    t.add_argument("--total-timesteps", type=_positive_int, help="override n_timesteps (total, incl. resumed)")
+    t.add_argument("--total-timesteps", type=positive_int("--total-timesteps"),
+                   help="override n_timesteps (total, incl. resumed)")
     t.add_argument("--out", help="output directory (default runs/<config name>)")
     t.add_argument("--resume", action="store_true", help="continue from the newest checkpoint in --out")
-    t.add_argument("--n-envs", type=_positive_int,
+    t.add_argument("--n-envs", type=positive_int("--n-envs"),
                    help="override n_envs (default: all cores); num_env_runners for backend: rllib")
     t.add_argument("--address", help="backend: rllib: Ray cluster to join (auto, ray://host:10001); "
                                      "default a local Ray on 127.0.0.1")
@@ -83,8 +73,9 @@ def build_parser() -> argparse.ArgumentParser:
     e = sub.add_parser("evaluate", help="evaluate baselines and/or saved models on held-out seeds")
     e.add_argument("--policy", action="append", required=True,
                    help="rocking, fillage, an SB3 model .zip or an RLlib checkpoint directory; repeat to compare")
-    e.add_argument("--episodes", type=_positive_int, default=20)
-    e.add_argument("--seed", type=_nonneg_int, default=1000, help="first held-out seed (episodes use S..S+N-1)")
+    e.add_argument("--episodes", type=positive_int("--episodes"), default=20)
+    e.add_argument("--seed", type=nonneg_int("--seed"), default=1000,
+                   help="first held-out seed (episodes use S..S+N-1)")
     e.add_argument("--config", default="default", help="well config name or YAML path")
     e.add_argument("--env-kwarg", type=_key_value, action="append", default=[], metavar="KEY=VALUE",
                    help="extra keyword for gymnasium.make (value read as YAML)")
@@ -100,9 +91,10 @@ def build_parser() -> argparse.ArgumentParser:
     q = sub.add_parser("quickstart", help="the v1 benchmark on a small scale: tuned baselines vs PPO/SAC")
     q.add_argument("--config", default=str(QUICK_BENCHMARK), help="benchmark YAML (default v1_quick.yaml)")
     q.add_argument("--out", default="runs/quickstart")
-    q.add_argument("--total-timesteps", type=_positive_int, help="override every agent run's n_timesteps")
-    q.add_argument("--episodes", type=_positive_int, help="override the number of test episodes")
-    q.add_argument("--seed", type=_nonneg_int, help="first test seed (episodes use S..S+N-1)")
+    q.add_argument("--total-timesteps", type=positive_int("--total-timesteps"),
+                   help="override every agent run's n_timesteps")
+    q.add_argument("--episodes", type=positive_int("--episodes"), help="override the number of test episodes")
+    q.add_argument("--seed", type=nonneg_int("--seed"), help="first test seed (episodes use S..S+N-1)")
 
     b = sub.add_parser("benchmark", help="tune baselines, train PPO/SAC, test all on unseen wells (v1)")
     b.add_argument("config", help="benchmark YAML, e.g. configs/benchmark/v1.yaml")
@@ -113,7 +105,8 @@ def build_parser() -> argparse.ArgumentParser:
                        "exit 1 if a return differs")
     r.add_argument("report", help="benchmark JSON, e.g. docs/benchmark.json (models are read next to it)")
     r.add_argument("--policy", action="append", help="a policy of the report; repeat (default: all but the oracle)")
-    r.add_argument("--episodes", type=_positive_int, default=3, help="the first N test episodes (default 3)")
+    r.add_argument("--episodes", type=positive_int("--episodes"), default=3,
+                   help="the first N test episodes (default 3)")
     return p
 
 

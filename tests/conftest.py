@@ -9,10 +9,12 @@
    second); it says nothing about the real well.
 2. :func:`assert_cli_refuses`: one check for the CLI's bad-input contract, shared by the tests of each command
    that reads a file.
+3. The ``wheel`` fixture: srenv's wheel, built once per session (tests/test_wheel.py, test_core_install.py).
 """
 
 from __future__ import annotations
 
+import shutil
 import subprocess
 import sys
 from dataclasses import dataclass, field
@@ -21,6 +23,7 @@ from types import SimpleNamespace
 
 import gymnasium as gym
 import numpy as np
+import pytest
 
 ENV_ID = "agents-fake/SuckerRod-v1"
 CARD = [f"card_up_{i:02d}" for i in range(32)] + [f"card_down_{i:02d}" for i in range(32)]
@@ -141,3 +144,37 @@ def assert_cli_refuses(args: list[str], out: Path, *needles: str) -> str:
     assert len(lines) == 1 and all(n in lines[0] for n in needles), p.stderr
     assert not out.exists()
     return lines[0]
+
+
+# ------------------------------------------------------------------------------------------------ the wheel
+ROOT = Path(__file__).resolve().parents[1]
+SOURCES = ("srenv", "agents", "configs", "setup.py", "pyproject.toml", "README.md")
+
+
+def _has_build_backend() -> bool:
+    """setuptools >= 68 (pyproject's build requirement) in this interpreter."""
+    from importlib.metadata import PackageNotFoundError, version
+
+    try:
+        return int(version("setuptools").split(".")[0]) >= 68
+    except (PackageNotFoundError, ValueError):
+        return False
+
+
+@pytest.fixture(scope="session")
+def wheel(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    tmp = tmp_path_factory.mktemp("wheel")
+    src = tmp / "src"
+    src.mkdir()
+    for name in SOURCES:
+        if (ROOT / name).is_dir():
+            shutil.copytree(ROOT / name, src / name, ignore=shutil.ignore_patterns("__pycache__"))
+        else:
+            shutil.copy2(ROOT / name, src / name)
+    cmd = [sys.executable, "-m", "pip", "wheel", "--no-deps", "-q", str(src), "-w", str(tmp / "dist")]
+    if _has_build_backend():
+        cmd.insert(4, "--no-build-isolation")  # build with the installed setuptools: nothing downloaded
+    p = subprocess.run(cmd, capture_output=True, text=True, timeout=300, check=False)
+    assert p.returncode == 0, p.stderr[-2000:]
+    (whl,) = (tmp / "dist").glob("srenv-*.whl")
+    return whl
