@@ -9,13 +9,13 @@ import numpy as np
 import pytest
 
 import srenv  # noqa: F401
-from agents.alarms_v2 import AlarmPumpOffPolicy
-from agents.benchmark_config import load_benchmark_config
-from agents.causal_oracle import freeze_future
-from agents.evaluate_fresh import V1ObsView, fresh_wells
-from agents.rliable_report import normalised_scores, rliable_section
-from agents.shipped_models import shipped_report
-from agents.tuning import TuningSet, refuse_test_split
+from agents.benchmark.config import load_benchmark_config
+from agents.benchmark.fresh import V1ObsView, fresh_wells
+from agents.benchmark.rliable_stats import normalised_scores, rliable_section
+from agents.evaluation.shipped import shipped_report
+from agents.policies.alarms import AlarmPumpOffPolicy
+from agents.policies.causal_oracle import freeze_future
+from agents.training.tuning import TuningSet, refuse_test_split
 from srenv.envs.sucker_rod_v2 import FIELD_OBS_NAMES
 from srenv.task import events as ev
 
@@ -113,8 +113,8 @@ def test_v2_configs_load():
 
 
 def test_causal_oracle_plays_and_weighs_the_baselines():
-    from agents.causal_oracle import CausalOraclePolicy
-    from agents.rollout_v1 import run_episode
+    from agents.evaluation.rollout import run_episode
+    from agents.policies.causal_oracle import CausalOraclePolicy
 
     env = gym.make("srenv/SuckerRod-v2", scenario="train", episode_hours=0.25, event_rate_scale=0.0)
     po = {"threshold": 0.9, "idle_time_s": 900, "a_spm": 0.3, "a_stroke": 1.0}

@@ -2,8 +2,8 @@
 
 import json
 
-from agents.quickstart_shipped import quickstart_shipped
-from agents.shipped_models import shipped_report
+from agents.benchmark.shipped_quickstart import quickstart_shipped
+from agents.evaluation.shipped import shipped_report
 
 
 def test_quickstart_fast_mode_agrees_with_the_shipped_report(tmp_path, capsys):

@@ -1,0 +1,213 @@
+"""``python -m agents benchmark CONFIG --evaluate-only --fresh-seed S --episodes N --out-dir DIR``.
+
+Evaluates the SHIPPED models and the tuned baselines on N fresh wells of the family - wells nobody has trained,
+tuned, selected or evaluated on - with no training and no tuning, and writes the benchmark report's schema
+(``DIR/benchmark.json``: ``policies`` -> ``episodes`` records with ``well_id``, ``seed``, ``reward``, ``cost``;
+``summary``, ``paired``, ``rliable``; ``DIR/benchmark.md``).
+
+- Wells: ``scenario="family:W"`` for W in :func:`fresh_wells` (N seeds drawn from ``S``; the report records S and
+  the W), episode k played from ``reset(seed=k)``.
+- Policies: the shipped report's (:func:`agents.evaluation.shipped.shipped_report`) tuned baselines ``installed``,
+  ``best_constant``, ``pump_off``, ``fillage_pi`` and the agents listed in the config's ``evaluate_only.agents``;
+  on v2 also ``alarm_pump_off`` (pump-off's tuned parameters with the config's alarm parameters) and, when the
+  config lists it, ``causal_oracle`` (the reference of the normalised score) and the clairvoyant ``oracle``.
+- The shipped agents are v1 agents. On v2 they see v1's part of v2's field observation (its first 77 entries are
+  v1's, :class:`V1ObsView`), so they run unchanged; the conditions and the classifier's output are then unseen by
+  them.
+"""
+
+from __future__ import annotations
+
+import json
+import sys
+import time
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from ..evaluation.agent import build_policy
+from ..evaluation.replay import load_report, policy_specs
+from ..evaluation.rollout import Runner, _cached_env, run_episode
+from .report import _atomic_write, _json_clean, build_report, markdown_tables, verdict
+
+V1_FIELD_DIM = 77
+SHIPPED_BASELINES = ("installed", "best_constant", "pump_off", "fillage_pi")
+DEFAULT_AGENTS = ("ppo_residual_distilled_ensemble",)
+
+
+def fresh_wells(fresh_seed: int, n: int) -> list[int]:
+    """N family well seeds drawn from ``fresh_seed`` (distinct)."""
+    rng = np.random.default_rng([int(fresh_seed), 0xF4E5])
+    seeds: list[int] = []
+    while len(seeds) < n:
+        s = int(rng.integers(0, 2**62))
+        if s not in seeds:
+            seeds.append(s)
+    return seeds
+
+
+class V1ObsView:
+    """A model trained on v1's field observation, driven from v2's: it sees the first 77 entries (v1's) and
+    whatever its caller appended at the end (a residual's baseline action)."""
+
+    def __init__(self, policy: Any, model_dim: int) -> None:
+        self.policy, self.model_dim = policy, int(model_dim)
+
+    def predict(self, observation: Any, state: Any = None, episode_start: Any = None,
+                deterministic: bool = True) -> tuple[np.ndarray, Any]:
+        x = np.asarray(observation, np.float32)
+        if x.shape[-1] != self.model_dim:
+            tail = self.model_dim - V1_FIELD_DIM
+            x = np.concatenate([x[..., :V1_FIELD_DIM], x[..., x.shape[-1] - tail:]], axis=-1) if tail else \
+                x[..., :V1_FIELD_DIM]
+        return self.policy.predict(x, state=state, episode_start=episode_start, deterministic=deterministic)
+
+
+def _model_dim(spec: dict[str, Any]) -> int:
+    from ..evaluation.model_io import read_data, space_shape
+
+    path = spec["path"] if spec["kind"] == "agent" else spec["members"][0]["path"]
+    return space_shape(read_data(path), "observation_space", path)[0]
+
+
+def build_policy_any(spec: dict[str, Any], env: Any) -> Any:
+    """:func:`agents.evaluation.agent.build_policy`, with v1 models viewing v2's observation through :class:`V1ObsView`."""
+    policy = build_policy(spec, env)
+    if spec["kind"] == "baseline" or env.observation_space.shape[0] == V1_FIELD_DIM:
+        return policy
+    dim = _model_dim(spec)
+    if hasattr(policy, "model") and hasattr(policy, "base_name"):  # a residual: the model sees obs + base action
+        policy.model = V1ObsView(policy.model, dim)
+        return policy
+    return V1ObsView(policy, dim)
+
+
+def fresh_episode_job(job: dict[str, Any]) -> dict[str, Any]:
+    """Worker entry (as :func:`agents.evaluation.rollout.episode_job`, for any env version)."""
+    import torch
+
+    torch.set_num_threads(1)
+    env = _cached_env(job["env_id"], job["env_kwargs"])
+    return run_episode(env, build_policy_any(job["policy"], env), job["seed"])
+
+
+def _specs(cfg: dict[str, Any], rep: dict[str, Any], root: Path) -> dict[str, list[dict[str, Any]]]:
+    ev = cfg.get("evaluate_only") or {}
+    specs = {n: policy_specs(rep, n, root) for n in SHIPPED_BASELINES}
+    for a in ev.get("agents", DEFAULT_AGENTS):
+        specs[str(a)] = policy_specs(rep, str(a), root)
+    if cfg["env_id"] != rep["env_id"]:  # v2: the field controller with alarms, on pump-off's tuned set point
+        alarms = {**rep["policies"]["pump_off"]["params"], **(ev.get("alarm_params") or {})}
+        specs["alarm_pump_off"] = [{"kind": "baseline", "name": "alarm_pump_off", "params": alarms}]
+    for name in ("causal_oracle", "oracle"):  # null: not run
+        params = (ev.get("references") or {}).get(name)
+        if params is not None:
+            params = dict(params)
+            if name == "causal_oracle":  # it also weighs following each tuned field baseline (its docstring)
+                params.setdefault("policies", [[b, rep["policies"][b]["params"]] for b in ("pump_off", "fillage_pi")])
+            specs[name] = [{"kind": "baseline", "name": name, "params": params}]
+    return specs
+
+
+def check_out_dir(flag: str, out: Path, names: tuple[str, ...]) -> None:
+    """The output folder and its files, checked before any work (created when missing)."""
+    from srenv.errors import ConfigError
+    from srenv.outputs import check_output_path
+
+    if out.is_symlink():
+        raise ConfigError(flag, str(out), "a directory that is not a symlink")
+    try:
+        out.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        raise ConfigError(flag, str(out), f"a directory that can be created ({exc.strerror or exc})") from None
+    for name in names:
+        if (out / name).is_symlink():
+            raise ConfigError(flag, str(out / name), "a path that is not a symlink")
+        check_output_path(flag, str(out / name), (Path(name).suffix,))
+
+
+def evaluate_fresh(config: str, fresh_seed: int, episodes: int, out_dir: str | Path,
+                   workers: int | None = None) -> dict[str, Any]:
+    from ..evaluation.shipped import shipped_report
+    from .config import load_benchmark_config
+
+    t0 = time.perf_counter()
+    check_out_dir("--out-dir", Path(out_dir), ("benchmark.json", "benchmark.md"))
+    cfg = load_benchmark_config(config)
+    path = shipped_report("v1")
+    rep = load_report(path)
+    specs = _specs(cfg, rep, path.resolve().parent)
+    wells = fresh_wells(fresh_seed, episodes)
+    jobs, owner = [], []
+    for n, sps in specs.items():
+        for sp in sps:
+            for k, w in enumerate(wells):
+                jobs.append({"env_id": cfg["env_id"], "env_kwargs": {**cfg["env_kwargs"], "scenario": f"family:{w}"},
+                             "policy": sp, "seed": k})
+                owner.append(n)
+    print(f"evaluate-only: {len(specs)} policies on {episodes} fresh family wells (seed {fresh_seed}), "
+          f"{len(jobs)} episodes", file=sys.stderr, flush=True)
+    with Runner(workers or cfg["workers"]) as runner:
+        recs = runner.map(jobs, fn=fresh_episode_job)
+    policies = _policies(rep, specs, owner, recs, episodes)
+    splits = {"test": {"scenario": "family", "seeds": list(range(episodes)),
+                       "well_ids": [f"family-{w}" for w in wells]},
+              "fresh": {"seed": int(fresh_seed), "family_seeds": wells, "drawn_by": "agents.benchmark.fresh.fresh_wells"}}
+    report = build_report(cfg, policies, splits, rep.get("tuned", {}), {"shipped_report": str(path)},
+                          {"total": time.perf_counter() - t0})
+    report.update(mode="evaluate_only", shipped_report=str(path))
+    _renormalise(report)
+    return _write(report, Path(out_dir))
+
+
+def _policies(rep: dict[str, Any], specs: dict[str, list[dict[str, Any]]], owner: list[str],
+              recs: list[dict[str, Any]], n_eps: int) -> dict[str, Any]:
+    from .report import _average_episodes
+
+    out: dict[str, Any] = {}
+    for n, sps in specs.items():
+        mine = [r for r, o in zip(recs, owner) if o == n]
+        per_model = [mine[i:i + n_eps] for i in range(0, len(mine), n_eps)]
+        eps = per_model[0] if len(per_model) == 1 else _average_episodes(per_model)
+        kind = "agent" if sps[0]["kind"] != "baseline" else "baseline"
+        entry: dict[str, Any] = {"kind": kind, "episodes": eps}
+        if kind == "baseline":
+            entry["params"] = sps[0].get("params", {})
+        else:
+            entry["models"] = rep["policies"][n].get("models")
+        out[n] = entry
+    return out
+
+
+def _renormalise(report: dict[str, Any]) -> None:
+    """The normalised score against the causal oracle when it ran (the fair top), else as build_report did."""
+    s = report["summary"]
+    if "causal_oracle" not in s:
+        return
+    base, top = s["installed"]["mean_reward"], s["causal_oracle"]["mean_reward"]
+    for row in s.values():
+        row["normalised_score"] = (row["mean_reward"] - base) / (top - base) if top != base else float("nan")
+    report["normalised_score"] = {n: r["normalised_score"] for n, r in s.items()}
+    report["normalised_to"] = "causal_oracle"
+
+
+def _write(report: dict[str, Any], out: Path) -> dict[str, Any]:
+    from .rliable_stats import markdown as rliable_md
+    from .rliable_stats import rliable_section
+
+    pol = report["policies"]
+    if "causal_oracle" in pol or "oracle" in pol:
+        report["rliable"] = rliable_section(report)
+    report = _json_clean(report)
+    title = (f"# Evaluate-only on {len(report['fresh']['family_seeds'])} fresh family wells "
+             f"(fresh seed {report['fresh']['seed']})")
+    md = [title, "", markdown_tables(report), "", verdict(report)]
+    if "rliable" in report:
+        md += ["", rliable_md(report["rliable"])]
+    _atomic_write(out / "benchmark.json", json.dumps(report, indent=1))
+    _atomic_write(out / "benchmark.md", "\n".join(md) + "\n")
+    print(markdown_tables(report), flush=True)
+    print(verdict(report), flush=True)
+    return {"benchmark_json": str(out / "benchmark.json"), "markdown": str(out / "benchmark.md"),
+            "fresh_seed": report["fresh"]["seed"], "episodes": len(report["fresh"]["family_seeds"])}

@@ -1,0 +1,153 @@
+"""``python -m agents quickstart``: the SHIPPED benchmarked agent beside the tuned baselines on a few test wells.
+
+Nothing is trained or tuned: the shipped v1 report (:func:`agents.evaluation.shipped.shipped_report`) names the
+agent's model files and every baseline's tuned parameters. The quick start plays the best shipped agent and
+the best tuned field baseline (pump-off) on the report's first N test episodes (default 3, 2 worker
+processes), takes the installed operating point, the fillage PI and the clairvoyant oracle from the report's
+own records of the same episodes (baselines replay to 1e-9; the oracle re-plans for minutes per episode), and
+prints
+
+1. a table: each policy's mean reward rate (USD/h), normalised score (0 installed, 1 oracle), mean
+   constraint cost, and how far its returns are from the report's record of the same episodes;
+2. a verdict in the words of ``docs/benchmark.md`` (:func:`agents.benchmark.report.verdict`): what the reward's
+   scale means and whether the agent's lead over the best tuned baseline is within noise (a paired 95 % CI over
+   these wells), then the shipped report's own verdict on all its test episodes;
+3. where the files are: ``OUT/quickstart.json`` (the records) and ``OUT/episode.png`` (one episode: the agent
+   beside the best baseline, SPM, duty, fillage and surface cards).
+
+Nothing but file locations is printed after the verdict.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import sys
+import time
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from ..envs import ENV_ID_V1
+from ..evaluation.replay import load_report, policy_specs
+from ..evaluation.rollout import Runner, episode_jobs
+from .figure import figure
+from .report import _atomic_write, _json_clean, build_report, verdict
+
+LIVE_BASELINES = ("pump_off",)  # the best tuned baseline of the shipped report, played now
+# taken from the report's records of the same episodes: baselines replay to 1e-9 (tests/test_replay_v1.py),
+# the oracle re-plans for minutes per episode; playing them again would only cost time
+FROM_RECORD = ("installed", "fillage_pi", "oracle")
+
+
+def best_agent(rep: dict[str, Any]) -> str:
+    s = rep["summary"]
+    return max((n for n in s if s[n]["kind"] == "agent"), key=lambda n: s[n]["mean_reward"])
+
+
+def quickstart_shipped(out_dir: str | Path, episodes: int = 3, agent: str | None = None,
+                       baselines: tuple[str, ...] = LIVE_BASELINES, workers: int = 2,
+                       report: str | Path | None = None) -> dict[str, Any]:
+    """Run the shipped agent and the tuned baselines on ``episodes`` test episodes; print table and verdict."""
+    from ..evaluation.shipped import shipped_report
+    from .fresh import check_out_dir
+
+    t0 = time.perf_counter()
+    check_out_dir("--out", Path(out_dir), ("quickstart.json", "episode.png"))
+    path = Path(report) if report else shipped_report("v1")
+    rep = load_report(path)
+    root = path.resolve().parent
+    agent = agent or best_agent(rep)
+    live = (agent, *baselines)
+    specs = {n: policy_specs(rep, n, root) for n in live}  # every model checked before any episode
+    seeds = rep["test"]["seeds"][:episodes]
+    kwargs = {**rep["env_kwargs"], "scenario": "test"}
+    jobs, owner = [], []
+    for n in live:
+        for k, sp in enumerate(specs[n]):
+            for j in episode_jobs(ENV_ID_V1, kwargs, sp, seeds):
+                j["trace"] = j["seed"] == seeds[0] and k == 0
+                jobs.append(j)
+                owner.append(n)
+    print(f"quickstart: {agent} (shipped) vs {', '.join(baselines)} (tuned) on {len(seeds)} test wells of "
+          f"{path}, {len(jobs)} episodes in {workers} processes ...", file=sys.stderr, flush=True)
+    with Runner(workers) as runner:
+        recs = runner.map(jobs)
+    policies, traces = _policies(rep, live, owner, recs, seeds)
+    mini = build_report({"source": str(path), "env_id": rep["env_id"], "env_kwargs": rep["env_kwargs"]},
+                        policies, {"test": {"scenario": "test", "seeds": seeds}}, {}, {}, {})
+    interval_s = float(rep.get("env_kwargs", {}).get("interval_s", 300.0))
+    fig_traces = {n: {**traces[n], "interval_s": interval_s} for n in (agent, _best(mini, baselines)) if n in traces}
+    out = Path(out_dir)
+    figure(mini, fig_traces, out / "episode.png")
+    diffs = {n: _record_diff(rep, n, policies[n]["episodes"]) for n in live}
+    result = {"report": str(path), "agent": agent, "seeds": seeds, "wall_time_s": time.perf_counter() - t0,
+              "record_max_rel_diff": diffs, **_agreement(rep, mini, agent, baselines, seeds),
+              "summary": mini["summary"], "paired": mini["paired"],
+              "policies": {n: {"episodes": p["episodes"]} for n, p in policies.items()}}
+    _atomic_write(out / "quickstart.json", json.dumps(_json_clean(result), indent=1))
+    print(_table(mini, diffs, live), flush=True)
+    print(flush=True)
+    print(f"This run ({len(seeds)} test wells): {verdict(mini)}", flush=True)
+    print(f"The shipped report ({len(rep['test']['seeds'])} test episodes, docs/benchmark.md): {verdict(rep)}",
+          flush=True)
+    print(f"Files: {out / 'quickstart.json'} (records), {out / 'episode.png'} (one episode: agent vs best baseline)",
+          flush=True)
+    return result
+
+
+def _policies(rep: dict[str, Any], live: tuple[str, ...], owner: list[str], recs: list[dict[str, Any]],
+              seeds: list[int]) -> tuple[dict[str, Any], dict[str, Any]]:
+    """Live episodes (a seed-mean agent averaged over its models) and the recorded ones, per policy."""
+    from .report import _average_episodes
+
+    policies: dict[str, Any] = {}
+    traces: dict[str, Any] = {}
+    for n in FROM_RECORD:
+        stored = {int(e["seed"]): e for e in rep["policies"][n]["episodes"]}
+        policies[n] = {"kind": "baseline", "source": "report record", "episodes": [stored[s] for s in seeds]}
+    for n in live:
+        mine = [r for r, o in zip(recs, owner) if o == n]
+        per_model = [mine[i:i + len(seeds)] for i in range(0, len(mine), len(seeds))]
+        for r in mine:
+            if "trace" in r:
+                traces[n] = {k: r[k] for k in ("well_id", "seed", "reward")} | {"trace": r.pop("trace")}
+        eps = per_model[0] if len(per_model) == 1 else _average_episodes(per_model)
+        policies[n] = {"kind": rep["policies"][n]["kind"], "source": "ran now", "episodes": eps}
+    return policies, traces
+
+
+def _best(mini: dict[str, Any], baselines: tuple[str, ...]) -> str:
+    return max((n for n in mini["summary"] if n in baselines), key=lambda n: mini["summary"][n]["mean_reward"])
+
+
+def _record_diff(rep: dict[str, Any], name: str, eps: list[dict[str, Any]]) -> float:
+    """Largest relative difference between this run's returns and the report's record of the same episodes."""
+    stored = {int(e["seed"]): float(e["reward"]) for e in rep["policies"][name]["episodes"]}
+    return max(abs(e["reward"] - stored[int(e["seed"])]) / max(1.0, abs(stored[int(e["seed"])])) for e in eps)
+
+
+def _agreement(rep: dict[str, Any], mini: dict[str, Any], agent: str, baselines: tuple[str, ...],
+               seeds: list[int]) -> dict[str, Any]:
+    """Does this run say what the report says? The same sign of the agent's lead on these episodes as the
+    report's records of them, and the report's own call on all its episodes."""
+    best = _best(mini, baselines)
+    now = mini["paired"][agent][best]["mean_diff_reward"]
+    rec = {n: {int(e["seed"]): e["reward"] for e in rep["policies"][n]["episodes"]} for n in (agent, best)}
+    recorded = float(np.mean([rec[agent][s] - rec[best][s] for s in seeds]))
+    full = rep["paired"][agent][best]
+    return {"best_baseline": best, "lead_now": now, "lead_recorded_same_episodes": recorded,
+            "lead_report_all_episodes": full["mean_diff_reward"],
+            "agrees_with_report": bool(math.copysign(1, now) == math.copysign(1, recorded))}
+
+
+def _table(mini: dict[str, Any], diffs: dict[str, float], live: tuple[str, ...]) -> str:
+    s = mini["summary"]
+    lines = ["| policy | source | USD/h | normalised score | mean cost | vs the report's record |", "|---" * 6 + "|"]
+    for n in sorted(s, key=lambda n: -s[n]["mean_reward"]):
+        src = "ran now" if n in live else "report record"
+        d = f"{diffs[n]:.1e} rel." if n in diffs else "-"
+        lines.append(f"| {n} | {src} | {s[n]['mean_reward_rate_usd_h']:.2f} | {s[n]['normalised_score']:.2f} | "
+                     f"{s[n]['mean_cost']:.3f} | {d} |")
+    return "\n".join(lines)
