@@ -58,11 +58,12 @@ def _run_record(run: dict[str, Any], specs: list[dict[str, Any]], per_seed: list
 
 def policy_records(cfg: dict[str, Any], tuned: dict[str, Any], agent_specs: dict[str, list[dict[str, Any]]],
                    teachers: dict[str, list[dict[str, Any]]], by_entry: Episodes,
-                   val_scores: dict[str, list[float]], models_dir: Path) -> tuple[dict[str, Any], dict[str, Any]]:
+                   val_scores: dict[str, list[float]],
+                   models_dir: Path) -> tuple[dict[str, Any], dict[str, Any]]:
     """(policies, training) of the report; copies each run's shipped model into ``models_dir``."""
     runs = cfg["agents"]["runs"]
-    policies: dict[str, dict[str, Any]] = {
-        n: {"kind": "baseline", "params": tuned[n]["params"], "episodes": by_entry[(n, -1)]} for n in BASELINE_NAMES}
+    policies: dict[str, dict[str, Any]] = {n: {"kind": "baseline", "params": tuned[n]["params"],
+                                               "episodes": by_entry[(n, -1)]} for n in BASELINE_NAMES}
     training: dict[str, Any] = {"selection": cfg["agents"]["selection"], "runs": {}}
     for a, specs in agent_specs.items():
         per_seed = [by_entry[(a, k)] for k in range(len(specs))]
@@ -71,7 +72,8 @@ def policy_records(cfg: dict[str, Any], tuned: dict[str, Any], agent_specs: dict
             policies[a] = _ensemble_record(specs[0], runs, per_seed[0])
             training.setdefault("ensembles", {})[a] = {
                 "of": specs[0]["of"], "models": policies[a]["models"],
-                "iqm_test_reward": iqm([e["reward"] for e in per_seed[0]]), "validation_reward": val[0] if val else None}
+                "iqm_test_reward": iqm([e["reward"] for e in per_seed[0]]),
+                "validation_reward": val[0] if val else None}
             continue
         pick = int(np.argmax(val)) if (val or cfg["agents"]["selection"] == "best_on_validation") else 0
         if cfg["agents"]["selection"] == "best_on_validation":
@@ -87,7 +89,8 @@ def policy_records(cfg: dict[str, Any], tuned: dict[str, Any], agent_specs: dict
             training["runs"][a]["teacher"] = {
                 **runs[a]["teacher"], "observation": "privileged",
                 "models": [model_ref(t["path"]) for t in teachers[a]],
-                "distill": [{"seed": sp["train_summary"]["seed"], "iterations": sp["distill"]} for sp in specs]}
+                "distill": [{"seed": sp["train_summary"]["seed"], "iterations": sp["distill"]}
+                            for sp in specs]}
     return policies, training
 
 

@@ -5,7 +5,7 @@ step, right after the compiled kernel, those calls cost as much as ~10 % of the 
 definitions (:mod:`srenv.analysis.metrics`, :mod:`srenv.analysis.stick_metrics`, :mod:`srenv.analysis.pump_card`) are evaluated by one
 compiled call that reads each trace column once. Same values: exact for maxima, minima, counts, order
 statistics and crossings; the card area and the slip residual differ from the numpy forms at most by the
-order of summation (``tests/test_stroke_pass.py`` pins them against the metrics functions).
+order of summation (``tests/srenv/simulation/test_stroke_pass.py`` pins them against the metrics functions).
 """
 
 from __future__ import annotations
