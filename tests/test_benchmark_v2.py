@@ -62,6 +62,7 @@ def test_causal_oracle_model_has_no_future():
     model = freeze_future(env)
     assert model.inflow_multiplier(0.9 * 3600.0) == pytest.approx(env.sim.annulus.rate_multiplier)
     assert model._schedule.active(0.9) == (None, 0.0)  # the leak to come is unknown to it
+    assert model._parting.budget == math.inf
 
 
 def test_fresh_wells_are_recorded_and_distinct():

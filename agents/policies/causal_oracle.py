@@ -30,15 +30,16 @@ from .oracle import OraclePolicy
 
 def freeze_future(model: Any) -> Any:
     """Remove what a causal controller cannot know from a copy of the env: the inflow keeps its present
-    multiplier, the present condition (v2) persists and no other starts."""
+    multiplier, the present condition (v2) persists, no other starts and the rods do not part."""
     ann = model.sim.annulus
     now = float(ann.rate_multiplier) if ann is not None else 1.0
     model.inflow_multiplier = lambda t_s: now
     if hasattr(model, "_schedule"):
-        from srenv.task.events import Event, Schedule
+        from srenv.task.events import Event, PartingClock, Schedule
 
         label, sev = model._condition
         model._schedule = Schedule([Event(label, 0.0, math.inf, sev)] if label is not None else [])
+        model._parting = PartingClock(budget=math.inf)  # when the rods will part is the future too
     return model
 
 
