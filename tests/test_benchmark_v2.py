@@ -10,9 +10,10 @@ import pytest
 
 import srenv  # noqa: F401
 from agents.benchmark.config import load_benchmark_config
-from agents.benchmark.fresh import V1ObsView, fresh_wells
+from agents.benchmark.fresh import fresh_wells
 from agents.benchmark.rliable_stats import normalised_scores, rliable_section
 from agents.evaluation.shipped import shipped_report
+from agents.evaluation.v1_view import V1ObsView
 from agents.policies.alarms import AlarmPumpOffPolicy
 from agents.policies.causal_oracle import freeze_future
 from agents.training.tuning import TuningSet, refuse_test_split
@@ -124,3 +125,23 @@ def test_causal_oracle_plays_and_weighs_the_baselines():
     # one re-plan: the last action and idle (2 steps each) and the pump-off closed loop (2 steps)
     assert rec["steps"] == 3 and pol.sim_steps == 6 and math.isfinite(rec["reward"])
     assert pol.params()["policies"] == [["pump_off", po]]
+
+
+def test_evaluate_only_writes_the_report_schema_and_replay_reproduces_it(tmp_path):
+    from agents.benchmark.fresh import evaluate_fresh
+    from agents.evaluation.replay import replay
+
+    cfg = tmp_path / "fresh.yaml"
+    cfg.write_text("env_id: srenv/SuckerRod-v2\nenv_kwargs: {observation: field, episode_hours: 0.25}\n"
+                   "workers: 1\ntuning: {scenario: train, seeds: [0]}\ntest: {seeds: [100000]}\n"
+                   "evaluate_only: {agents: [ppo_residual_distilled_ensemble], references: {}}\n")
+    out = tmp_path / "out"
+    evaluate_fresh(str(cfg), 11, 1, out)
+    rep = json.loads((out / "benchmark.json").read_text())
+    assert rep["fresh"]["seed"] == 11 and rep["fresh"]["family_seeds"] == fresh_wells(11, 1)
+    for name in ("installed", "pump_off", "alarm_pump_off", "ppo_residual_distilled_ensemble"):
+        e = rep["policies"][name]["episodes"][0]
+        assert e["well_id"] == f"family-{fresh_wells(11, 1)[0]}" and e["seed"] == 0
+        assert math.isfinite(e["reward"]) and e["cost"] >= 0
+    res = replay(out / "benchmark.json", ["pump_off", "ppo_residual_distilled_ensemble"], episodes=1, tol=1e-6)
+    assert res["reproduced"], res

@@ -11,9 +11,10 @@ tuned, selected or evaluated on - with no training and no tuning, and writes the
   ``best_constant``, ``pump_off``, ``fillage_pi`` and the agents listed in the config's ``evaluate_only.agents``;
   on v2 also ``alarm_pump_off`` (pump-off's tuned parameters with the config's alarm parameters) and, when the
   config lists it, ``causal_oracle`` (the reference of the normalised score) and the clairvoyant ``oracle``.
-- The shipped agents are v1 agents. On v2 they see v1's part of v2's field observation (its first 77 entries are
-  v1's, :class:`V1ObsView`), so they run unchanged; the conditions and the classifier's output are then unseen by
-  them.
+- The shipped agents are v1 agents. On v2 they see v1's part of v2's field observation (its first 77 entries
+  are v1's: :class:`agents.evaluation.v1_view.V1ObsView`), so they run unchanged; the conditions and the
+  classifier's output are then unseen by them.
+- ``python -m agents replay DIR/benchmark.json`` re-runs the report's episodes on the same family wells.
 """
 
 from __future__ import annotations
@@ -26,12 +27,11 @@ from typing import Any
 
 import numpy as np
 
-from ..evaluation.agent import build_policy
 from ..evaluation.replay import load_report, policy_specs
 from ..evaluation.rollout import Runner, _cached_env, run_episode
+from ..evaluation.v1_view import build_policy_any
 from .report import _atomic_write, _json_clean, build_report, markdown_tables, verdict
 
-V1_FIELD_DIM = 77
 SHIPPED_BASELINES = ("installed", "best_constant", "pump_off", "fillage_pi")
 DEFAULT_AGENTS = ("ppo_residual_distilled_ensemble",)
 
@@ -45,42 +45,6 @@ def fresh_wells(fresh_seed: int, n: int) -> list[int]:
         if s not in seeds:
             seeds.append(s)
     return seeds
-
-
-class V1ObsView:
-    """A model trained on v1's field observation, driven from v2's: it sees the first 77 entries (v1's) and
-    whatever its caller appended at the end (a residual's baseline action)."""
-
-    def __init__(self, policy: Any, model_dim: int) -> None:
-        self.policy, self.model_dim = policy, int(model_dim)
-
-    def predict(self, observation: Any, state: Any = None, episode_start: Any = None,
-                deterministic: bool = True) -> tuple[np.ndarray, Any]:
-        x = np.asarray(observation, np.float32)
-        if x.shape[-1] != self.model_dim:
-            tail = self.model_dim - V1_FIELD_DIM
-            x = np.concatenate([x[..., :V1_FIELD_DIM], x[..., x.shape[-1] - tail:]], axis=-1) if tail else \
-                x[..., :V1_FIELD_DIM]
-        return self.policy.predict(x, state=state, episode_start=episode_start, deterministic=deterministic)
-
-
-def _model_dim(spec: dict[str, Any]) -> int:
-    from ..evaluation.model_io import read_data, space_shape
-
-    path = spec["path"] if spec["kind"] == "agent" else spec["members"][0]["path"]
-    return space_shape(read_data(path), "observation_space", path)[0]
-
-
-def build_policy_any(spec: dict[str, Any], env: Any) -> Any:
-    """:func:`agents.evaluation.agent.build_policy`, with v1 models viewing v2's observation through :class:`V1ObsView`."""
-    policy = build_policy(spec, env)
-    if spec["kind"] == "baseline" or env.observation_space.shape[0] == V1_FIELD_DIM:
-        return policy
-    dim = _model_dim(spec)
-    if hasattr(policy, "model") and hasattr(policy, "base_name"):  # a residual: the model sees obs + base action
-        policy.model = V1ObsView(policy.model, dim)
-        return policy
-    return V1ObsView(policy, dim)
 
 
 def fresh_episode_job(job: dict[str, Any]) -> dict[str, Any]:
@@ -174,8 +138,9 @@ def _policies(rep: dict[str, Any], specs: dict[str, list[dict[str, Any]]], owner
         entry: dict[str, Any] = {"kind": kind, "episodes": eps}
         if kind == "baseline":
             entry["params"] = sps[0].get("params", {})
-        else:
-            entry["models"] = rep["policies"][n].get("models")
+        else:  # what replay needs to rebuild it (agents/evaluation/replay.py)
+            entry.update({k: v for k, v in rep["policies"][n].items()
+                          if k in ("models", "residual_on", "ensemble_of", "algo")})
         out[n] = entry
     return out
 
@@ -199,15 +164,17 @@ def _write(report: dict[str, Any], out: Path) -> dict[str, Any]:
     pol = report["policies"]
     if "causal_oracle" in pol or "oracle" in pol:
         report["rliable"] = rliable_section(report)
-    report = _json_clean(report)
+    # the text from the figures as computed (a CI of one episode is NaN, which the JSON writes as null)
+    tables, call = markdown_tables(report), verdict(report)
     title = (f"# Evaluate-only on {len(report['fresh']['family_seeds'])} fresh family wells "
              f"(fresh seed {report['fresh']['seed']})")
-    md = [title, "", markdown_tables(report), "", verdict(report)]
+    md = [title, "", tables, "", call]
     if "rliable" in report:
         md += ["", rliable_md(report["rliable"])]
+    report = _json_clean(report)
     _atomic_write(out / "benchmark.json", json.dumps(report, indent=1))
     _atomic_write(out / "benchmark.md", "\n".join(md) + "\n")
-    print(markdown_tables(report), flush=True)
-    print(verdict(report), flush=True)
+    print(tables, flush=True)
+    print(call, flush=True)
     return {"benchmark_json": str(out / "benchmark.json"), "markdown": str(out / "benchmark.md"),
             "fresh_seed": report["fresh"]["seed"], "episodes": len(report["fresh"]["family_seeds"])}

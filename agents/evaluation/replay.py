@@ -30,9 +30,11 @@ import numpy as np
 from ..envs import ENV_ID_V1, make_env
 from ..policies.ensemble import ensemble_spec
 from ..policies.residual import RESIDUAL_BASES, check_scales
-from .agent import build_policy
 from .manifest import MODELS_HOME
 from .rollout import run_episode
+from .v1_view import build_policy_any
+
+REPLAYABLE = (ENV_ID_V1, "srenv/SuckerRod-v2")
 
 MAX_REPORT_BYTES = 50_000_000
 
@@ -54,8 +56,8 @@ def load_report(path: str | Path) -> dict[str, Any]:
     if not isinstance(rep, dict) or rep.get("schema") != "srenv benchmark v1":
         raise ReplayError(f"report {p}: schema = {rep.get('schema') if isinstance(rep, dict) else None!r}, "
                           "expected 'srenv benchmark v1'")
-    if rep.get("env_id") != ENV_ID_V1:
-        raise ReplayError(f"report {p}: env_id = {rep.get('env_id')!r}, expected {ENV_ID_V1}")
+    if rep.get("env_id") not in REPLAYABLE:
+        raise ReplayError(f"report {p}: env_id = {rep.get('env_id')!r}, expected one of {', '.join(REPLAYABLE)}")
     if not isinstance(rep.get("env_kwargs"), dict) or not isinstance(rep.get("policies"), dict):
         raise ReplayError(f"report {p}: expected env_kwargs and policies mappings")
     seeds = (rep.get("test") or {}).get("seeds")
@@ -122,6 +124,17 @@ def policy_specs(rep: dict[str, Any], name: str, root: Path) -> list[dict[str, A
     return [ensemble_spec(specs)] if pol.get("ensemble_of") else specs
 
 
+def _scenario(rep: dict[str, Any], k: int) -> str:
+    """The scenario of the report's k-th test episode: the test split, or (evaluate-only) its fresh family well."""
+    fresh = rep.get("fresh")
+    if isinstance(fresh, dict) and isinstance(fresh.get("family_seeds"), list):
+        w = fresh["family_seeds"][k]
+        if not (isinstance(w, int) and w >= 0):
+            raise ReplayError(f"fresh.family_seeds[{k}] = {w!r}: expected a non-negative integer")
+        return f"family:{w}"
+    return "test"
+
+
 def replay(report: str | Path, names: list[str] | None = None, episodes: int = 3,
            tol: float = 1e-9) -> dict[str, Any]:
     """Re-run ``episodes`` test episodes of each policy in ``names`` (default: every policy but the oracle)."""
@@ -130,20 +143,23 @@ def replay(report: str | Path, names: list[str] | None = None, episodes: int = 3
     names = list(names or [n for n in rep["policies"] if n != "oracle"])
     specs = {n: policy_specs(rep, n, root) for n in names}  # every name and model checked before any episode
     seeds = rep["test"]["seeds"][:episodes]
-    env = make_env(ENV_ID_V1, **{**rep["env_kwargs"], "scenario": "test"})
+    envs = {sc: make_env(rep["env_id"], **{**rep["env_kwargs"], "scenario": sc})
+            for sc in {_scenario(rep, k) for k in range(len(seeds))}}
     out: dict[str, Any] = {"report": str(report), "episodes": len(seeds), "tol": tol, "policies": {}}
     try:
         for n, sp in specs.items():
             stored = {int(e["seed"]): float(e["reward"]) for e in rep["policies"][n].get("episodes", [])}
             rows, worst = [], 0.0
-            for s in seeds:
-                ret = float(np.mean([run_episode(env, build_policy(x, env), s)["reward"] for x in sp]))
+            for k, s in enumerate(seeds):
+                env = envs[_scenario(rep, k)]
+                ret = float(np.mean([run_episode(env, build_policy_any(x, env), s)["reward"] for x in sp]))
                 ref = stored.get(int(s), math.nan)  # an episode the report lacks counts as a mismatch
                 diff = abs(ret - ref) if math.isfinite(ref) else math.inf
                 rows.append({"seed": int(s), "reward": ret, "stored_reward": ref, "abs_diff": diff})
                 worst = max(worst, diff / max(1.0, abs(ref) if math.isfinite(ref) else 1.0))
             out["policies"][n] = {"runs": len(sp), "episodes": rows, "max_rel_diff": worst, "reproduced": worst <= tol}
     finally:
-        env.close()
+        for env in envs.values():
+            env.close()
     out["reproduced"] = all(p["reproduced"] for p in out["policies"].values())
     return out
