@@ -3,6 +3,7 @@ fresh wells, v1 models on v2's observation, and the rliable block's schema."""
 
 import json
 import math
+from pathlib import Path
 
 import gymnasium as gym
 import numpy as np
@@ -21,6 +22,7 @@ from srenv.envs.sucker_rod_v2 import FIELD_OBS_NAMES
 from srenv.task import events as ev
 
 NAMES = list(FIELD_OBS_NAMES)
+REPO = Path(__file__).resolve().parents[2]
 
 
 def _obs(fill=1.0, pprl=0.8, mprl=0.4, **probs):
@@ -108,10 +110,10 @@ def test_rliable_block_schema_and_reproducible():
 
 
 def test_v2_configs_load():
-    full = load_benchmark_config("configs/benchmark/v2.yaml")
+    full = load_benchmark_config(REPO / "configs/benchmark/v2.yaml")
     assert full["env_id"] == "srenv/SuckerRod-v2" and full["history"]
     assert full["evaluate_only"]["references"]["causal_oracle"]
-    assert load_benchmark_config("configs/benchmark/v2_quick.yaml")["test"]["seeds"] == [100000, 100001, 100002]
+    assert load_benchmark_config(REPO / "configs/benchmark/v2_quick.yaml")["test"]["seeds"] == [100000, 100001, 100002]
 
 
 def test_causal_oracle_plays_and_weighs_the_baselines():
