@@ -61,6 +61,8 @@ Version history
 ---------------
 * v1: well family with splits, in-episode inflow changes, idle/intermittent pumping, USD/h reward with
   constraint cost, field observation. v0 (one well, stroke-per-step, unitless reward) is kept unchanged.
+* v1, no change of results: the episode's well, and what happens before and after each interval, are methods
+  (``_episode_spec``, ``_before_interval``, ``_after_interval``; no-ops here) that v2 overrides.
 """
 
 from __future__ import annotations
