@@ -1,0 +1,91 @@
+"""The well model of a field record: a srenv config (as a dict, SI) built from the record's description, and
+the pump's state read off a diagnosis (the vendor's analysis where the record has one, srenv's own diagnosis
+of the measured card otherwise). No field is fitted to the surface card here.
+
+What follows from the description (docs/realism.md):
+- each taper's mass per length is the record's weight in lb/ft (rod body plus couplings): the steel body's
+  share is the body density times the area, the rest is ``coupling_mass_kg_per_m``;
+- the liquid's density is the well test's water cut mixing the water's specific gravity and the oil's API
+  gravity (or the record's fluid density);
+- the pump sits at its own depth, below the listed rods where the record says so: the liquid column between
+  the rod string's end and the pump adds rho g dz to the discharge pressure at the plunger, which enters
+  the valve law as an intake pressure lower by the same amount (the upstroke load
+  (p_out - p_in) A_pl is then exact); the rod end's true load keeps the pressure at the rod end;
+- a pump that does not fill (fillage f < 1) is modelled as free gas in the intake: the plunger travels
+  (1 - f) of its stroke on the downstroke before the valve opens, so the intake gas fraction is
+  phi = (1 - f) / ((1 + clearance) (1 - (p_in / p_d)^(1/k))) (``physics.pump.GasChamber``).
+"""
+
+from __future__ import annotations
+
+import math
+
+from ..physics.rod import GRAVITY_M_S2
+from .field_record import FieldRecord
+
+STEEL_DENSITY_KG_M3 = 7850.0
+DEFAULT_DAMPING_FACTOR = 0.05
+MIN_INTAKE_PA = 101325.0       # a pump intake below atmospheric is read as pumped off at one atmosphere
+CLEARANCE_FRACTION = 0.05
+
+
+def _qp_solver() -> str:
+    """The project's default backend where installed (proxqp), else the first installed one."""
+    try:
+        import qpsolvers
+
+        avail = list(qpsolvers.available_solvers)
+    except ImportError:
+        return "proxqp"
+    return "proxqp" if "proxqp" in avail or not avail else min(avail)
+
+
+def tapers(rec: FieldRecord) -> list[dict]:
+    out = []
+    for t in rec.tapers:
+        area = math.pi / 4 * t["diameter_m"] ** 2
+        body = STEEL_DENSITY_KG_M3 * area
+        out.append({"diameter_mm": 1e3 * t["diameter_m"], "length_m": t["length_m"],
+                    "youngs_modulus_pa": t["youngs_modulus_pa"], "density_kg_m3": STEEL_DENSITY_KG_M3,
+                    "coupling_mass_kg_per_m": max(t["weight_kg_m"] - body, 0.0),
+                    "grade": t["grade"] if t["grade"] in ("C", "K", "D") else "D"})
+    return out
+
+
+def pump_column_pa(rec: FieldRecord) -> float:
+    """rho g dz of the liquid between the rod string's end and the pump (0 when the rods reach the pump)."""
+    dz = max(rec.pump_depth_m - rec.rod_length_m, 0.0)
+    incl = math.radians(rec.survey[-1]["inclination_deg"]) if rec.survey else 0.0
+    return rec.fluid_density_kg_m3 * GRAVITY_M_S2 * dz * math.cos(incl)
+
+
+def gas_fraction_for_fillage(fillage: float, p_in_pa: float, p_d_pa: float, k: float = 1.0) -> float:
+    if not fillage < 1.0:
+        return 0.0
+    squeeze = 1.0 - (max(p_in_pa, MIN_INTAKE_PA) / max(p_d_pa, p_in_pa + 1.0)) ** (1.0 / k)
+    return float(min(max((1.0 - fillage) / ((1.0 + CLEARANCE_FRACTION) * squeeze), 0.0), 0.95))
+
+
+def well_config(rec: FieldRecord, card_csv: str, intake_pressure_pa: float, fillage: float = 1.0,
+                damping_factor: float = DEFAULT_DAMPING_FACTOR, friction_coefficient: float = 0.0) -> dict:
+    """The config dict of the record's well, driven by the measured motion in `card_csv` (t_s, position)."""
+    stations = [{"md_m": 0.0, "inclination_deg": 0.0, "azimuth_deg": 0.0}] + [
+        s for s in rec.survey if 0.0 < s["md_m"]] if rec.survey else []
+    p_rod_end = rec.tubing_pressure_pa + rec.fluid_density_kg_m3 * GRAVITY_M_S2 * rec.rod_length_m  # upper bound
+    p_in_model = max(intake_pressure_pa - pump_column_pa(rec), MIN_INTAKE_PA)  # the gas law needs p_in > 0
+    phi = gas_fraction_for_fillage(fillage, intake_pressure_pa, p_rod_end + pump_column_pa(rec))
+    return {
+        "name": "field-record",
+        "description": f"built from {rec.source} by srenv validate",
+        "rod": {"tapers": tapers(rec)},
+        "fluid": {"density_kg_m3": rec.fluid_density_kg_m3, "wellhead_pressure_pa": rec.tubing_pressure_pa},
+        "pump": {"load_source": "pressures", "plunger_diameter_mm": 1e3 * rec.plunger_diameter_m,
+                 "intake_pressure_pa": p_in_model, "plunger_friction_n": 0.0,
+                 "intake_gas_fraction": phi, "clearance_volume_fraction": CLEARANCE_FRACTION},
+        "damping": {"model": "dimensionless", "damping_factor": damping_factor},
+        "survey": {"stations": stations},
+        "friction": {"coefficient": friction_coefficient},
+        "surface": {"motion": "measured", "measured_card_csv": card_csv, "measured_spm": rec.spm,
+                    "stroke_length_m": float(rec.position_m.max() - rec.position_m.min())},
+        "simulation": {"qp_solver": _qp_solver()},
+    }
