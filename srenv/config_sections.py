@@ -84,6 +84,10 @@ class DampingConfig:
                                 doc="Gibbs dimensionless factor nu: c = rho*A*pi*a*nu/(2L)")
     fluid_viscosity_pa_s: float = num(0.01, unit="Pa*s", check="nonneg", hi=100.0)
     tubing_inner_diameter_mm: float = num(62.0, unit="mm", hi=500.0)
+    stiffness_proportional_s: float = num(0.0, unit="s", check="nonneg", hi=1.0,
+                                          doc="Kelvin-Voigt retardation time tau: element force EA/L (du + tau dv); "
+                                              "damps mode k by zeta_k = tau w_k / 2 (the string's high modes: "
+                                              "couplings, guides, fluid); 0 = off (docs/realism.md)")
 
 
 @dataclass(frozen=True)

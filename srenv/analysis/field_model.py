@@ -20,11 +20,14 @@ from __future__ import annotations
 
 import math
 
+import numpy as np
+
 from ..physics.rod import GRAVITY_M_S2
 from .field_record import FieldRecord
 
 STEEL_DENSITY_KG_M3 = 7850.0
-DEFAULT_DAMPING_FACTOR = 0.05
+DEFAULT_DAMPING_FACTOR = 0.02        # the vendor's own range on 11708328 (0.009-0.038; docs/realism.md)
+DEFAULT_KV_TAU_S = 0.03              # Kelvin-Voigt retardation time of the string (docs/realism.md)
 MIN_INTAKE_PA = 101325.0       # a pump intake below atmospheric is read as pumped off at one atmosphere
 CLEARANCE_FRACTION = 0.05
 
@@ -59,6 +62,33 @@ def pump_column_pa(rec: FieldRecord) -> float:
     return rec.fluid_density_kg_m3 * GRAVITY_M_S2 * dz * math.cos(incl)
 
 
+def pump_tvd_m(rec: FieldRecord) -> float:
+    """True vertical depth of the pump from the record's survey (minimum curvature approximated by the
+    trapezoidal rule on cos(inclination) every metre; vertical without a survey)."""
+    if not rec.survey:
+        return rec.pump_depth_m
+    md = np.array([s["md_m"] for s in rec.survey])
+    inc = np.radians([s["inclination_deg"] for s in rec.survey])
+    grid = np.linspace(0.0, rec.pump_depth_m, max(int(rec.pump_depth_m), 2))
+    c = np.cos(np.interp(grid, md, inc))
+    return float(np.sum(0.5 * (c[1:] + c[:-1]) * np.diff(grid)))
+
+
+def discharge_pressure_pa(rec: FieldRecord) -> float:
+    """Hydrostatic tubing pressure at the pump: tubing-head pressure plus the liquid column."""
+    return rec.tubing_pressure_pa + rec.fluid_density_kg_m3 * GRAVITY_M_S2 * pump_tvd_m(rec)
+
+
+def pump_drag_n(rec: FieldRecord, fluid_load_n: float | None, intake_pressure_pa: float) -> float:
+    """The plunger's friction read off a diagnosed fluid load: the diagnosed load step between the upstroke
+    and downstroke plateaus is (p_d - p_in) A_pl + 2 P_f, so P_f = (F_fluid - (p_d - p_in) A_pl) / 2 with the
+    hydrostatic p_d (0 when the diagnosis carries no more than the pressures)."""
+    if fluid_load_n is None:
+        return 0.0
+    a_pl = math.pi / 4 * rec.plunger_diameter_m ** 2
+    return max(0.0, 0.5 * (fluid_load_n - (discharge_pressure_pa(rec) - intake_pressure_pa) * a_pl))
+
+
 def gas_fraction_for_fillage(fillage: float, p_in_pa: float, p_d_pa: float, k: float = 1.0) -> float:
     if not fillage < 1.0:
         return 0.0
@@ -67,22 +97,23 @@ def gas_fraction_for_fillage(fillage: float, p_in_pa: float, p_d_pa: float, k: f
 
 
 def well_config(rec: FieldRecord, card_csv: str, intake_pressure_pa: float, fillage: float = 1.0,
-                damping_factor: float = DEFAULT_DAMPING_FACTOR, friction_coefficient: float = 0.0) -> dict:
+                plunger_friction_n: float = 0.0, damping_factor: float = DEFAULT_DAMPING_FACTOR,
+                friction_coefficient: float = 0.0) -> dict:
     """The config dict of the record's well, driven by the measured motion in `card_csv` (t_s, position)."""
     stations = [{"md_m": 0.0, "inclination_deg": 0.0, "azimuth_deg": 0.0}] + [
         s for s in rec.survey if 0.0 < s["md_m"]] if rec.survey else []
-    p_rod_end = rec.tubing_pressure_pa + rec.fluid_density_kg_m3 * GRAVITY_M_S2 * rec.rod_length_m  # upper bound
     p_in_model = max(intake_pressure_pa - pump_column_pa(rec), MIN_INTAKE_PA)  # the gas law needs p_in > 0
-    phi = gas_fraction_for_fillage(fillage, intake_pressure_pa, p_rod_end + pump_column_pa(rec))
+    phi = gas_fraction_for_fillage(fillage, intake_pressure_pa, discharge_pressure_pa(rec))
     return {
         "name": "field-record",
         "description": f"built from {rec.source} by srenv validate",
         "rod": {"tapers": tapers(rec)},
         "fluid": {"density_kg_m3": rec.fluid_density_kg_m3, "wellhead_pressure_pa": rec.tubing_pressure_pa},
         "pump": {"load_source": "pressures", "plunger_diameter_mm": 1e3 * rec.plunger_diameter_m,
-                 "intake_pressure_pa": p_in_model, "plunger_friction_n": 0.0,
+                 "intake_pressure_pa": p_in_model, "plunger_friction_n": plunger_friction_n,
                  "intake_gas_fraction": phi, "clearance_volume_fraction": CLEARANCE_FRACTION},
-        "damping": {"model": "dimensionless", "damping_factor": damping_factor},
+        "damping": {"model": "dimensionless", "damping_factor": damping_factor,
+                    "stiffness_proportional_s": DEFAULT_KV_TAU_S},
         "survey": {"stations": stations},
         "friction": {"coefficient": friction_coefficient},
         "surface": {"motion": "measured", "measured_card_csv": card_csv, "measured_spm": rec.spm,

@@ -45,7 +45,7 @@ def check_card(position_m: np.ndarray, load_n: np.ndarray | None, field: str, so
             raise ConfigError(field, source, f"finite {name} values (sample {i + 1} is {col[i]})")
     stroke = float(np.ptp(x))
     if not stroke > 0:
-        raise ConfigError(field, source, "a card whose polished-rod position moves (its stroke is 0)")
+        raise ConfigError(field, source, "a card whose polished-rod position moves (the card has zero stroke)")
     if stroke > MAX_STROKE_M:
         raise ConfigError(field, source, f"a stroke of at most {MAX_STROKE_M:g} m (found {stroke:.4g} m; "
                           "positions in inches need a unit row or units: block)")

@@ -50,15 +50,18 @@ def _diagnose(cfg_dict: dict, rec) -> tuple[object, dict]:
 
 
 def pump_state(rec, work_dir: str) -> dict:
-    """Intake pressure (Pa) and fillage: the record's analysis, else srenv's diagnosis of the measured card."""
-    from ..analysis.field_model import MIN_INTAKE_PA, pump_column_pa, well_config
+    """Intake pressure (Pa), fillage and plunger friction (N): the record's own analysis where it has one,
+    else srenv's diagnosis of the measured card (never a fit to the surface card)."""
+    from ..analysis.field_model import MIN_INTAKE_PA, pump_column_pa, pump_drag_n, well_config
 
     if rec.intake_pressure_pa is not None:
-        return {"intake_pressure_pa": rec.intake_pressure_pa, "fillage": rec.fillage or 1.0, "source": "record"}
-    csv = os.path.join(work_dir, "motion.csv")
-    _, s = _diagnose(well_config(rec, csv, MIN_INTAKE_PA), rec)
-    p_in = max(float(s["intake_pressure_pa"] or 0.0) + pump_column_pa(rec), MIN_INTAKE_PA)
-    return {"intake_pressure_pa": p_in, "fillage": float(s["fillage"]), "source": "srenv diagnose"}
+        p_in, fill, fluid, source = rec.intake_pressure_pa, rec.fillage or 1.0, rec.fluid_load_n, "record"
+    else:
+        _, s = _diagnose(well_config(rec, os.path.join(work_dir, "motion.csv"), MIN_INTAKE_PA), rec)
+        p_in = max(float(s["intake_pressure_pa"] or 0.0) + pump_column_pa(rec), MIN_INTAKE_PA)
+        fill, fluid, source = float(s["fillage"]), float(s["fluid_load_n"]), "srenv diagnose"
+    return {"intake_pressure_pa": p_in, "fillage": fill, "plunger_friction_n": pump_drag_n(rec, fluid, p_in),
+            "source": source}
 
 
 def _simulate(cfg_dict: dict, strokes: int):
@@ -114,19 +117,22 @@ def compare(rec, sim, result, pump_card, convention: str) -> dict:
     return out
 
 
-def validate(rec, params: list[str], strokes: int, convention: str) -> tuple[dict, object]:
+def validate(rec, params: list[str], strokes: int, convention: str, overrides: dict | None = None
+             ) -> tuple[dict, object]:
+    """Predict, diagnose and compare one record (`overrides`: config fields set on the realistic model,
+    e.g. for the baseline of docs/realism.md)."""
     from ..analysis.field_model import well_config
+    from ..config import apply_overrides
 
     with tempfile.TemporaryDirectory(prefix="srenv-validate-") as work:
         csv = os.path.join(work, "motion.csv")
         _write_motion_csv(rec, csv)
         state = pump_state(rec, work)
-        cfg = well_config(rec, csv, state["intake_pressure_pa"], state["fillage"])
+        cfg = apply_overrides(well_config(rec, csv, state["intake_pressure_pa"], state["fillage"],
+                                          state["plunger_friction_n"]), dict(overrides or {}))
         fitted = None
         if params:
             fitted = _fit(cfg, rec, params, strokes, work)
-            from ..config import apply_overrides
-
             cfg = apply_overrides(cfg, fitted["params"])
         sim, result = _simulate(cfg, strokes)
         pump_card, diag = _diagnose(cfg, rec)
