@@ -120,3 +120,36 @@ def well_config(rec: FieldRecord, card_csv: str, intake_pressure_pa: float, fill
                     "stroke_length_m": float(rec.position_m.max() - rec.position_m.min())},
         "simulation": {"qp_solver": _qp_solver()},
     }
+
+
+def unit_from_record(rec: FieldRecord):
+    """The record's conventional (class I) unit from its inline API dimensions (A, C, I, K, P, R, rotation),
+    or None when the record names another geometry or lacks a dimension. Ratings are not used here."""
+    from ..surface_unit.beam_unit import BeamUnitGeometry, ConventionalUnit
+
+    u = rec.unit
+    if str(u.get("geometry") or "").upper() != "C" or any(u.get(k) is None for k in "ACIKPR"):
+        return None
+    rot = str(u.get("rotation") or "").lower().replace(" ", "")
+    rotation = "counterclockwise" if rot.startswith(("c.clock", "counter", "ccw")) else "clockwise"
+    g = BeamUnitGeometry(designation="C-record", a_m=u["A"], c_m=u["C"], i_m=u["I"], k_m=u["K"], p_m=u["P"],
+                         crank_radii_m=(u["R"],), rotation=rotation, torque_rating_nm=1.0,
+                         structural_unbalance_n=u.get("structural_unbalance_n") or 0.0, max_stroke_m=1.0,
+                         max_load_n=1.0)
+    return ConventionalUnit(g)
+
+
+def unit_kinematics_check(rec: FieldRecord) -> dict | None:
+    """The record's unit at constant crank speed against its measured polished-rod position: stroke error and
+    the RMS position difference (best time alignment over the card's samples), in % of the measured stroke."""
+    cu = unit_from_record(rec)
+    if cu is None:
+        return None
+    n = len(rec.position_m)
+    stroke = float(np.ptp(rec.position_m))
+    base = cu.theta_bottom + 2 * np.pi * np.arange(n) / n
+    best = min(float(np.sqrt(np.mean((np.asarray(cu.position_m(base - 2 * np.pi * k / n)) - rec.position_m) ** 2)))
+               for k in range(n))
+    return {"unit_stroke_error_pct": 100.0 * (cu.stroke_m / stroke - 1.0),
+            "unit_position_rms_pct_of_stroke": 100.0 * best / stroke,
+            "unit_rotation": cu.geometry.rotation}

@@ -137,6 +137,9 @@ def validate(rec, params: list[str], strokes: int, convention: str, overrides: d
         sim, result = _simulate(cfg, strokes)
         pump_card, diag = _diagnose(cfg, rec)
         out = compare(rec, sim, result, pump_card, convention)
+    from ..analysis.field_model import unit_kinematics_check
+
+    out["unit_kinematics"] = unit_kinematics_check(rec)
     out.update({"record": rec.source, "card_time_reversed": bool(getattr(rec, "time_reversed", False)),
                 "pump_state": {**state, "intake_pressure_psi": state["intake_pressure_pa"] / 6894.757293168361},
                 "diagnosis": {k: diag[k] for k in ("fillage", "card_class", "fluid_load_n", "intake_pressure_pa")},
