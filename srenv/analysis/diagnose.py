@@ -145,11 +145,28 @@ def march(cfg: WellConfig, u0_m: np.ndarray, n0_eq_n: np.ndarray, period_s: floa
     return time(uh), time(nhat), time(iw * uh)
 
 
+KV_MAX_GAIN = 10.0
+
+
+def kv_harmonic_cap(cfg: WellConfig, period_s: float) -> int:
+    """With Kelvin-Voigt damping (tau > 0) the march from the surface amplifies harmonic n by about
+    exp(zeta_n w_n T), zeta_n = tau w_n / 2, T the string's wave travel time: harmonics beyond a gain of
+    KV_MAX_GAIN would amplify the card's noise more than they carry signal, and are dropped."""
+    tau = cfg.damping.stiffness_proportional_s
+    if not tau > 0:
+        return 10**9
+    mesh = build_mesh(cfg.rod, min(cfg.simulation.element_length_m, 25.0))
+    travel = float(np.sum(mesh.length_m / np.sqrt(mesh.ea_n / mesh.rho_a_kg_m)))
+    w_max = math.sqrt(2.0 * math.log(KV_MAX_GAIN) / (tau * travel))
+    return max(4, int(w_max * period_s / (2 * math.pi)))
+
+
 def diagnose_card(cfg: WellConfig, t_s: np.ndarray, position_m: np.ndarray, load_n: np.ndarray,
                   harmonics: int = DEFAULT_HARMONICS, period_s: float | None = None,
                   segment_length_m: float | None = None, friction: bool = True) -> PumpCard:
     """Pump card of the last stroke of a surface card (time, polished-rod position upward, load)."""
     period = stroke_period_s(t_s, position_m) if period_s is None else float(period_s)
+    harmonics = min(harmonics, kv_harmonic_cap(cfg, period))
     dt = float(np.median(np.diff(t_s)))
     keep = t_s > t_s[-1] - period + 0.5 * dt
     t, x, f = t_s[keep], position_m[keep], load_n[keep]
