@@ -59,6 +59,9 @@ class TaperConfig:
                            "(MATERIAL_DEFAULTS) unless given")
     tensile_strength_pa: float = num(0.0, unit="Pa", check="nonneg", hi=1.0e10,
                                      doc="T for Goodman; 0 = from the grade (steel, sinker bar) or the material")
+    damping_scale: float = num(1.0, unit="-", check="nonneg", hi=100.0,
+                               doc="this taper's viscous damping per length = the string's (damping.*) x this "
+                                   "factor (e.g. guided rods, sinker bars in a tight annulus); 1 = as the string")
 
 
 # Per-material defaults filled in for fields a taper does not give (config_from_dict). Fiberglass: a typical

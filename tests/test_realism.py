@@ -268,3 +268,19 @@ def test_kelvin_voigt_damping_closes_the_energy_balance_and_damps_high_modes():
     assert s1 < 0.5 * s0
     assert abs(e1) <= 1e-7 * w1 and abs(e0) <= 1e-7 * w1
     assert p1 == pytest.approx(p0, rel=0.06)
+
+
+def test_per_taper_damping_scale():
+    """rod.tapers[i].damping_scale multiplies that taper's viscous damping per length; 1 leaves it as it was."""
+    from srenv.config import apply_overrides, config_from_dict, read_raw
+    from srenv.physics.rod import build_mesh, damping_per_length
+
+    raw = apply_overrides(read_raw("paper_fig3_vertical"), [f"simulation.qp_solver={_qp_solver()}"])
+    base = config_from_dict(raw)
+    raw["rod"]["tapers"][0]["damping_scale"] = 2.0
+    scaled = config_from_dict(raw)
+    m0, m1 = build_mesh(base.rod, 25.0), build_mesh(scaled.rod, 25.0)
+    c0, c1 = damping_per_length(m0, base.damping), damping_per_length(m1, scaled.damping)
+    first = m0.taper == 0
+    assert np.allclose(c1[first], 2 * c0[first]) and np.array_equal(c1[~first], c0[~first])
+    assert m0.damping_scale is None
