@@ -284,3 +284,22 @@ def test_per_taper_damping_scale():
     first = m0.taper == 0
     assert np.allclose(c1[first], 2 * c0[first]) and np.array_equal(c1[~first], c0[~first])
     assert m0.damping_scale is None
+
+
+@pytest.mark.parametrize("edit, match", [
+    (lambda d: d.__setitem__("equipmentData", [1, 2]), "equipmentData"),
+    (lambda d: d["equipmentData"]["Pump"].__setitem__("Depth", True), "equipmentData.Pump.Depth"),
+    (lambda d: d["equipmentData"]["Pump"].__setitem__("Depth", 1e9), "within"),
+    (lambda d: d["InputParameters"].__setitem__("StrokesPerMinute", float("nan")), "StrokesPerMinute"),
+    (lambda d: d.__setitem__("dynaoutputData", "x") or d["equipmentData"].pop("DampingCoefficient", None),
+     "dynaoutputData"),
+    (lambda d: d["cardData"].__setitem__("Load", d["cardData"]["Load"][:-3]), "one load per position"),
+    (lambda d: d["cardData"].__setitem__("Position", [p * 100 for p in d["cardData"]["Position"]]), "at most 20 m"),
+])
+def test_record_defects_are_one_config_error(tmp_path, edit, match):
+    d = json.loads((DATA / "11708328.json").read_text())
+    edit(d)
+    bad = tmp_path / "bad.json"
+    bad.write_text(json.dumps(d))
+    with pytest.raises(ConfigError, match=match):
+        read_dynacard_json(bad)

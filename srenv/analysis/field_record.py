@@ -61,6 +61,16 @@ def _get(d: dict, key: str, where: str):
     return d[key]
 
 
+def _section(d: dict, key: str, where: str, required: bool = True) -> dict:
+    """A JSON object of the record ({} when optional and absent); anything else is one ConfigError."""
+    v = d.get(key) if isinstance(d, dict) else None
+    if v is None and not required:
+        return {}
+    if not isinstance(v, dict):
+        raise ConfigError(f"{where}.{key}", "missing" if v is None else type(v).__name__, "a JSON object")
+    return v
+
+
 def _num(d: dict, key: str, where: str, lo: float, hi: float, unit: str, optional: bool = False):
     """A number of the record in its field unit, checked in [lo, hi] (in that unit), returned in SI."""
     if optional and (not isinstance(d, dict) or d.get(key) is None):
@@ -68,6 +78,8 @@ def _num(d: dict, key: str, where: str, lo: float, hi: float, unit: str, optiona
     v = _get(d, key, where)
     if isinstance(v, str):
         v = v.strip().rstrip("%")
+    if isinstance(v, bool):
+        raise ConfigError(f"{where}.{key}", v, f"a number in {unit}")
     try:
         x = float(v)
     except (TypeError, ValueError):
@@ -130,9 +142,9 @@ def read_dynacard_json(path: str | Path, reverse: bool = False, auto_orient: boo
         raise ConfigError("RECORD", str(path), f"a readable JSON file ({type(exc).__name__})") from None
     if not isinstance(d, dict):
         raise ConfigError("RECORD", str(path), "a JSON object (the dynacard layout)")
-    eq = _get(d, "equipmentData", "record")
-    ip = _get(d, "InputParameters", "record")
-    cd = _get(d, "cardData", "record")
+    eq = _section(d, "equipmentData", "record")
+    ip = _section(d, "InputParameters", "record")
+    cd = _section(d, "cardData", "record")
     x_in, f_lbf = _series(cd, "Position", "cardData"), _series(cd, "Load", "cardData")
     if len(x_in) != len(f_lbf):
         raise ConfigError("cardData", f"{len(x_in)} positions, {len(f_lbf)} loads", "one load per position")
@@ -142,15 +154,15 @@ def read_dynacard_json(path: str | Path, reverse: bool = False, auto_orient: boo
     x, f = check_card(x_m, f_n, "cardData", str(path), reverse)
     spm = _num(ip, "StrokesPerMinute", "InputParameters", 0.1, 60.0, "-")
     t = np.arange(len(x)) * (60.0 / spm / len(x))
-    pump = _get(eq, "Pump", "equipmentData")
-    wb = eq.get("WellBore") or {}
-    wt = d.get("WellTestData") or {}
+    pump = _section(eq, "Pump", "equipmentData")
+    wb = _section(eq, "WellBore", "equipmentData", required=False)
+    wt = _section(d, "WellTestData", "record", required=False)
     wcut = _num(wt, "WaterCut", "WellTestData", 0.0, 100.0, "%", optional=True)
     api = _num(wb, "OilApi", "WellBore", 5.0, 80.0, "-", optional=True) or 35.0
     sgw = _num(wb, "WaterGravity", "WellBore", 0.9, 1.4, "-", optional=True) or 1.0
     rho = fu.liquid_density_kg_m3(wcut if wcut is not None else 0.0, sgw, api)
     rho_given = _num(ip, "FluidDensity", "InputParameters", 100.0, 3000.0, "kg/m^3", optional=True)
-    an = d.get("downholeCardAnalysis") or {}
+    an = _section(d, "downholeCardAnalysis", "record", required=False)
     rec = FieldRecord(
         source=str(path), time_reversed=reverse, t_s=t, position_m=x - x.min(), load_n=f, spm=spm,
         tapers=_tapers(eq.get("Rods"), "equipmentData.Rods"),
@@ -162,9 +174,8 @@ def read_dynacard_json(path: str | Path, reverse: bool = False, auto_orient: boo
         intake_pressure_pa=_num(an, "Pump Intake Pressure", "downholeCardAnalysis", 0.0, 20000.0, "psi", True),
         fillage=_num(an, "Pump Fillage", "downholeCardAnalysis", 0.0, 100.0, "%", optional=True),
         fluid_load_n=_num(an, "Fluid Load", "downholeCardAnalysis", -1e6, 1e6, "lbf", optional=True),
-        damping_coefficients=[float(c) for c in (eq.get("DampingCoefficient")
-                                                 or (d.get("dynaoutputData") or {}).get("DampingCoefficient")
-                                                 or []) if isinstance(c, (int, float)) and math.isfinite(c)],
+        damping_coefficients=_coefficients(eq.get("DampingCoefficient") or _section(
+            d, "dynaoutputData", "record", required=False).get("DampingCoefficient")),
         unit=_unit(eq.get("SurfaceUnit"), "equipmentData.SurfaceUnit"))
     dh = d.get("downholeCard")
     if isinstance(dh, dict) and dh.get("Position") and dh.get("Load"):
@@ -175,6 +186,13 @@ def read_dynacard_json(path: str | Path, reverse: bool = False, auto_orient: boo
             rec.pump_position_m = fu.to_si(xp[::-1] if back else xp, "in")
             rec.pump_load_n = fu.to_si(fp[::-1] if back else fp, "lbf")
     return rec
+
+
+def _coefficients(v) -> list[float]:
+    """The vendor's damping coefficients as given (reported, not used by the model)."""
+    if not isinstance(v, list):
+        return []
+    return [float(c) for c in v if isinstance(c, (int, float)) and not isinstance(c, bool) and math.isfinite(c)]
 
 
 def _survey(rows) -> list[dict]:

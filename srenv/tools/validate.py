@@ -21,7 +21,6 @@ comes from the record's own analysis where it has one, else from srenv's diagnos
 from __future__ import annotations
 
 import json
-import math
 import os
 import tempfile
 
@@ -162,14 +161,14 @@ def cmd_validate(args) -> int:
     check_output_path("--plot", args.plot, (".png",))
     rec = read_record(args.record, args.config, args.reverse)
     out, parts = validate(rec, list(args.fit or []), args.strokes, args.load_convention)
-    for k, v in out.items():
-        if isinstance(v, float) and not math.isfinite(v):
-            raise ConfigError(k, v, "a finite figure (the run diverged)")
+    from .cli import check_finite
+
+    check_finite({}, out)  # a figure that is not finite is a failure, not a result
     if args.plot:
         from .validate_plot import save_validation_plot
 
         atomic_write(args.plot, lambda tmp: save_validation_plot(*parts, tmp))
-    print(json.dumps(out, default=float))
+    print(json.dumps(out, default=float, allow_nan=False))
     return 0
 
 
