@@ -303,3 +303,24 @@ def test_record_defects_are_one_config_error(tmp_path, edit, match):
     bad.write_text(json.dumps(d))
     with pytest.raises(ConfigError, match=match):
         read_dynacard_json(bad)
+
+
+def test_pump_fillage_is_a_predictive_input():
+    """pump.fillage < 1: the gas fraction whose compression takes (1 - fillage) of the stroke; the simulated
+    pump card's fillage (read off the card as the diagnosis reads it) comes back within a few points."""
+    from srenv.analysis.stroke_summary import summarize
+    from srenv.config import load_config
+    from srenv.simulation.simulator import Simulator
+
+    for target in (0.6, 0.85):
+        cfg = load_config("default", ["inflow.model=none", f"pump.fillage={target}",
+                                      f"simulation.qp_solver={_qp_solver()}"])
+        sim = Simulator(cfg)
+        s = summarize(sim, sim.run_strokes(3))
+        assert s["fillage"] == pytest.approx(target, abs=0.06), s["fillage"]
+    with pytest.raises(ConfigError, match="pump.fillage"):
+        load_config("default", ["inflow.model=none", "pump.fillage=0.7", "pump.intake_gas_fraction=0.1"])
+    with pytest.raises(ConfigError, match="pump.fillage"):
+        load_config("default", ["pump.fillage=0.7"])  # the default well's inflow model sets its fill
+    with pytest.raises(ConfigError, match="tubing.anchored"):
+        load_config("default", ["inflow.model=none", "pump.fillage=0.7", "tubing.anchored=false"])

@@ -11,9 +11,8 @@ What follows from the description (docs/realism.md):
   the rod string's end and the pump adds rho g dz to the discharge pressure at the plunger, which enters
   the valve law as an intake pressure lower by the same amount (the upstroke load
   (p_out - p_in) A_pl is then exact); the rod end's true load keeps the pressure at the rod end;
-- a pump that does not fill (fillage f < 1) is modelled as free gas in the intake: the plunger travels
-  (1 - f) of its stroke on the downstroke before the valve opens, so the intake gas fraction is
-  phi = (1 - f) / ((1 + clearance) (1 - (p_in / p_d)^(1/k))) (``physics.pump.GasChamber``).
+- a pump that does not fill (fillage f < 1) is ``pump.fillage``: free gas in the intake whose compression
+  takes (1 - f) of the stroke (``physics.pump.gas_fraction_for_fillage``).
 """
 
 from __future__ import annotations
@@ -89,13 +88,6 @@ def pump_drag_n(rec: FieldRecord, fluid_load_n: float | None, intake_pressure_pa
     return max(0.0, 0.5 * (fluid_load_n - (discharge_pressure_pa(rec) - intake_pressure_pa) * a_pl))
 
 
-def gas_fraction_for_fillage(fillage: float, p_in_pa: float, p_d_pa: float, k: float = 1.0) -> float:
-    if not fillage < 1.0:
-        return 0.0
-    squeeze = 1.0 - (max(p_in_pa, MIN_INTAKE_PA) / max(p_d_pa, p_in_pa + 1.0)) ** (1.0 / k)
-    return float(min(max((1.0 - fillage) / ((1.0 + CLEARANCE_FRACTION) * squeeze), 0.0), 0.95))
-
-
 def well_config(rec: FieldRecord, card_csv: str, intake_pressure_pa: float, fillage: float = 1.0,
                 plunger_friction_n: float = 0.0, damping_factor: float = DEFAULT_DAMPING_FACTOR,
                 friction_coefficient: float = 0.0) -> dict:
@@ -103,7 +95,6 @@ def well_config(rec: FieldRecord, card_csv: str, intake_pressure_pa: float, fill
     stations = [{"md_m": 0.0, "inclination_deg": 0.0, "azimuth_deg": 0.0}] + [
         s for s in rec.survey if 0.0 < s["md_m"]] if rec.survey else []
     p_in_model = max(intake_pressure_pa - pump_column_pa(rec), MIN_INTAKE_PA)  # the gas law needs p_in > 0
-    phi = gas_fraction_for_fillage(fillage, intake_pressure_pa, discharge_pressure_pa(rec))
     return {
         "name": "field-record",
         "description": f"built from {rec.source} by srenv validate",
@@ -111,7 +102,7 @@ def well_config(rec: FieldRecord, card_csv: str, intake_pressure_pa: float, fill
         "fluid": {"density_kg_m3": rec.fluid_density_kg_m3, "wellhead_pressure_pa": rec.tubing_pressure_pa},
         "pump": {"load_source": "pressures", "plunger_diameter_mm": 1e3 * rec.plunger_diameter_m,
                  "intake_pressure_pa": p_in_model, "plunger_friction_n": plunger_friction_n,
-                 "intake_gas_fraction": phi, "clearance_volume_fraction": CLEARANCE_FRACTION},
+                 "fillage": min(max(fillage, 0.05), 1.0), "clearance_volume_fraction": CLEARANCE_FRACTION},
         "damping": {"model": "dimensionless", "damping_factor": damping_factor,
                     "stiffness_proportional_s": DEFAULT_KV_TAU_S},
         "survey": {"stations": stations},

@@ -97,7 +97,8 @@ class Simulator(PumpCycle):
         self.annulus = None
         if cfg.inflow.model != "none":
             self.annulus = Annulus(cfg.inflow, cfg.fluid, float(x[-1]), self.survey.tvd)
-        self.gas = GasChamber.from_config(cfg.pump, self.surface.stroke_length_m(cfg.surface.stroke_length_m))
+        self.gas = GasChamber.from_config(cfg.pump, self.surface.stroke_length_m(cfg.surface.stroke_length_m),
+                                          self.p_pump_pa + cfg.pump.discharge_overpressure_pa)
         tb = cfg.tubing
         self.tubing_stiffness_n_m = 0.0  # anchored: the barrel does not move
         if not tb.anchored:  # the free tubing between the anchor (or the surface) and the pump, as a spring

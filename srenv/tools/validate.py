@@ -143,7 +143,7 @@ def validate(rec, params: list[str], strokes: int, convention: str, overrides: d
                 "pump_state": {**state, "intake_pressure_psi": state["intake_pressure_pa"] / 6894.757293168361},
                 "diagnosis": {k: diag[k] for k in ("fillage", "card_class", "fluid_load_n", "intake_pressure_pa")},
                 "fit": fitted, "model": {"damping_factor": cfg["damping"]["damping_factor"],
-                                         "intake_gas_fraction": cfg["pump"]["intake_gas_fraction"]}})
+                                         "fillage": cfg["pump"]["fillage"]}})
     return out, (rec, result, pump_card)
 
 
