@@ -324,3 +324,23 @@ def test_pump_fillage_is_a_predictive_input():
         load_config("default", ["pump.fillage=0.7"])  # the default well's inflow model sets its fill
     with pytest.raises(ConfigError, match="tubing.anchored"):
         load_config("default", ["inflow.model=none", "pump.fillage=0.7", "tubing.anchored=false"])
+
+
+def test_validate_reproduces_srenv_own_card(tmp_path):
+    """srenv's own record (card CSV + the well YAML it came from): the model driven by the card's measured
+    motion reproduces the card (the pipeline adds no error of its own: resampling, period, alignment)."""
+    import yaml
+
+    from srenv.config import apply_overrides, read_raw
+
+    raw = apply_overrides(read_raw("default"), [f"simulation.qp_solver={_qp_solver()}"])
+    well = tmp_path / "well.yaml"
+    well.write_text(yaml.safe_dump(raw, sort_keys=False))
+    card = tmp_path / "card.csv"
+    p = run_cli("simulate", str(well), "--strokes", "3", "--out", str(card))
+    assert p.returncode == 0, p.stderr
+    p = run_cli("validate", str(card), "--config", str(well))
+    assert p.returncode == 0, p.stderr
+    d = json.loads(p.stdout.strip().splitlines()[-1])
+    assert abs(d["pprl_error_pct"]) < 0.1 and abs(d["mprl_error_pct"]) < 0.1 and d["card_rms_pct_of_pprl"] < 0.1
+    assert d["pump_card_rms_pct_of_range"] is None and d["pump_state"]["source"] == "config"

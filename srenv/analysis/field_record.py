@@ -45,6 +45,7 @@ class FieldRecord:
     damping_coefficients: list[float] = field(default_factory=list)
     unit: dict = field(default_factory=dict)           # API 11E dimensions (m) and names, as given
     time_reversed: bool = False                        # the stored card ran in reverse time
+    config: dict | None = None                         # srenv's own record: the well YAML (its model)
 
     @property
     def period_s(self) -> float:
@@ -212,10 +213,11 @@ def read_record_csv(path: str | Path, config: str, reverse: bool = False) -> Fie
     """srenv's own record: a card CSV (``t_s, polished_rod_position_m, polished_rod_load_n``, SI or a unit row;
     the last stroke is used) with the well YAML it came from (the tapers, fluid, pump and survey of the config;
     the pump's state from srenv's diagnosis)."""
-    from ..config import load_config
+    from ..config import config_from_dict, read_raw
     from ..surface_unit.measured_motion import last_stroke, read_card_csv, stroke_period_s
 
-    cfg = load_config(config)
+    raw = read_raw(config)
+    cfg = config_from_dict(raw)
     cols = read_card_csv(path, "RECORD", ("t_s", "polished_rod_position_m", "polished_rod_load_n"),
                          reverse=reverse)
     t, x, f = cols["t_s"], cols["polished_rod_position_m"], cols["polished_rod_load_n"]
@@ -230,4 +232,4 @@ def read_record_csv(path: str | Path, config: str, reverse: bool = False) -> Fie
         pump_depth_m=cfg.rod_length_m, plunger_diameter_m=1e-3 * cfg.pump.plunger_diameter_mm,
         tubing_pressure_pa=cfg.fluid.wellhead_pressure_pa, fluid_density_kg_m3=cfg.fluid.density_kg_m3,
         survey=[{"md_m": s.md_m, "inclination_deg": s.inclination_deg, "azimuth_deg": s.azimuth_deg}
-                for s in cfg.survey.stations])
+                for s in cfg.survey.stations], config=raw)

@@ -126,9 +126,16 @@ def validate(rec, params: list[str], strokes: int, convention: str, overrides: d
     with tempfile.TemporaryDirectory(prefix="srenv-validate-") as work:
         csv = os.path.join(work, "motion.csv")
         _write_motion_csv(rec, csv)
-        state = pump_state(rec, work)
-        cfg = apply_overrides(well_config(rec, csv, state["intake_pressure_pa"], state["fillage"],
-                                          state["plunger_friction_n"]), dict(overrides or {}))
+        if rec.config is not None:  # srenv's own record: its well YAML is the model, driven by the card
+            pump = rec.config.get("pump") or {}
+            state = {"intake_pressure_pa": pump.get("intake_pressure_pa"), "fillage": pump.get("fillage"),
+                     "plunger_friction_n": pump.get("plunger_friction_n"), "source": "config"}
+            cfg = apply_overrides(rec.config, {"surface.motion": "measured", "surface.measured_card_csv": csv,
+                                               "surface.measured_spm": rec.spm, **dict(overrides or {})})
+        else:
+            state = pump_state(rec, work)
+            cfg = apply_overrides(well_config(rec, csv, state["intake_pressure_pa"], state["fillage"],
+                                              state["plunger_friction_n"]), dict(overrides or {}))
         fitted = None
         if params:
             fitted = _fit(cfg, rec, params, strokes, work)
@@ -140,10 +147,10 @@ def validate(rec, params: list[str], strokes: int, convention: str, overrides: d
 
     out["unit_kinematics"] = unit_kinematics_check(rec)
     out.update({"record": rec.source, "card_time_reversed": bool(getattr(rec, "time_reversed", False)),
-                "pump_state": {**state, "intake_pressure_psi": state["intake_pressure_pa"] / 6894.757293168361},
+                "pump_state": state,
                 "diagnosis": {k: diag[k] for k in ("fillage", "card_class", "fluid_load_n", "intake_pressure_pa")},
-                "fit": fitted, "model": {"damping_factor": cfg["damping"]["damping_factor"],
-                                         "fillage": cfg["pump"]["fillage"]}})
+                "fit": fitted, "model": {"damping_factor": cfg.get("damping", {}).get("damping_factor"),
+                                         "fillage": cfg.get("pump", {}).get("fillage")}})
     return out, (rec, result, pump_card)
 
 
