@@ -141,6 +141,10 @@ class PumpConfig:
     gas_polytropic_exponent: float = num(1.0, unit="-", lo=1.0, hi=2.0, doc="k of p V^k = const in the chamber (1 = isothermal)")
     clearance_volume_fraction: float = num(0.05, unit="-", check="nonneg", hi=10.0,
                                            doc="unswept chamber volume / swept volume at surface.stroke_length_m")
+    fluid_column_mass_kg: float = num(0.0, unit="kg", check="nonneg", hi=1.0e6,
+                                      doc="liquid column lifted with the rising plunger, as a mass at the plunger "
+                                          "(rho L A_pl^2 / (A_t - A_r), physics/pump.fluid_column_mass_kg); its "
+                                          "inertia adds to the pump load on the upstroke; 0 = off (docs/realism.md)")
     fillage: float = num(1.0, unit="-", hi=1.0,
                          doc="predictive input: liquid share of the plunger's displacement; < 1 is free gas at the "
                              "intake whose compression takes 1 - fillage of the stroke at pump.intake_pressure_pa "

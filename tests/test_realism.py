@@ -344,3 +344,30 @@ def test_validate_reproduces_srenv_own_card(tmp_path):
     d = json.loads(p.stdout.strip().splitlines()[-1])
     assert abs(d["pprl_error_pct"]) < 0.1 and abs(d["mprl_error_pct"]) < 0.1 and d["card_rms_pct_of_pprl"] < 0.1
     assert d["pump_card_rms_pct_of_range"] is None and d["pump_state"]["source"] == "config"
+
+
+def test_fluid_column_inertia_closes_the_energy_balance_and_loads_the_upstroke():
+    """pump.fluid_column_mass_kg: the liquid lifted with the rising plunger adds its inertia to the pump
+    load (booked as the pump's work, so the energy balance still closes); PPRL rises, the downstroke (the
+    column left behind) keeps its load."""
+    from srenv.config import load_config
+    from srenv.physics.pump import fluid_column_mass_kg
+    from srenv.simulation.simulator import Simulator
+
+    m = fluid_column_mass_kg(1000.0, 1500.0, math.pi / 4 * 0.04445 ** 2, math.pi / 4 * 0.062 ** 2,
+                             math.pi / 4 * 0.01905 ** 2)
+    assert m == pytest.approx(1000 * 1500 * (math.pi / 4 * 0.04445 ** 2) ** 2
+                              / (math.pi / 4 * (0.062 ** 2 - 0.01905 ** 2)))
+    out = {}
+    for mass in (0.0, m):
+        cfg = load_config("default", ["inflow.model=none", f"pump.fluid_column_mass_kg={mass}",
+                                      f"simulation.qp_solver={_qp_solver()}"])
+        sim = Simulator(cfg)
+        r = sim.run_strokes(3)[-1]
+        work = abs(float(np.trapezoid(r.trace["polished_rod_load_n"], r.trace["polished_rod_position_m"])))
+        out[mass] = (r.trace["polished_rod_load_n"].max(), sim.energy_balance()["residual_j"], work,
+                     r.trace["pump_load_n"].min())
+    (p0, _, _, d0), (p1, e1, w1, d1) = out[0.0], out[m]
+    assert p1 > p0 * 1.01
+    assert abs(e1) <= 1e-7 * w1
+    assert d1 == pytest.approx(d0, rel=0.1)

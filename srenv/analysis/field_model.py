@@ -29,6 +29,7 @@ DEFAULT_DAMPING_FACTOR = 0.02        # the vendor's own range on 11708328 (0.009
 DEFAULT_KV_TAU_S = 0.03              # Kelvin-Voigt retardation time of the string (docs/realism.md)
 MIN_INTAKE_PA = 101325.0       # a pump intake below atmospheric is read as pumped off at one atmosphere
 CLEARANCE_FRACTION = 0.05
+TUBING_ID_M = 0.062            # 2 7/8-in tubing (srenv's tubing default) where the record names none
 
 
 def _qp_solver() -> str:
@@ -59,6 +60,19 @@ def pump_column_pa(rec: FieldRecord) -> float:
     dz = max(rec.pump_depth_m - rec.rod_length_m, 0.0)
     incl = math.radians(rec.survey[-1]["inclination_deg"]) if rec.survey else 0.0
     return rec.fluid_density_kg_m3 * GRAVITY_M_S2 * dz * math.cos(incl)
+
+
+def fluid_column_kg(rec: FieldRecord, tubing_inner_diameter_m: float = TUBING_ID_M) -> float:
+    """The liquid column lifted with the plunger as a mass at the plunger, summed over the tapers' annuli
+    (and the gap below the rods at the bottom taper's area); the records give no tubing: 2 7/8-in by default."""
+    from ..physics.pump import fluid_column_mass_kg
+
+    a_t = math.pi / 4 * tubing_inner_diameter_m ** 2
+    a_pl = math.pi / 4 * rec.plunger_diameter_m ** 2
+    lengths = [t["length_m"] for t in rec.tapers]
+    lengths[-1] += max(rec.pump_depth_m - rec.rod_length_m, 0.0)
+    return float(sum(fluid_column_mass_kg(rec.fluid_density_kg_m3, h, a_pl, a_t, math.pi / 4 * t["diameter_m"] ** 2)
+                     for h, t in zip(lengths, rec.tapers)))
 
 
 def pump_tvd_m(rec: FieldRecord) -> float:

@@ -192,6 +192,11 @@ def steps(const, fric_p, valve_p, prog, cnt, ksd, kso, kd, ko, md, mo, cd, f, ea
         b0[0] -= kc * ua_new + mc * aa_new
         if kv_tau != 0.0:  # the top column of C_K = tau K, moved over like K's
             b0[0] -= kv_tau * kc * va_new
+        if vp.fluid_kg != 0.0:  # the liquid column rides on the rising plunger: extra mass at the pump node
+            if p.have_qp == 0:
+                vp.fluid_dk = c1 * vp.fluid_kg if p.plunger_dir < 0 else 0.0
+                ksd[n - 1] += vp.fluid_dk
+            b0[n - 1] += vp.fluid_dk * b[n - 1]  # b holds the predicted velocities here
         # -- bounds: the laws' intervals
         if p.have_qp == 0:
             if nonsmooth:
@@ -260,6 +265,10 @@ def steps(const, fric_p, valve_p, prog, cnt, ksd, kso, kd, ko, md, mo, cd, f, ea
             if i < n - 1:
                 kv += kso[i] * v[i + 1]
             lam[i] = b[i] - kv - shift[i] if nonmono else b[i] - kv
+        if vp.fluid_dk != 0.0:  # the column's inertia m a is part of the pump's force on the rod
+            lam[n - 1] += vp.fluid_dk * (v[n - 1] - (prev_v[n - 1] + dt * (1.0 - gamma) * a[n - 1]))
+            ksd[n - 1] -= vp.fluid_dk
+            vp.fluid_dk = 0.0
         if vp.lin_dk != 0.0 or vp.lin_shift_n != 0.0:
             # the plunger's whole reaction: friction part + the gas spring moved into K* and b
             lam[n - 1] += vp.lin_shift_n + vp.lin_dk * v[n - 1]

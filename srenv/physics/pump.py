@@ -54,6 +54,13 @@ def true_loads_n(law: ValveLaw, p_out_pa: float, rod_area_m2: float) -> tuple[fl
 
 
 STANDARD_PRESSURE_PA = 101325.0
+
+
+def fluid_column_mass_kg(density_kg_m3: float, length_m: float, plunger_area_m2: float, tubing_area_m2: float,
+                         rod_area_m2: float) -> float:
+    """The liquid column above a rising plunger as a mass at the plunger: the column in the tubing-rod
+    annulus moves at v A_pl / (A_t - A_r), so its kinetic energy is (1/2) rho L A_pl^2 / (A_t - A_r) v^2."""
+    return density_kg_m3 * length_m * plunger_area_m2 ** 2 / max(tubing_area_m2 - rod_area_m2, 1e-9)
 MAX_FILLAGE_GAS_FRACTION = 0.95
 
 
