@@ -18,7 +18,8 @@ from srenv.analysis.field_record import read_dynacard_json
 from srenv.errors import ConfigError
 from srenv.surface_unit.card_checks import check_card, loop_work
 
-DATA = Path(__file__).parent / "data" / "field"
+# tests/data/field/, wherever under tests/ this file sits
+DATA = next(p for p in Path(__file__).resolve().parents if p.name == "tests") / "data" / "field"
 WELLS = ("11708328", "7699227")
 
 
