@@ -120,6 +120,13 @@ def default_classifier() -> Classifier | None:
     return None
 
 
+def physics_overrides(spec: wf.WellSpec) -> dict[str, Any]:
+    """v2's per-well physics on top of the family's config: the one place the realism branch's features are
+    switched on for v2 (e.g. ``pump.fluid_column_mass_kg`` from the well's tapers and tubing, a unit geometry
+    drawn per well). Empty today: v2 runs the family's physics until the lead wires them here."""
+    return {}
+
+
 def _uniform(_: dict) -> np.ndarray:
     return np.full(len(LABELS), 1.0 / len(LABELS))
 
@@ -153,6 +160,12 @@ class SuckerRodV2Env(SuckerRodV1Env):
     # ------------------------------------------------------------------------------------------ episode
     def _episode_spec(self, seed: int | None, rng: np.random.Generator) -> wf.WellSpec:
         spec = self._fixed if self.split == "family" else super()._episode_spec(seed, rng)
+        over = physics_overrides(spec)
+        if over:
+            from ..config import load_config
+
+            spec = wf.WellSpec(spec.well_id, spec.params, load_config(spec.cfg, over), spec.nominal_rate_m3_day,
+                               spec.design)
         # the conditions from their own stream, seeded by the episode's: v1's draws keep their meaning
         erng = np.random.default_rng(int(rng.integers(2**63)))
         self._schedule = ev.draw_schedule(erng, spec.cfg.task.episode_hours, self.event_rate_scale)
