@@ -131,12 +131,13 @@ class SuckerRodV1Env(CardWindow, gym.Env):
 
     def __init__(self, scenario: str = "train", observation: str = "field", render_mode: str | None = None,
                  overrides: dict | None = None, episode_hours: float | None = None, interval_s: float | None = None,
-                 **kwargs: Any) -> None:
+                 fast_stepping: bool = False, **kwargs: Any) -> None:
         if observation not in OBSERVATIONS:
             raise ConfigError("observation", observation, "one of " + ", ".join(OBSERVATIONS))
         if render_mode is not None and render_mode not in self.metadata["render_modes"]:
             raise ConfigError("render_mode", render_mode, "one of " + ", ".join(self.metadata["render_modes"]))
         self.scenario = str(scenario)
+        self.fast_stepping = bool(fast_stepping)  # IntervalRunner(reuse_periodic=...): off keeps v1's numbers
         self.observation = observation
         self.render_mode = render_mode
         self.overrides = dict(overrides or {})
@@ -211,7 +212,7 @@ class SuckerRodV1Env(CardWindow, gym.Env):
             level0 = cfg.inflow.initial_fluid_level_m
         self.sim = Simulator(cfg)
         self.sim.reset(fluid_level_m=level0)
-        self.runner = IntervalRunner(self.sim)
+        self.runner = IntervalRunner(self.sim, reuse_periodic=self.fast_stepping)
         self.econ = EconomicReward(cfg.economics)
         s = cfg.surface
         self._spm = float(s.spm)

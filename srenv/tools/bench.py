@@ -103,8 +103,12 @@ def env_figures(repeats: int) -> dict | None:
 
 
 def run(repeats: int = 5, strokes: int = 10) -> dict:
+    from .bench_kernel import kernel_figures
+
+    t_start = time.perf_counter()
     out: dict = {"repeats": repeats, "strokes_per_run": strokes, "python": sys.version.split()[0],
                  "numpy": np.__version__, "cases": {}}
+    out["kernel"] = kernel_figures(CASES[0], repeats=max(repeats, 5), strokes=strokes)
     for name in CASES:
         out["cases"][name] = case_figures(name, repeats, strokes)
     out["always_qp"] = {CASES[0]: always_qp_figures(CASES[0], repeats)}
@@ -115,6 +119,7 @@ def run(repeats: int = 5, strokes: int = 10) -> dict:
     from ..envs.bench_env import v1_figures
 
     out["env_v1"] = v1_figures(repeats=max(1, repeats // 2))
+    out["wall_time_s"] = time.perf_counter() - t_start
     return out
 
 
