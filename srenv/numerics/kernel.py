@@ -118,7 +118,7 @@ def events(valve_p, prog, ub, vb):
     return False
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)  # nogil: the vector env steps wells on threads (srenv/envs/vector.py)
 def advance(const, fric_p, valve_p, prog, cnt, model, side, state, work, out, va_t, t0, k_end):
     """Advance from step Progress.step to k_end; va_t[k] is the prescribed top velocity at the end of step
     k. Returns DONE, NEED_QP (work.wb/wlo/whi hold the sub-problem; the caller puts the solution in work.wv,
@@ -133,7 +133,7 @@ def advance(const, fric_p, valve_p, prog, cnt, model, side, state, work, out, va
                  cp, dp, nforce, fric_s, wv, wb, wlo, whi, rec, energy, emax, emin, stick, va_t, t0, k_end)
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def steps(const, fric_p, valve_p, prog, cnt, ksd, kso, kd, ko, md, mo, cd, f, ea_len, axial, weight, turn,
           u, v, a, top, status, prev_lam, prev_v, prev_stuck, lo, hi, ns, lam, b, b0, shift, vk, rhs, stuck,
           cp, dp, nforce, fric_s, wv, wb, wlo, whi, rec, energy, emax, emin, stick, va_t, t0, k_end):
