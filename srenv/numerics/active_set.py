@@ -12,7 +12,7 @@ from __future__ import annotations
 from numba import njit
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True)
 def thomas_pattern(kd, ko, rhs, stuck, v, cp, dp):
     """Solve K* v = rhs with rows of stuck nodes replaced by v_i = 0 (Thomas algorithm)."""
     n = kd.shape[0]
@@ -37,7 +37,7 @@ def thomas_pattern(kd, ko, rhs, stuck, v, cp, dp):
         v[i] = dp[i] - cp[i] * v[i + 1]
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True)
 def solve_pattern(ksd, kso, b, lo, hi, ns, status, v, lam, rhs, stuck, cp, dp, maxcorr, tolv, toll):
     """Certified active-set solve with up to `maxcorr` corrections.
 

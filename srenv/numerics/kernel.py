@@ -49,6 +49,7 @@ from .kernel_layout import (  # noqa: F401 - the layout's constants are part of 
     TOP_V,
     Stepper,
 )
+from .newmark import coefficients, predict, update
 
 
 def run(stepper: Stepper, va_t, t0: float, k_end: int) -> int:
@@ -143,13 +144,12 @@ def steps(const, fric_p, valve_p, prog, cnt, ksd, kso, kd, ko, md, mo, cd, f, ea
     p = prog[0]
     vp = valve_p[0]
     dt, beta, gamma = c.dt_s, c.beta, c.gamma
-    c2 = beta * dt / gamma
+    h, q, c1, c2 = coefficients(dt, beta, gamma)
     nonsmooth, rec_on = c.nonsmooth != 0, c.record != 0
     kc, mc = c.top_coupling_stiffness_n_m, c.top_coupling_mass_kg
     fric_nonmono = fric_p[0].nonmonotone != 0
     maxcorr, tolv, toll, always_qp = c.max_corrections, c.tol_v_m_s, c.tol_lambda, c.always_qp
     dc_tol, dc_max = c.dc_tol_m_s, c.dc_max_iterations
-    c1 = 1.0 / (gamma * dt)
     n = u.shape[0]
     while p.step < k_end:
         k = p.step
@@ -161,9 +161,9 @@ def steps(const, fric_p, valve_p, prog, cnt, ksd, kso, kd, ko, md, mo, cd, f, ea
         # holds the latest DC iterate or a failed pattern solve, and b0 is rebuilt from scratch when the
         # kernel resumes after a NEED_QP return.
         for i in range(n):
-            vpr = prev_v[i] + dt * (1.0 - gamma) * a[i]
+            vpr, ut = predict(u[i], prev_v[i], a[i], dt, h, q, c2)
             b[i] = vpr
-            rhs[i] = u[i] + dt * prev_v[i] + dt * dt * (0.5 - beta) * a[i] - c2 * vpr
+            rhs[i] = ut
             b0[i] = f[i] + c1 * md[i] * vpr
         for i in range(n):
             ku = kd[i] * rhs[i]
@@ -256,9 +256,7 @@ def steps(const, fric_p, valve_p, prog, cnt, ksd, kso, kd, ko, md, mo, cd, f, ea
         du_a = ua_new - ua_old
         for i in range(n):
             vo = prev_v[i]  # v_n: `v` already holds v_{n+1}
-            vpr = vo + dt * (1.0 - gamma) * a[i]
-            a_new = (v[i] - vpr) * c1
-            u_new = u[i] + dt * vo + dt * dt * (0.5 - beta) * a[i] - c2 * vpr + c2 * v[i]
+            u_new, a_new = update(u[i], vo, a[i], v[i], dt, h, q, c1, c2)
             du = u_new - u[i]
             energy[E_GRAV] += f[i] * du
             energy[E_REACT] -= 0.5 * (lam[i] + prev_lam[i]) * du
