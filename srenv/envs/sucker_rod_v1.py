@@ -17,6 +17,7 @@ Constructor
 | ``episode_hours`` | ``12.0`` (spec) | horizon in hours of well time (``task.episode_hours``); ``None`` keeps the config's; an override of ``task.episode_hours`` wins |
 | ``interval_s`` | ``300.0`` (spec) | control interval in s of well time (``task.interval_s``); ``None`` keeps the config's; an override of ``task.interval_s`` wins |
 | ``render_mode`` | ``None`` | ``"rgb_array"`` or ``"human"`` (surface and pump cards of the last stroke) |
+| ``fast_stepping`` | ``False`` | ``True``: an interval at an earlier interval's setpoint reuses its converged stroke (``IntervalRunner(reuse_periodic=True)``, docs/speed.md); off keeps v1's numbers |
 | ``overrides`` | ``None`` | ``{"key.path": value}`` applied to every well's config (e.g. ``economics.oil_price_usd_m3``) |
 | ``**kwargs`` | | further overrides as ``section__field=value`` (e.g. ``task__interval_s=600``) |
 
@@ -61,6 +62,8 @@ Version history
 ---------------
 * v1: well family with splits, in-episode inflow changes, idle/intermittent pumping, USD/h reward with
   constraint cost, field observation. v0 (one well, stroke-per-step, unitless reward) is kept unchanged.
+  Since: the opt-in ``fast_stepping`` kwarg (default off, numbers unchanged) and a native vector env
+  (``gymnasium.make_vec(..., vectorization_mode="vector_entry_point")``, srenv/envs/vector.py).
 """
 
 from __future__ import annotations
