@@ -49,12 +49,36 @@ from .kernel_layout import (  # noqa: F401 - the layout's constants are part of 
     TOP_V,
     Stepper,
 )
-from .newmark import coefficients, predict, update
 
 
 def run(stepper: Stepper, va_t, t0: float, k_end: int) -> int:
     """advance() with the stepper's groups (the one call site of both callers)."""
     return advance(*stepper, va_t, t0, k_end)
+
+
+# The Newmark relations of one free node (every path of the kernel takes them from here; kept in this file so
+# that an edit of them invalidates numba's cache of the kernel, which watches this file only). With
+# h = dt (1 - gamma), q = dt^2 (1/2 - beta), c1 = 1 / (gamma dt), c2 = beta dt / gamma: v-tilde = v + h a,
+# u-tilde = u + dt v + q a - c2 v-tilde; at the step's end u = u-tilde + c2 v_new, a = (v_new - v-tilde) c1.
+# The order of the operations is part of the results (tests/test_kernel_regression.py).
+@njit(cache=True, inline="always")
+def coefficients(dt, beta, gamma):
+    """(h, q, c1, c2) of the time step."""
+    return dt * (1.0 - gamma), dt * dt * (0.5 - beta), 1.0 / (gamma * dt), beta * dt / gamma
+
+
+@njit(cache=True, inline="always")
+def predict(u, v, a, dt, h, q, c2):
+    """(v-tilde, u-tilde) of a node from its state at the step's start."""
+    vpr = v + h * a
+    return vpr, u + dt * v + q * a - c2 * vpr
+
+
+@njit(cache=True, inline="always")
+def update(u, v, a, v_new, dt, h, q, c1, c2):
+    """(u, a) at the step's end from the state at its start and the new velocity."""
+    vpr = v + h * a
+    return u + dt * v + q * a - c2 * vpr + c2 * v_new, (v_new - vpr) * c1
 
 
 @njit(cache=True, inline="always")
