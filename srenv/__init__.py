@@ -23,6 +23,9 @@ ENVS: dict[str, tuple[str, dict]] = {
                 {"scenario": "train", "observation": "field", "episode_hours": 12.0, "interval_s": 300.0}),
 }
 
+# native vector envs (gymnasium.make_vec(..., vectorization_mode="vector_entry_point"), srenv/envs/vector.py)
+VECTOR_ENTRY_POINTS: dict[str, str] = {ENV_ID_V1: "srenv.envs.vector:make_v1"}
+
 
 def register_envs() -> None:
     """Register :data:`ENVS` with gymnasium (idempotent; run on ``import srenv``)."""
@@ -32,7 +35,8 @@ def register_envs() -> None:
         if env_id not in gymnasium.registry:
             # entry point by string: importing srenv stays light (the kernel compiles only when an env is made)
             gymnasium.register(id=env_id, entry_point=entry_point, kwargs=dict(kwargs),
-                               max_episode_steps=None, reward_threshold=None, nondeterministic=False)
+                               max_episode_steps=None, reward_threshold=None, nondeterministic=False,
+                               vector_entry_point=VECTOR_ENTRY_POINTS.get(env_id))
     # The registry is left as gymnasium makes it: v0 and v1 are versions of one name, so gymnasium's make of
     # v0 issues its DeprecationWarning "out of date, consider v1" (hidden by Python's default filters outside
     # __main__). v0 stays, with its numbers, for reproducibility.
