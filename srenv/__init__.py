@@ -1,5 +1,7 @@
 """srenv: exact nonsmooth finite-element sucker-rod pump simulator and Gymnasium environment."""
 
+import warnings
+
 from .config import WellConfig, load_config
 from .errors import ConfigError, SolverFailure
 
@@ -33,9 +35,12 @@ def register_envs() -> None:
             # entry point by string: importing srenv stays light (the kernel compiles only when an env is made)
             gymnasium.register(id=env_id, entry_point=entry_point, kwargs=dict(kwargs),
                                max_episode_steps=None, reward_threshold=None, nondeterministic=False)
-    # The registry is left as gymnasium makes it: v0 and v1 are versions of one name, so gymnasium's make of
-    # v0 issues its DeprecationWarning "out of date, consider v1" (hidden by Python's default filters outside
-    # __main__). v0 stays, with its numbers, for reproducibility.
+    # The registry is left as gymnasium makes it. v0 and v1 are versions of one name, so gymnasium's make of v0
+    # warns "out of date, consider upgrading to v1" -- wrong advice here: v1 is another task, and v0 stays, with
+    # its numbers, for reproducibility. That one notice, for srenv's ids only, is filtered (a strict caller's
+    # own filters, e.g. simplefilter("error"), still see it).
+    warnings.filterwarnings("ignore", message=r".*The environment srenv/SuckerRod-v\d+ is out of date",
+                            category=DeprecationWarning)
 
 
 register_envs()
