@@ -134,6 +134,25 @@ class PumpConfig:
     gas_polytropic_exponent: float = num(1.0, unit="-", lo=1.0, hi=2.0, doc="k of p V^k = const in the chamber (1 = isothermal)")
     clearance_volume_fraction: float = num(0.05, unit="-", check="nonneg", hi=10.0,
                                            doc="unswept chamber volume / swept volume at surface.stroke_length_m")
+    # pump conditions (srenv.physics.laws.pump_conditions, docs/conditions.md); 0 = off everywhere
+    travelling_valve_leak_fraction: float = num(0.0, unit="-", check="nonneg", hi=100.0,
+                                                doc="leak through the closed travelling valve at the full pressure "
+                                                "difference / the plunger's peak displacement rate (0 = tight)")
+    standing_valve_leak_fraction: float = num(0.0, unit="-", check="nonneg", hi=100.0,
+                                              doc="leak through the closed standing valve, same measure")
+    tubing_leak_fraction: float = num(0.0, unit="-", check="unit_interval", hi=1.0,
+                                      doc="share of the fluid load lost to a tubing leak by the top of the upstroke")
+    flow_through_fraction: float = num(0.0, unit="-", check="nonneg", hi=0.95,
+                                       doc="share of the fluid load carried by the well flowing through the pump")
+    tag_top_overtravel_m: float = num(0.0, unit="m", check="nonneg", hi=20.0,
+                                      doc="tagging up: the pump's top this far inside the plunger's first free "
+                                      "upstroke (0 = no contact)")
+    tag_bottom_overtravel_m: float = num(0.0, unit="m", check="nonneg", hi=20.0,
+                                         doc="tagging down: the pump's bottom this far inside the first free "
+                                         "downstroke (0 = no contact)")
+    tag_stiffness_n_m: float = num(2.0e5, unit="N/m", lo=1.0e3, hi=1.0e8,
+                                   doc="contact stiffness of the pump's ends (explicit: keep k dt^2 below the "
+                                   "plunger node's mass)")
 
 
 @dataclass(frozen=True)
