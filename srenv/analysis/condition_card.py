@@ -12,7 +12,7 @@ import numpy as np
 from ..config import WellConfig, apply_overrides, config_from_dict, to_dict
 from ..physics.conditions import condition_overrides
 
-STROKES = 5  # start-up, three to settle (a pounding pump takes a few), the recorded one
+STROKES = 4  # start-up, two to settle (a pounding pump takes a few), the recorded one
 
 
 @dataclass(frozen=True)

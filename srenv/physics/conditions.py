@@ -16,7 +16,7 @@ parted_rods            the string parted at ``1 - 0.9 s`` of its length (s > 0):
 tagging_up             the pump's top ``0.02 + 0.08 s`` x stroke inside the plunger's free upstroke
 tagging_down           the pump's bottom the same inside its free downstroke
 tubing_leak            ``pump.tubing_leak_fraction = 0.8 s`` of the fluid load lost over the upstroke
-heavy_oil              viscous rods (Gibbs factor + ``0.6 s``) and plunger friction + ``0.3 s`` x fluid load
+heavy_oil              viscous rods (Gibbs factor + ``0.3 + 0.7 s``) and plunger friction + ``0.3 s`` x fluid load
 flowing                ``pump.flow_through_fraction = 0.9 s`` of the fluid load lifted by the well's flow
 =====================  ===========================================================================
 """
@@ -146,7 +146,7 @@ def condition_overrides(label: str, severity: float, well=None) -> dict[str, obj
         out["pump.tubing_leak_fraction"] = 0.8 * s
     elif label == "heavy_oil":
         out.update({"damping.model": "dimensionless",
-                    "damping.damping_factor": round(cfg.damping.damping_factor + 0.6 * s, 6),
+                    "damping.damping_factor": round(cfg.damping.damping_factor + 0.3 + 0.7 * s, 6),
                     "pump.plunger_friction_n": round(cfg.pump.plunger_friction_n + 0.3 * s * fluid_load_n(cfg), 3)})
     elif label == "flowing":
         out["pump.flow_through_fraction"] = 0.9 * s

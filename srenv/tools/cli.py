@@ -173,6 +173,12 @@ def build_parser() -> argparse.ArgumentParser:
     from ..analysis.fit import add_parser as add_fit
 
     add_fit(sub)
+    from .cards import add_parser as add_cards  # pump conditions (docs/conditions.md)
+
+    add_cards(sub)
+    from .classify import add_parser as add_classify
+
+    add_classify(sub)
     return p
 
 
