@@ -11,5 +11,6 @@ from setuptools import find_packages, setup
 setup(
     packages=[*find_packages(include=["srenv", "srenv.*"]), "srenv.configs"],
     package_dir={"srenv.configs": "configs"},
-    package_data={"srenv.configs": ["wells/*.yaml", "units/*.yaml"]},
+    package_data={"srenv.configs": ["wells/*.yaml", "units/*.yaml"],
+                  "srenv": ["models/*.npz"]},  # the condition classifier's weights (docs/conditions.md)
 )

@@ -21,16 +21,13 @@ def _periodic_interp(t: np.ndarray, y: np.ndarray) -> np.ndarray:
 
 
 def _lowpass(y: np.ndarray, alpha: float) -> np.ndarray:
-    """First-order low-pass, run twice around the periodic signal so the start has settled."""
+    """First-order low-pass s += alpha (y - s), run twice around the periodic signal so the start has settled."""
     if alpha >= 1.0:
         return y
-    out = np.empty_like(y)
-    s = y[0]
-    for _ in range(2):
-        for i in range(len(y)):
-            s += alpha * (y[i] - s)
-            out[i] = s
-    return out
+    from scipy.signal import lfilter
+
+    out = lfilter([alpha], [1.0, alpha - 1.0], np.r_[y, y], zi=[(1.0 - alpha) * y[0]])[0]
+    return out[len(y):]
 
 
 def augment(position: np.ndarray, load: np.ndarray, rng: np.random.Generator) -> tuple[np.ndarray, np.ndarray]:

@@ -169,3 +169,12 @@ def condition_of(cfg) -> str:
         if getattr(p, field) > 0:
             return label
     return "full"
+
+
+def condition_name(cfg, card_class: str = "full") -> str:
+    """The stroke summary's ``condition``: the config's condition, or the card class (fluid pound, gas)
+    that a well without a configured condition runs into."""
+    label = condition_of(cfg)
+    if label == "full" and card_class in ("fluid_pound", "gas_interference"):
+        return card_class
+    return label

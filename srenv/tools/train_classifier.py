@@ -5,7 +5,7 @@
 
 Reads the card sets written by ``srenv cards`` (their ``train`` split to fit, ``validation`` to choose the
 model; the ``test`` split is scored once at the end, for the docs), fits each candidate of CANDIDATES on
-freshly augmented training cards every epoch (srenv.analysis.card_augment), picks the one with the best
+AUG_COPIES augmented versions of every training card (srenv.analysis.card_augment), picks the one with the best
 accuracy on augmented validation cards, and writes its weights as data (NPZ, no pickle). No real card is
 read here. Needs torch (a training-time dependency; inference is numpy only).
 """
@@ -27,6 +27,8 @@ from ..physics.conditions import LABELS
 # name -> (hidden widths, augmented training); chosen on augmented validation accuracy
 CANDIDATES = {"mlp_aug": ((128, 128), True), "mlp_clean": ((128, 128), False), "linear_aug": ((), True)}
 VALIDATION_DRAWS = 3  # augmented copies of each validation card
+AUG_COPIES = 6  # augmented copies of each training card (the training pool)
+BATCH = 512
 
 
 def load_sets(dirs: list[str]) -> dict[str, np.ndarray]:
@@ -50,14 +52,12 @@ def featurise(x: np.ndarray, y: np.ndarray, labels: np.ndarray, rng, aug: bool, 
     return np.array(rows), np.array(out, dtype=np.int64)
 
 
-def fit(data: dict, split_idx: dict, widths: tuple, aug: bool, epochs: int, seed: int):
+def fit(f0: np.ndarray, t0: np.ndarray, widths: tuple, epochs: int, seed: int) -> dict:
+    """An MLP (or linear model without hidden widths) on feature rows f0 with labels t0."""
     import torch
 
+    torch.set_num_threads(1)  # a shared machine: one thread is faster than several contending
     torch.manual_seed(seed)
-    rng = np.random.default_rng(seed)
-    tr = split_idx["train"]
-    x, y, lab = data["polished_rod_position_m"][tr], data["polished_rod_load_n"][tr], data["label"][tr]
-    f0, t0 = featurise(x, y, lab, rng, aug)
     mean, std = f0.mean(axis=0), f0.std(axis=0) + 1e-6
     dims = [f0.shape[1], *widths, len(LABELS)]
     mods = []
@@ -65,28 +65,24 @@ def fit(data: dict, split_idx: dict, widths: tuple, aug: bool, epochs: int, seed
         mods.append(torch.nn.Linear(dims[i], dims[i + 1]))
         if i < len(dims) - 2:
             mods += [torch.nn.ReLU(), torch.nn.Dropout(0.1)]
-    net = torch.nn.Sequential(*mods).double()
-    opt = torch.optim.AdamW(net.parameters(), lr=2e-3, weight_decay=1e-4)
+    net = torch.nn.Sequential(*mods)
+    opt = torch.optim.AdamW(net.parameters(), lr=3e-3, weight_decay=1e-4)
     sched = torch.optim.lr_scheduler.CosineAnnealingLR(opt, epochs)
-    for epoch in range(epochs):
-        f, t = (f0, t0) if not aug or epoch == 0 else featurise(x, y, lab, rng, True)
-        fx = torch.from_numpy((f - mean) / std)
-        ty = torch.from_numpy(t)
+    fx, ty = torch.from_numpy(((f0 - mean) / std).astype(np.float32)), torch.from_numpy(t0)
+    for _ in range(epochs):
         net.train()
         perm = torch.randperm(len(ty))
-        for i in range(0, len(ty), 128):
-            b = perm[i:i + 128]
+        for i in range(0, len(ty), BATCH):
+            b = perm[i:i + BATCH]
             opt.zero_grad()
-            loss = torch.nn.functional.cross_entropy(net(fx[b]), ty[b])
-            loss.backward()
+            torch.nn.functional.cross_entropy(net(fx[b]), ty[b]).backward()
             opt.step()
         sched.step()
     net.eval()
-    layers = [m for m in net if isinstance(m, torch.nn.Linear)]
     weights = {"mean": mean, "std": std, "labels": np.array(LABELS)}
-    for i, m in enumerate(layers):
-        weights[f"w{i}"] = m.weight.detach().numpy().T.copy()
-        weights[f"b{i}"] = m.bias.detach().numpy().copy()
+    for i, m in enumerate(m for m in net if isinstance(m, torch.nn.Linear)):
+        weights[f"w{i}"] = m.weight.detach().double().numpy().T.copy()
+        weights[f"b{i}"] = m.bias.detach().double().numpy().copy()
     return weights
 
 
@@ -115,15 +111,20 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--cards", nargs="+", required=True, help="directories written by `srenv cards`")
     ap.add_argument("--out", required=True, help="model file (.npz)")
     ap.add_argument("--report", help="JSON report: every candidate's validation accuracy, the test confusion")
-    ap.add_argument("--epochs", type=int, default=60)
+    ap.add_argument("--epochs", type=int, default=40)
     ap.add_argument("--seed", type=int, default=0)
     a = ap.parse_args(argv)
     data = load_sets(a.cards)
     split_idx = {s: np.flatnonzero(data["split"] == s) for s in ("train", "validation", "test")}
     report: dict = {"n_cards": {s: len(i) for s, i in split_idx.items()}, "candidates": {}}
     best, best_acc = None, -1.0
+    tr = split_idx["train"]
+    pools = {}  # AUG_COPIES augmented versions of every training card (or the clean cards), drawn once
+    for aug in {a for _, a in CANDIDATES.values()}:
+        pools[aug] = featurise(data["polished_rod_position_m"][tr], data["polished_rod_load_n"][tr],
+                               data["label"][tr], np.random.default_rng(a.seed), aug, AUG_COPIES if aug else 1)
     for name, (widths, aug) in CANDIDATES.items():
-        w = fit(data, split_idx, widths, aug, a.epochs, a.seed)
+        w = fit(*pools[aug], widths, a.epochs, a.seed)
         acc_aug, _ = evaluate(w, data, split_idx["validation"], True, a.seed + 1)
         acc_clean, _ = evaluate(w, data, split_idx["validation"], False, a.seed + 1)
         report["candidates"][name] = {"validation_accuracy_augmented": acc_aug,
