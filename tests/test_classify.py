@@ -29,8 +29,7 @@ LEFT_OUT = {"plunger_out_of_barrel": "no such label among the twelve", "sand": "
 MISSED: dict[str, str] = {
     "normal": "measured: classified both_valves_leak (0.76); full 0.11",
     "gas_interference": "measured: classified fluid_pound (1.00)",
-    "rod_part": "measured: classified both_valves_leak (1.00): the plate's loads are not zero-based, so the "
-                "min/max load ratio that marks parted rods in field units does not survive the plate's scale",
+    "rod_part": "measured: classified both_valves_leak (1.00)",
     "tagging_up": "measured: classified standing_valve_leak (0.60), tagging_up 0.40",
 }
 

@@ -10,6 +10,7 @@ attempt number.
 from __future__ import annotations
 
 import dataclasses
+import functools
 import io
 import math
 import zipfile
@@ -24,10 +25,11 @@ CARDS_PER_WELL = 4
 WELL_SEED0 = 10_000_000  # card wells: disjoint from the family's train (0...) and test (1 000 000...) seeds
 SPLITS = ("train", "validation", "test")
 MAX_ATTEMPTS = 8
-DAMPING_RANGE = (0.02, 0.4)   # Gibbs factor, log-uniform: from ringing strings to strongly damped ones
+DAMPING_RANGE = (0.02, 0.8)   # Gibbs factor, log-uniform: from ringing strings to strongly damped ones
+CONVENTIONAL_SHARE = 0.5      # cards driven by a catalogue beam unit (four-bar linkage), the rest harmonic
 MIN_SEVERITY = 0.25           # below it a condition's card is hard to tell from a full pump's
 WELL_COLUMNS = ("depth_m", "plunger_diameter_mm", "spm", "stroke_length_m", "damping_factor",
-                "max_inclination_deg", "friction_coefficient", "fluid_density_kg_m3")
+                "max_inclination_deg", "friction_coefficient", "fluid_density_kg_m3", "conventional_unit")
 ARRAYS = ("polished_rod_position_m", "polished_rod_load_n", "pump_position_m", "pump_load_n")
 
 
@@ -45,6 +47,7 @@ class Draw:
     spm: float
     stroke_length_m: float
     damping_factor: float
+    conventional: bool = False
 
 
 def draw(seed: int, index: int, attempt: int, labels: tuple[str, ...]) -> Draw:
@@ -54,7 +57,25 @@ def draw(seed: int, index: int, attempt: int, labels: tuple[str, ...]) -> Draw:
     severity = 0.0 if label == "full" else float(rng.uniform(MIN_SEVERITY, 1.0))
     lo, hi = DAMPING_RANGE
     return Draw(well_seed, label, severity, float(rng.uniform()), float(rng.uniform()),
-                float(math.exp(rng.uniform(math.log(lo), math.log(hi)))))
+                float(math.exp(rng.uniform(math.log(lo), math.log(hi)))), bool(rng.uniform() < CONVENTIONAL_SHARE))
+
+
+@functools.lru_cache(maxsize=1)
+def _unit_strokes() -> tuple[tuple[float, str, int], ...]:
+    """(stroke, designation, crank hole) of every catalogue unit and hole."""
+    from ..surface_unit.unit_catalogue import conventional_unit, get_unit, list_units
+
+    return tuple((conventional_unit(d, h).stroke_m, d, h) for d in list_units()
+                 for h in range(len(get_unit(d).crank_radii_m)))
+
+
+def _surface(surface, spm: float, stroke: float, conventional: bool):
+    """Harmonic at the drawn stroke, or the catalogue unit and hole whose stroke is nearest."""
+    if not conventional:
+        return dataclasses.replace(surface, spm=spm, stroke_length_m=stroke)
+    s, unit, hole = min(_unit_strokes(), key=lambda u: abs(u[0] - stroke))
+    return dataclasses.replace(surface, motion="conventional", unit=unit, crank_hole=hole, spm=spm,
+                               stroke_length_m=round(s, 4))
 
 
 def card_config(d: Draw):
@@ -67,7 +88,7 @@ def card_config(d: Draw):
     spm = round(c.spm_min + d.spm * (c.spm_max - c.spm_min), 3)
     stroke = round(c.stroke_min_m + d.stroke_length_m * (c.stroke_max_m - c.stroke_min_m), 4)
     # the operating point and damping on the parsed config (checked again with the condition's overrides)
-    well = dataclasses.replace(well, surface=dataclasses.replace(well.surface, spm=spm, stroke_length_m=stroke),
+    well = dataclasses.replace(well, surface=_surface(well.surface, spm, stroke, d.conventional),
                                damping=dataclasses.replace(well.damping, model="dimensionless",
                                                            damping_factor=round(d.damping_factor, 6)))
     return condition_config(well, d.label, d.severity)
@@ -97,7 +118,8 @@ def make_card(seed: int, index: int, labels: tuple[str, ...]) -> dict:
                 "spm": cfg.surface.spm, "stroke_length_m": cfg.surface.stroke_length_m,
                 "damping_factor": cfg.damping.damping_factor,
                 "max_inclination_deg": max([s.inclination_deg for s in cfg.survey.stations] or [0.0]),
-                "friction_coefficient": cfg.friction.coefficient, "fluid_density_kg_m3": cfg.fluid.density_kg_m3}
+                "friction_coefficient": cfg.friction.coefficient, "fluid_density_kg_m3": cfg.fluid.density_kg_m3,
+                "conventional_unit": float(cfg.surface.motion == "conventional")}
         return {"arrays": arrays, "label": d.label, "severity": d.severity, "well_seed": d.well_seed,
                 "fillage": card.fillage, "period_s": float(card.t_s[-1]), "well": well}
     raise RuntimeError(f"card {index} of set {seed}: no simulation succeeded in {MAX_ATTEMPTS} draws")

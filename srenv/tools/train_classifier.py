@@ -100,6 +100,11 @@ def evaluate(weights: dict, data: dict, idx: np.ndarray, aug: bool, seed: int) -
     return float(np.mean(pred == t)), cm
 
 
+def _read_weights(path: str) -> dict:
+    with np.load(path, allow_pickle=False) as z:
+        return {k: z[k] for k in z.files}
+
+
 def write_model(path: str, weights: dict) -> None:
     from ..analysis.card_set import write_npz
 
@@ -113,6 +118,8 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--report", help="JSON report: every candidate's validation accuracy, the test confusion")
     ap.add_argument("--epochs", type=int, default=40)
     ap.add_argument("--seed", type=int, default=0)
+    ap.add_argument("--compare", nargs="*", default=[], help="existing model files to score on the same "
+                    "validation cards as candidates (e.g. the shipped model)")
     a = ap.parse_args(argv)
     data = load_sets(a.cards)
     split_idx = {s: np.flatnonzero(data["split"] == s) for s in ("train", "validation", "test")}
@@ -123,8 +130,11 @@ def main(argv: list[str] | None = None) -> int:
     for aug in {a for _, a in CANDIDATES.values()}:
         pools[aug] = featurise(data["polished_rod_position_m"][tr], data["polished_rod_load_n"][tr],
                                data["label"][tr], np.random.default_rng(a.seed), aug, AUG_COPIES if aug else 1)
-    for name, (widths, aug) in CANDIDATES.items():
-        w = fit(*pools[aug], widths, a.epochs, a.seed)
+    models = {name: (lambda widths=widths, aug=aug: fit(*pools[aug], widths, a.epochs, a.seed))
+              for name, (widths, aug) in CANDIDATES.items()}
+    models.update({path: (lambda path=path: _read_weights(path)) for path in a.compare})  # trained before
+    for name, make in models.items():
+        w = make()
         acc_aug, _ = evaluate(w, data, split_idx["validation"], True, a.seed + 1)
         acc_clean, _ = evaluate(w, data, split_idx["validation"], False, a.seed + 1)
         report["candidates"][name] = {"validation_accuracy_augmented": acc_aug,
