@@ -140,3 +140,19 @@ def test_cards_cli(tmp_path, capsys) -> None:
         main(["cards", "--n", "2", "--out", str(tmp_path / "t"), "--conditions", "sticky"])
     assert exc.value.code == 2
     assert "--conditions" in capsys.readouterr().err
+    (tmp_path / "f").write_text("x")
+    (tmp_path / "link").symlink_to(tmp_path / "s")
+    for out in ("f", "link", "missing/deeper"):  # a file, a symbolic link, no parent directory
+        assert main(["cards", "--n", "1", "--out", str(tmp_path / out), "--no-progress"]) == 2
+        err = capsys.readouterr().err.strip()
+        assert len(err.splitlines()) == 1 and "--out" in err
+
+
+def test_stroke_summary_names_the_condition(well) -> None:
+    from srenv.analysis.stroke_summary import summarize
+    from srenv.simulation.simulator import Simulator
+
+    for label in ("full", "tagging_up"):
+        sim = Simulator(condition_config(well, label, 0.5))
+        sim.reset()
+        assert summarize(sim, sim.run_strokes(2))["condition"] == label

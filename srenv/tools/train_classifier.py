@@ -25,7 +25,8 @@ from ..analysis.card_shape import BadCard, features
 from ..physics.conditions import LABELS
 
 # name -> (hidden widths, augmented training); chosen on augmented validation accuracy
-CANDIDATES = {"mlp_aug": ((128, 128), True), "mlp_clean": ((128, 128), False), "linear_aug": ((), True)}
+CANDIDATES = {"mlp_aug": ((128, 128), True), "mlp_clean": ((128, 128), False), "linear_aug": ((), True),
+              "mlp_wide_aug": ((256, 256), True)}
 VALIDATION_DRAWS = 3  # augmented copies of each validation card
 AUG_COPIES = 6  # augmented copies of each training card (the training pool)
 BATCH = 512
@@ -118,6 +119,7 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--report", help="JSON report: every candidate's validation accuracy, the test confusion")
     ap.add_argument("--epochs", type=int, default=40)
     ap.add_argument("--seed", type=int, default=0)
+    ap.add_argument("--candidates", nargs="*", choices=sorted(CANDIDATES), default=list(CANDIDATES))
     ap.add_argument("--compare", nargs="*", default=[], help="existing model files to score on the same "
                     "validation cards as candidates (e.g. the shipped model)")
     a = ap.parse_args(argv)
@@ -127,11 +129,11 @@ def main(argv: list[str] | None = None) -> int:
     best, best_acc = None, -1.0
     tr = split_idx["train"]
     pools = {}  # AUG_COPIES augmented versions of every training card (or the clean cards), drawn once
-    for aug in {a for _, a in CANDIDATES.values()}:
+    for aug in {CANDIDATES[c][1] for c in a.candidates}:
         pools[aug] = featurise(data["polished_rod_position_m"][tr], data["polished_rod_load_n"][tr],
                                data["label"][tr], np.random.default_rng(a.seed), aug, AUG_COPIES if aug else 1)
     models = {name: (lambda widths=widths, aug=aug: fit(*pools[aug], widths, a.epochs, a.seed))
-              for name, (widths, aug) in CANDIDATES.items()}
+              for name, (widths, aug) in CANDIDATES.items() if name in a.candidates}
     models.update({path: (lambda path=path: _read_weights(path)) for path in a.compare})  # trained before
     for name, make in models.items():
         w = make()
