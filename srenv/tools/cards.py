@@ -69,6 +69,14 @@ def check_out_dir(path: str) -> Path:
     return p
 
 
+def _worker_init() -> None:
+    # the command's SIGTERM handler (raise KeyboardInterrupt, for its own cleanup) is not the workers':
+    # the pool ends them with SIGTERM after an interruption, and they should just stop
+    import signal
+
+    signal.signal(signal.SIGTERM, signal.SIG_DFL)
+
+
 def _one(job: tuple[int, int, tuple[str, ...]]) -> dict:
     from ..analysis.card_set import make_card
 
@@ -91,11 +99,13 @@ def simulate_set(n: int, seed: int, labels: tuple[str, ...], workers: int, progr
         import multiprocessing as mp
 
         ctx = mp.get_context("spawn" if sys.platform == "darwin" else "fork")
-        with ctx.Pool(workers) as pool:
+        with ctx.Pool(workers, initializer=_worker_init) as pool:
             out = []
             for card in pool.imap(_one, jobs, chunksize=max(1, min(16, n // (4 * workers) or 1))):
                 out.append(card)
                 bar.update()
+            pool.close()  # let the workers finish on their own: no SIGTERM at the end of a good run
+            pool.join()
             return out
     finally:
         bar.close()
