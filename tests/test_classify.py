@@ -105,3 +105,13 @@ def test_bad_model_exits_2(tmp_path, capsys) -> None:
 def test_shipped_model_is_data() -> None:
     clf = CardClassifier.load()
     assert clf.labels == LABELS
+
+
+def test_srenv_simulate_csv_is_a_card(tmp_path, capsys) -> None:
+    """srenv's own simulate CSV (several strokes, more columns): its last stroke is classified."""
+    out = tmp_path / "run.csv"
+    assert main(["simulate", "paper_fig3_vertical", "--strokes", "3", "--out", str(out)]) == 0
+    capsys.readouterr()
+    assert main(["classify", str(out), "--json"]) == 0
+    row = json.loads(capsys.readouterr().out.splitlines()[0])
+    assert row["label"] == "full" and row["file"] == str(out)
