@@ -14,11 +14,11 @@ from pathlib import Path
 import matplotlib
 
 matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
+import matplotlib.pyplot as plt
 
-from srenv.analysis.condition_card import condition_config, simulate_card  # noqa: E402
-from srenv.config import load_config  # noqa: E402
-from srenv.physics.conditions import LABELS  # noqa: E402
+from srenv.analysis.condition_card import condition_config, simulate_card
+from srenv.config import load_config
+from srenv.physics.conditions import LABELS
 
 
 def main() -> None:
