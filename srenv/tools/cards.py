@@ -13,7 +13,7 @@ import os
 import sys
 from pathlib import Path
 
-MAX_CARDS = 10_000_000
+MAX_CARDS = 200_000  # the set is held in memory: 200 000 cards x 4 arrays x 256 points x 8 B = 1.6 GB
 MAX_WORKERS = 256
 
 
