@@ -1,5 +1,5 @@
 """Argument types shared by the command lines (``srenv`` and its ``sweep``, ``diagnose`` and ``fit``
-subcommands): a bad value is one line naming the flag, the value and what is expected (argparse turns it
+subcommands, and ``python -m agents``): a bad value is one line naming the flag, the value and what is expected (argparse turns it
 into exit status 2)."""
 
 from __future__ import annotations
@@ -29,6 +29,14 @@ def positive_int(name: str, hi: int | None = None) -> Callable[[str], int]:
         # digits only, and few of them: int() of a 100 000-digit string is itself slow
         if not text.isdigit() or len(text) > 18 or int(text) <= 0 or (hi is not None and int(text) > hi):
             raise argparse.ArgumentTypeError(f"{name} = {text[:40]!r}: expected a positive integer{limit}")
+        return int(text)
+    return parse
+
+
+def nonneg_int(name: str) -> Callable[[str], int]:
+    def parse(text: str) -> int:
+        if not text.isdigit() or len(text) > 18:
+            raise argparse.ArgumentTypeError(f"{name} = {text[:40]!r}: expected a non-negative integer")
         return int(text)
     return parse
 

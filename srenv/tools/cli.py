@@ -173,6 +173,9 @@ def build_parser() -> argparse.ArgumentParser:
     from ..analysis.fit import add_parser as add_fit
 
     add_fit(sub)
+    from .validate import add_parser as add_validate  # field records (docs/realism.md)
+
+    add_validate(sub)
     from .cards import add_parser as add_cards  # pump conditions (docs/conditions.md)
 
     add_cards(sub)
