@@ -6,6 +6,11 @@ highest positions into the up branch (bottom -> top) and the down branch (top ->
 load is read at ``N_GRID`` fixed positions. One more number survives any change of units: the load ratio
 min / max (field loads are tension from the load cell's zero, so a unit change multiplies both): thin
 cards high above zero (parted rods, a flowing well) keep it near 1.
+
+Time order: the polished rod does positive work over a stroke (the loop integral of load d(position) is
+positive: the up branch carries the higher load), so a card whose loop integral is negative was stored
+with its time reversed (some field exports are) and is read backwards. Every simulated card has positive
+work, so this changes no training card.
 """
 
 from __future__ import annotations
@@ -45,6 +50,9 @@ def features(position, load) -> np.ndarray:
         raise BadCard("the card's position does not vary (no stroke)")
     if yr <= 1e-12 * max(1.0, abs(float(y.max()))):
         raise BadCard("the card's load does not vary")
+    xc, yc = np.r_[x, x[:1]], np.r_[y, y[:1]]
+    if float(np.sum(0.5 * (yc[1:] + yc[:-1]) * np.diff(xc))) < 0.0:  # stored with time reversed
+        x, y = x[::-1], y[::-1]
     ymax, ymin = float(y.max()), float(y.min())
     ratio = float(np.clip(ymin / ymax, -1.0, 1.0)) if ymax > 0 else 0.0
     xn = (x - x.min()) / xr

@@ -115,3 +115,12 @@ def test_srenv_simulate_csv_is_a_card(tmp_path, capsys) -> None:
     assert main(["classify", str(out), "--json"]) == 0
     row = json.loads(capsys.readouterr().out.splitlines()[0])
     assert row["label"] == "full" and row["file"] == str(out)
+
+
+def test_a_card_stored_backwards_reads_the_same() -> None:
+    """Field exports are sometimes stored with time reversed: the card's positive work tells the order."""
+    from srenv.analysis.card_shape import features
+
+    card = simulate_card(condition_config(load_config("paper_fig3_vertical"), "tagging_down", 0.7))
+    x, y = card.polished_rod_position_m, card.polished_rod_load_n
+    np.testing.assert_allclose(features(x[::-1], y[::-1]), features(x, y), atol=1e-9)
