@@ -124,3 +124,9 @@ def test_a_card_stored_backwards_reads_the_same() -> None:
     card = simulate_card(condition_config(load_config("paper_fig3_vertical"), "tagging_down", 0.7))
     x, y = card.polished_rod_position_m, card.polished_rod_load_n
     np.testing.assert_allclose(features(x[::-1], y[::-1]), features(x, y), atol=1e-9)
+
+
+def test_the_wheel_ships_the_model(wheel) -> None:
+    import zipfile
+
+    assert "srenv/models/classifier.npz" in zipfile.ZipFile(wheel).namelist()
