@@ -1,7 +1,7 @@
 """Train the condition classifier on simulated cards only (docs/conditions.md).
 
     python -m srenv.tools.train_classifier --cards DIR [DIR ...] --out srenv/models/classifier.npz \
-        [--report docs/classifier_report.json] [--epochs 60] [--seed 0]
+        [--report docs/classifier_report.json] [--epochs 30] [--seed 0] [--candidates ...] [--compare M.npz ...]
 
 Reads the card sets written by ``srenv cards`` (their ``train`` split to fit, ``validation`` to choose the
 model; the ``test`` split is scored once at the end, for the docs), fits each candidate of CANDIDATES on
@@ -117,7 +117,7 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--cards", nargs="+", required=True, help="directories written by `srenv cards`")
     ap.add_argument("--out", required=True, help="model file (.npz)")
     ap.add_argument("--report", help="JSON report: every candidate's validation accuracy, the test confusion")
-    ap.add_argument("--epochs", type=int, default=40)
+    ap.add_argument("--epochs", type=int, default=30)
     ap.add_argument("--seed", type=int, default=0)
     ap.add_argument("--candidates", nargs="*", choices=sorted(CANDIDATES), default=list(CANDIDATES))
     ap.add_argument("--compare", nargs="*", default=[], help="existing model files to score on the same "
