@@ -64,6 +64,8 @@ Version history
   constraint cost, field observation. v0 (one well, stroke-per-step, unitless reward) is kept unchanged.
   Since: the opt-in ``fast_stepping`` kwarg (default off, numbers unchanged) and a native vector env
   (``gymnasium.make_vec(..., vectorization_mode="vector_entry_point")``, srenv/envs/vector.py).
+  Later: ``info["condition"]`` names the pump condition (srenv.physics.conditions.LABELS); observation,
+  reward and dynamics unchanged.
 """
 
 from __future__ import annotations
@@ -81,6 +83,7 @@ from ..analysis.metrics import resample_prescribed_card
 from ..analysis.render import CardWindow
 from ..config import ControlConfig, WellConfig, load_config
 from ..errors import ConfigError, SolverFailure
+from ..physics.conditions import condition_name
 from ..simulation.simulator import Simulator
 from ..task import well_family as wf
 from ..task.economics import COST_TERMS, REWARD_TERMS, EconomicReward
@@ -338,6 +341,7 @@ class SuckerRodV1Env(CardWindow, gym.Env):
             fast_forward_strokes=float(r.fast_forward_strokes if r is not None else 0.0),
             stick_slip_energy_j=float(r.stick_slip_j if r is not None else f.stick_slip_j),
             impact_speed_m_s=float(f.impact_m_s),
+            condition=condition_name(self.sim.cfg, f.summary.get("card_class", "full")),
         )
         solver = r.solver if r is not None else {k: int(f.summary[k]) for k in
                                                  ("certified_steps", "corrected_steps", "qp_steps", "solver_calls")}

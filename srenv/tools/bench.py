@@ -119,6 +119,9 @@ def run(repeats: int = 5, strokes: int = 10, quick: bool = False) -> dict:
     from ..envs.bench_env import v1_figures
 
     out["env_v1"] = v1_figures(repeats=max(1, repeats // 2))
+    from .bench_cards import cards_figures  # pump conditions: srenv cards / classify
+
+    out["cards"] = cards_figures(n_cards=40 if repeats < 5 else 200)
     from .bench_speed import speed_figures
 
     out.update(speed_figures(quick))

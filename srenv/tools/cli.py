@@ -176,6 +176,12 @@ def build_parser() -> argparse.ArgumentParser:
     from .validate import add_parser as add_validate  # field records (docs/realism.md)
 
     add_validate(sub)
+    from .cards import add_parser as add_cards  # pump conditions (docs/conditions.md)
+
+    add_cards(sub)
+    from .classify import add_parser as add_classify
+
+    add_classify(sub)
     return p
 
 
