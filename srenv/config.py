@@ -96,6 +96,7 @@ def _parse_scalar(tp: Any, value: Any, path: str, meta: dict) -> Any:
                 f" in {unit}" if unit not in ("", "-") else "")
         lo, hi = meta.get("lo"), meta.get("hi")
         what += _range_phrase(lo, hi)
+        value = _plain_number(value)
         if isinstance(value, bool) or not isinstance(value, (int, float)):
             raise ConfigError(path, value, what)
         if isinstance(value, int):
@@ -109,6 +110,17 @@ def _parse_scalar(tp: Any, value: Any, path: str, meta: dict) -> Any:
             raise ConfigError(path, value, what)
         return x
     raise TypeError(f"unsupported config type {tp} at {path}")  # programming error, not user input
+
+
+def _plain_number(value: Any) -> Any:
+    """numpy scalars (np.float32(5.0), np.int64(5): what a training loop hands the env) are numbers."""
+    import numbers
+
+    if isinstance(value, numbers.Integral) and not isinstance(value, (bool, int)):
+        return int(value)
+    if isinstance(value, numbers.Real) and not isinstance(value, (bool, int, float)):
+        return float(value)
+    return value
 
 
 # integers beyond this are refused before any conversion to float (every bound is far below it)
@@ -200,8 +212,15 @@ def apply_overrides(data: dict, overrides: dict[str, Any] | list[str] | None) ->
     import copy
 
     data = copy.deepcopy(data)
-    if not overrides:
+    if overrides is None or (isinstance(overrides, (dict, list)) and not overrides):
         return data
+    if not isinstance(overrides, (dict, list)):
+        raise ConfigError("overrides", overrides, "a mapping {'section.field': value} (or a list of "
+                          "'section.field=value' strings)")
+    for key in overrides:
+        if not isinstance(key, str):
+            raise ConfigError("overrides", key, "'section.field' strings as keys" if isinstance(overrides, dict)
+                              else "'section.field=value' strings")
     items = overrides.items() if isinstance(overrides, dict) else []
     if isinstance(overrides, list):
         pairs = []
