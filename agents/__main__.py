@@ -10,6 +10,7 @@ from __future__ import annotations
 import argparse
 import json
 import math
+import signal
 import sys
 from pathlib import Path
 from typing import Any
@@ -17,6 +18,7 @@ from typing import Any
 import yaml
 
 EXIT_BAD_INPUT = 2
+EXIT_INTERRUPTED = 130
 QUICK_CONFIG = Path(__file__).resolve().parent.parent / "configs" / "train" / "ppo_quick.yaml"
 QUICK_BENCHMARK = Path(__file__).resolve().parent.parent / "configs" / "benchmark" / "v1_quick.yaml"
 
@@ -27,16 +29,15 @@ class _Parser(argparse.ArgumentParser):
         sys.exit(EXIT_BAD_INPUT)
 
 
-def _nonneg_int(text: str) -> int:
-    if not text.isdigit():
-        raise argparse.ArgumentTypeError(f"{text!r}: expected a non-negative integer")
-    return int(text)
+def _flag(command: str, flag: str) -> Any:
+    """The argparse type of a declared flag (agents/inputs.py: type, unit, range)."""
+    from .inputs import FLAGS
+
+    return FLAGS[command][flag].parse
 
 
-def _positive_int(text: str) -> int:
-    if not text.isdigit() or int(text) == 0:
-        raise argparse.ArgumentTypeError(f"{text!r}: expected a positive integer")
-    return int(text)
+def _raise_on_sigterm(signum: int, frame: object) -> None:
+    raise KeyboardInterrupt(f"signal {signum}")  # every `finally` runs: workers stopped, temporaries removed
 
 
 def _key_value(text: str) -> tuple[str, Any]:
@@ -44,7 +45,12 @@ def _key_value(text: str) -> tuple[str, Any]:
     key, sep, value = text.partition("=")
     if not sep or not key:
         raise argparse.ArgumentTypeError(f"{text!r}: expected KEY=VALUE")
-    return key, yaml.safe_load(value)
+    from srenv.safe_yaml import _yaml_load
+
+    try:
+        return key, _yaml_load(value)
+    except yaml.YAMLError:
+        return key, value  # a plain string, as --set reads one
 
 
 def _json_default(x: Any) -> Any:
@@ -69,10 +75,10 @@ def build_parser() -> argparse.ArgumentParser:
 
     t = sub.add_parser("train", help="train PPO/SAC from a hyperparameter YAML (SB3, or RLlib with backend: rllib)")
     t.add_argument("config", help="training YAML, e.g. configs/train/ppo_default.yaml")
-    t.add_argument("--total-timesteps", type=_positive_int, help="override n_timesteps (total, incl. resumed)")
+    t.add_argument("--total-timesteps", type=_flag("train", "--total-timesteps"), help="override n_timesteps (total, incl. resumed)")
     t.add_argument("--out", help="output directory (default runs/<config name>)")
     t.add_argument("--resume", action="store_true", help="continue from the newest checkpoint in --out")
-    t.add_argument("--n-envs", type=_positive_int,
+    t.add_argument("--n-envs", type=_flag("train", "--n-envs"),
                    help="override n_envs (default: all cores); num_env_runners for backend: rllib")
     t.add_argument("--address", help="backend: rllib: Ray cluster to join (auto, ray://host:10001); "
                                      "default a local Ray on 127.0.0.1")
@@ -82,8 +88,8 @@ def build_parser() -> argparse.ArgumentParser:
     e = sub.add_parser("evaluate", help="evaluate baselines and/or saved models on held-out seeds")
     e.add_argument("--policy", action="append", required=True,
                    help="rocking, fillage, an SB3 model .zip or an RLlib checkpoint directory; repeat to compare")
-    e.add_argument("--episodes", type=_positive_int, default=20)
-    e.add_argument("--seed", type=_nonneg_int, default=1000, help="first held-out seed (episodes use S..S+N-1)")
+    e.add_argument("--episodes", type=_flag("evaluate", "--episodes"), default=20)
+    e.add_argument("--seed", type=_flag("evaluate", "--seed"), default=1000, help="first held-out seed (episodes use S..S+N-1)")
     e.add_argument("--config", default="default", help="well config name or YAML path")
     e.add_argument("--env-kwarg", type=_key_value, action="append", default=[], metavar="KEY=VALUE",
                    help="extra keyword for gymnasium.make (value read as YAML)")
@@ -99,9 +105,10 @@ def build_parser() -> argparse.ArgumentParser:
     q = sub.add_parser("quickstart", help="the v1 benchmark on a small scale: tuned baselines vs PPO/SAC")
     q.add_argument("--config", default=str(QUICK_BENCHMARK), help="benchmark YAML (default v1_quick.yaml)")
     q.add_argument("--out", default="runs/quickstart")
-    q.add_argument("--total-timesteps", type=_positive_int, help="override every agent run's n_timesteps")
-    q.add_argument("--episodes", type=_positive_int, help="override the number of test episodes")
-    q.add_argument("--seed", type=_nonneg_int, help="first test seed (episodes use S..S+N-1)")
+    q.add_argument("--total-timesteps", type=_flag("quickstart", "--total-timesteps"),
+                   help="override every agent run's n_timesteps")
+    q.add_argument("--episodes", type=_flag("quickstart", "--episodes"), help="override the number of test episodes")
+    q.add_argument("--seed", type=_flag("quickstart", "--seed"), help="first test seed (episodes use S..S+N-1)")
 
     b = sub.add_parser("benchmark", help="tune baselines, train PPO/SAC, test all on unseen wells (v1)")
     b.add_argument("config", help="benchmark YAML, e.g. configs/benchmark/v1.yaml")
@@ -112,7 +119,7 @@ def build_parser() -> argparse.ArgumentParser:
                        "exit 1 if a return differs")
     r.add_argument("report", help="benchmark JSON, e.g. docs/benchmark.json (models are read next to it)")
     r.add_argument("--policy", action="append", help="a policy of the report; repeat (default: all but the oracle)")
-    r.add_argument("--episodes", type=_positive_int, default=3, help="the first N test episodes (default 3)")
+    r.add_argument("--episodes", type=_flag("replay", "--episodes"), default=3, help="the first N test episodes (default 3)")
     return p
 
 
@@ -207,11 +214,18 @@ def main(argv: list[str] | None = None) -> int:
     commands = {"train": cmd_train, "evaluate": cmd_evaluate, "quickstart": cmd_quickstart,
                 "convert-stats": cmd_convert_stats, "benchmark": cmd_benchmark,
                 "replay": cmd_replay}
+    previous = signal.signal(signal.SIGTERM, _raise_on_sigterm) if argv is None else None
     try:
         result = commands[args.command](args)
     except (ConfigError, TrainConfigError, ValueError, FileNotFoundError) as exc:
         print(f"agents: error: {exc}", file=sys.stderr)
         return EXIT_BAD_INPUT
+    except KeyboardInterrupt:  # Ctrl-C or SIGTERM: one line, status 130 (no traceback)
+        print("agents: interrupted", file=sys.stderr)
+        return EXIT_INTERRUPTED
+    finally:
+        if previous is not None:
+            signal.signal(signal.SIGTERM, previous)
     _print_json(result)
     return 1 if result.get("reproduced") is False else 0  # replay: a return differs from the report's
 

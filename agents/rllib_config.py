@@ -98,9 +98,9 @@ def parse_rllib_config(data: Any, source: str = "<dict>") -> RLlibTrainConfig:
     algo = str(data.get("algo", "")).lower()
     configs = algorithm_configs()
     _expect(algo in configs, "algo", data.get("algo"), "one of " + ", ".join(configs))
-    runners = data.get("num_env_runners", 2)
-    _expect(isinstance(runners, int) and not isinstance(runners, bool) and runners >= 0, "num_env_runners",
-            runners, "a non-negative integer")
+    from .inputs import FIELDS
+
+    runners = FIELDS["train"]["num_env_runners"].check(data.get("num_env_runners", 2), "train config: num_env_runners")
     num_cpus = data.get("num_cpus")
     _expect(num_cpus is None or (isinstance(num_cpus, int) and num_cpus > 0), "num_cpus", num_cpus,
             "a positive integer or null")

@@ -60,8 +60,10 @@ class ObsNormalizer:
 
     @classmethod
     def load(cls, path: str) -> ObsNormalizer:
-        with np.load(path, allow_pickle=False) as z:
-            return cls(z["mean"], z["var"], float(z["clip_obs"]), float(z["epsilon"]))
+        from .inputs import obs_norm_npz  # checked: keys, shapes, finite values (one line on any defect)
+
+        z = obs_norm_npz(path)
+        return cls(z["mean"], z["var"], z["clip_obs"], z["epsilon"])
 
     def save(self, path: str) -> None:
         tmp = f"{path}.tmp.npz"

@@ -93,7 +93,11 @@ def _expect(cond: bool, key: str, value: Any, what: str) -> None:
 
 
 def _positive_int(data: dict, key: str, default: int) -> int:
+    from .inputs import FIELDS
+
     v = data.get(key, default)
+    if key in FIELDS["train"]:  # declared with a bound (agents/inputs.py)
+        return FIELDS["train"][key].check(v, f"train config: {key}")
     _expect(isinstance(v, int) and not isinstance(v, bool) and v > 0, key, v, "a positive integer")
     return int(v)
 
@@ -120,8 +124,9 @@ def parse_train_config(data: Any, source: str = "<dict>") -> TrainConfig:
             "sb3 here (backend: rllib is read by agents.rllib_config)")
     algo = str(data.get("algo", "")).lower()
     _expect(algo in algorithms(), "algo", data.get("algo"), "one of " + ", ".join(algorithms()))
-    n_envs = data.get("n_envs") or 0
-    _expect(isinstance(n_envs, int) and n_envs >= 0, "n_envs", n_envs, "a positive integer or null")
+    from .inputs import FIELDS
+
+    n_envs = FIELDS["train"]["n_envs"].check(data.get("n_envs") or 0, "train config: n_envs")
     normalize = data.get("normalize", False)
     _expect(isinstance(normalize, (bool, dict)), "normalize", normalize, "true, false or a mapping")
     env_kwargs = data.get("env_kwargs") or {}
