@@ -128,8 +128,8 @@ def report_episodes(policy: Mapping, name: str) -> dict[int, float]:
     for i, e in enumerate(eps):
         if not isinstance(e, Mapping) or "seed" not in e or "reward" not in e:
             raise ConfigError(f"{where}[{i}]", e, "a mapping with a seed and a reward")
-        seed = field("report", "episodes[].seed", e["seed"], f"{where}[{i}].")
-        out[seed] = field("report", "episodes[].reward", e["reward"], f"{where}[{i}].")
+        seed = FIELDS["report"]["episodes[].seed"].check(e["seed"], f"{where}[{i}].seed")
+        out[seed] = FIELDS["report"]["episodes[].reward"].check(e["reward"], f"{where}[{i}].reward")
     return out
 
 

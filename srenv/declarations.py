@@ -87,20 +87,39 @@ class Number:
                 raise ConfigError(name, value, self.expected())
             x: Any = int(value)
         else:
-            x = float(value)
+            try:
+                x = float(value)
+            except OverflowError:  # an integer beyond any float (10**400)
+                raise ConfigError(name, value, self.expected()) from None
         if not self._in_range(float(x)):
             raise ConfigError(name, value, self.expected())
         return x
+
+    def _below(self) -> float:
+        """A value just out of range at the bottom (the bound itself when it is excluded)."""
+        if self.lo_open:
+            return self.lo
+        return self.lo - 1 if self.kind is int else self.lo - (0.5 * abs(self.lo) + 1.0)
 
     def bad_texts(self) -> list[str]:
         """Values every declaration must refuse: not numbers, not finite, out of range on either side."""
         out = ["abc", "nan", "inf", "-inf", "1" + "0" * 400]
         if self.kind is int:
             out += ["2.5", "1e3"]
-        below = self.lo if self.lo_open else (self.lo - 1 if self.kind is int or self.lo == 0 else self.lo * 0.5)
-        out.append(f"{below:g}")
+        out.append(f"{self._below():g}")
         if self.hi is not None:
             out.append(str(int(self.hi) + 1) if self.kind is int else f"{self.hi * 1.5 + 1:g}")
+        return out
+
+
+    def bad_values(self) -> list[Any]:
+        """File values every declaration must refuse (what a YAML/JSON reader can hand over)."""
+        out: list[Any] = ["abc", None, True, [1], {"a": 1}, float("nan"), float("inf"), 10**400]
+        if self.kind is int:
+            out.append(2.5)
+        out.append(self._below())
+        if self.hi is not None:
+            out.append(int(self.hi) + 1 if self.kind is int else self.hi * 1.5 + 1)
         return out
 
 
