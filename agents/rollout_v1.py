@@ -22,6 +22,7 @@ from __future__ import annotations
 import json
 import math
 import os
+import signal
 from collections.abc import Callable, Iterable, Sequence
 from concurrent.futures import ProcessPoolExecutor
 from multiprocessing import get_context
@@ -210,11 +211,16 @@ class Runner:
 
     def __enter__(self) -> Self:
         if self.workers > 1:
-            self._pool = ProcessPoolExecutor(self.workers, mp_context=get_context("spawn"))
+            # workers ignore Ctrl-C (the terminal sends it to the whole group): the driver reports it in one line
+            self._pool = ProcessPoolExecutor(self.workers, mp_context=get_context("spawn"), initializer=signal.signal,
+                                             initargs=(signal.SIGINT, signal.SIG_IGN))
         return self
 
     def __exit__(self, *exc: object) -> None:
         if self._pool is not None:
+            if exc[0] is not None:  # an error or Ctrl-C: stop the running episodes too, not only the queued ones
+                for proc in list(getattr(self._pool, "_processes", {}).values()):
+                    proc.terminate()
             self._pool.shutdown(cancel_futures=True)
             self._pool = None
 

@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import math
 import os
+import signal
 import time
 import warnings
 from typing import Any
@@ -103,7 +104,9 @@ def run_local(cases: list[Case], duration_s: float, settle_fraction: float, work
     from tqdm import tqdm
 
     n = min(workers or os.cpu_count() or 1, len(cases))
-    pool = multiprocessing.get_context("spawn").Pool(n)
+    # workers ignore Ctrl-C (the terminal sends it to the whole group): the driver alone reports it, in one line
+    pool = multiprocessing.get_context("spawn").Pool(n, initializer=signal.signal, initargs=(signal.SIGINT,
+                                                                                            signal.SIG_IGN))
     try:
         out: list[dict[str, float] | None] = [None] * len(cases)
         jobs = [(c.index, c.raw, duration_s, settle_fraction) for c in cases]
