@@ -62,6 +62,7 @@ from .benchmark_report import (
 )
 from .distill_v1 import distill_job
 from .ensemble_v1 import ensemble_spec
+from .inputs import check_output_dir
 from .rollout_v1 import Runner, episode_jobs
 from .tuning import Evaluator, TuningSet, coordinate_search, search_best_constant
 
@@ -137,6 +138,7 @@ def run_benchmark(cfg: dict[str, Any], out_dir: str | Path, quick: bool = False,
                   log: Any = None) -> dict[str, Any]:
     log = log or (lambda m: print(m, file=sys.stderr, flush=True))
     out = Path(out_dir)
+    check_output_dir(out, ("benchmark.json", "benchmark.md", "figures/benchmark_v1.png"))  # before any work
     t_start = time.perf_counter()
     wall: dict[str, float] = {}
     env_id, env_kwargs = cfg["env_id"], cfg["env_kwargs"]

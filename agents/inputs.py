@@ -194,6 +194,20 @@ def obs_norm_npz(path: str | Path) -> dict[str, Any]:
     return out
 
 
+def check_output_dir(out: Path, names: tuple[str, ...]) -> None:
+    """The files a command will write under ``out``, checked before any work: ``out`` a directory (or
+    absent), no file a directory or a symbolic link (outputs never write through nor replace a link)."""
+    if out.exists() and not out.is_dir():
+        raise ConfigError("--out-dir", str(out), "a directory (this is a file)")
+    for name in names:
+        p = out / name
+        if p.is_symlink():
+            raise ConfigError("--out-dir", str(p), "no symbolic link among the outputs (an output is never "
+                              "written through a link nor replaces one)")
+        if p.is_dir():
+            raise ConfigError("--out-dir", str(p), "a file path for this output (it is a directory)")
+
+
 def policy_json(meta: Any, path: str | Path) -> dict[str, Any]:
     """An RLlib ``srenv_policy.json``: a mapping with the keys the loader uses, shapes bounded."""
     where = f"{path}"
