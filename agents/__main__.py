@@ -10,6 +10,7 @@ from __future__ import annotations
 import argparse
 import json
 import math
+import numbers
 import signal
 import sys
 from pathlib import Path
@@ -60,13 +61,15 @@ def _json_default(x: Any) -> Any:
 def _print_json(obj: dict) -> None:
     # NaN/inf are not JSON: report them as null so every reader can parse the line
     def clean(v: Any) -> Any:
-        if isinstance(v, float) and not math.isfinite(v):
-            return None
+        if isinstance(v, numbers.Real) and not isinstance(v, (bool, numbers.Integral)):  # numpy floats too
+            return float(v) if math.isfinite(float(v)) else None
         if isinstance(v, dict):
             return {k: clean(w) for k, w in v.items()}
+        if isinstance(v, (list, tuple)):
+            return [clean(w) for w in v]
         return v
 
-    print(json.dumps(clean(obj), default=_json_default), flush=True)
+    print(json.dumps(clean(obj), default=_json_default, allow_nan=False), flush=True)
 
 
 def build_parser() -> argparse.ArgumentParser:
