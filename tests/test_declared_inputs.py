@@ -487,3 +487,26 @@ def test_fit_refuses_a_param_without_effect_and_its_json_is_strict(tmp_path: Pat
                       "--strokes", "1", "--out", "f.yaml"], capsys)
     _one_line(rc, err, "--param", "economics.oil_price_usd_m3", "change the simulated card")
     assert not (tmp_path / "f.yaml").exists()
+
+
+def test_agents_benchmark_refuses_a_symlinked_output_before_any_work(tmp_path: Path,
+                                                                     capsys: pytest.CaptureFixture) -> None:
+    root = Path(__file__).resolve().parents[1]
+    out = tmp_path / "o"
+    out.mkdir()
+    (tmp_path / "target.json").write_text("keep me")
+    os.symlink(tmp_path / "target.json", out / "benchmark.json")
+    rc, err = _agents(["benchmark", str(root / "configs" / "benchmark" / "v1_quick.yaml"), "--quick", "--out-dir",
+                       str(out)], capsys)
+    _one_line(rc, err, "--out-dir", "symbolic link")
+    assert (tmp_path / "target.json").read_text() == "keep me" and sorted(os.listdir(out)) == ["benchmark.json"]
+
+
+def test_agents_summary_line_is_strict_json(capsys: pytest.CaptureFixture) -> None:
+    from agents.__main__ import _print_json
+
+    _print_json({"a": [float("nan"), np.float32("inf"), 1, np.float64(2.5)], "b": {"c": (np.nan,)}})
+
+    def refuse(token: str) -> None:
+        raise ValueError(token)
+    assert json.loads(capsys.readouterr().out, parse_constant=refuse) == {"a": [None, None, 1, 2.5], "b": {"c": [None]}}
