@@ -64,6 +64,10 @@ FIELDS: dict[str, dict[str, Number]] = {
         "policy_kwargs.net_arch[]": Number("policy_kwargs.net_arch[]", int, hi=MAX_NET_WIDTH,
                                            why="memory (width^2 weights per layer)"),
     },
+    "checkpoint": {
+        "num_timesteps": Number("num_timesteps", int, lo=0, hi=MAX_TIMESTEPS, lo_open=False),
+        "iterations": Number("iterations", int, lo=0, hi=MAX_TIMESTEPS, lo_open=False),
+    },
     "obs_norm": {
         "clip_obs": Number("clip_obs", float, hi=1e6),
         "epsilon": Number("epsilon", float, hi=1.0),
@@ -192,6 +196,14 @@ def obs_norm_npz(path: str | Path) -> dict[str, Any]:
             raise ConfigError(f"obs_norm {p}: {k}", a.shape, "a scalar")
         out[k] = field("obs_norm", k, a.item(), f"obs_norm {p}: ")
     return out
+
+
+def checkpoint_progress(record: Any, path: str | Path) -> tuple[int, int]:
+    """(num_timesteps, iterations) of a checkpoint's progress JSON, each declared and bounded."""
+    if not isinstance(record, Mapping) or not {"num_timesteps", "iterations"} <= set(record):
+        raise ConfigError(f"{path}", short_repr(record, 80), "a JSON mapping with num_timesteps and iterations")
+    return (field("checkpoint", "num_timesteps", record["num_timesteps"], f"{path}: "),
+            field("checkpoint", "iterations", record["iterations"], f"{path}: "))
 
 
 def check_output_dir(out: Path, names: tuple[str, ...]) -> None:

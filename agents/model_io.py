@@ -220,7 +220,7 @@ def read_stats(path: str | Path, obs_shape: tuple[int, ...]) -> ObsNormalizer | 
         clip, eps = float(rec["clip_obs"]), float(rec["epsilon"])
     except ModelFileError:
         raise
-    except (OSError, ValueError, KeyError, TypeError) as exc:
+    except (OSError, ValueError, KeyError, TypeError, AttributeError) as exc:  # AttributeError: not a mapping
         raise ModelFileError(f"{path}: not a readable statistics JSON ({type(exc).__name__}: {exc})") from None
     if mean.shape != tuple(obs_shape) or var.shape != mean.shape:
         raise ModelFileError(f"{path}: normalisation statistics of shape {mean.shape} do not fit the env's "

@@ -245,7 +245,7 @@ def _field_cases(kinds: tuple[str, ...]) -> list[Any]:
             for kind in kinds for name, d in ag_inputs.FIELDS[kind].items() for v in d.bad_values()]
 
 
-@pytest.mark.parametrize(("kind", "name", "value"), _field_cases(("benchmark", "train", "report")))
+@pytest.mark.parametrize(("kind", "name", "value"), _field_cases(tuple(ag_inputs.FIELDS)))
 def test_every_declared_file_field_refuses_bad_values(kind: str, name: str, value: Any) -> None:
     with pytest.raises(ConfigError) as ex:
         ag_inputs.field(kind, name, value, "where.")
@@ -369,6 +369,9 @@ MODEL_CASES = [("obs-shape-1e9", lambda: ag_inputs.shape([10**9], "model", "obse
                ("net-arch-dict", lambda: ag_inputs.net_arch({"pi": [64, 10**7]}, "net_arch"), "net_arch.pi[1]"),
                ("net-arch-deep", lambda: ag_inputs.net_arch([8] * 100, "net_arch"), "at most 16"),
                ("rllib-list", lambda: ag_inputs.policy_json([1, 2], "p.json"), "a JSON mapping"),
+               ("checkpoint-list", lambda: ag_inputs.checkpoint_progress([1], "ckpt"), "num_timesteps"),
+               ("checkpoint-negative", lambda: ag_inputs.checkpoint_progress({"num_timesteps": -1, "iterations": 1},
+                                                                             "ckpt"), "ckpt: num_timesteps"),
                ("rllib-missing", lambda: ag_inputs.policy_json({"algo": "PPO"}, "p.json"), "missing"),
                ("rllib-hiddens", lambda: ag_inputs.policy_json(
                    {"algo": "PPO", "model_config": {"fcnet_hiddens": [10**6]}, "observation_shape": [4],
