@@ -1,82 +1,25 @@
-"""Hardening, second round (issue 28): cases generated from the declarations (srenv/declarations.py,
-agents/inputs.py), one parametrised test per class - flags, outputs and symlinks, interruption, report and
-config fields, checkpoint and normaliser files, env kwargs and actions. A flag or field added to a
-declaration table is covered by construction; a typed flag added to a parser without a declaration fails
-``test_every_typed_flag_is_declared``.
+"""Hardening, second round (issue 28), part 1: flags, outputs and symlinks, interruption - cases generated from
+the declarations (srenv/declarations.py, agents/inputs.py), so a flag added to a declaration table is covered by
+construction, and a typed flag added to a parser without a declaration fails ``test_every_typed_flag_is_declared``.
+(Part 2, the files: tests/test_declared_files.py.)
 
-Every refusal: exit 2 (130 on interruption), one stderr line naming the flag or field, the value and what
-is expected, no traceback, nothing left behind. All cases run in-process (parsing and checks happen before
-any work), so the file runs in seconds.
+Every refusal: exit 2 (130 on interruption), one stderr line naming the flag, the value and what is expected,
+no traceback, nothing left behind. All cases run in-process (parsing and checks happen before any work).
 """
 
 from __future__ import annotations
 
 import argparse
-import json
 import os
 from pathlib import Path
 from typing import Any
 
-import numpy as np
 import pytest
+from declared_helpers import BASE_ARGV, nothing_left, one_line, run_agents, run_srenv
 
 from agents import inputs as ag_inputs
 from srenv.declarations import FLAGS, OUTPUTS
-from srenv.envs.env_kwargs import CARD_POINTS
 from srenv.errors import ConfigError, short_repr
-from srenv.tools.cli import main
-
-FIG3 = "paper_fig3_vertical"
-FIG7 = "paper_fig7_pullout"
-CARD_HEADER = "t_s,polished_rod_position_m,polished_rod_load_n"
-# the smallest valid command line of each command, flags and outputs added by the cases
-BASE_ARGV = {
-    "simulate": ["simulate", FIG3, "--out", "o.csv"],
-    "bench": ["bench"],
-    "sweep": ["sweep", FIG7, "--param", "surface.pull_velocity_m_s", "--values", "0.5", "--out", "o.csv"],
-    "diagnose": ["diagnose", "card.csv", "--config", FIG3, "--out", "o.csv"],
-    "fit": ["fit", "card.csv", "--config", FIG3, "--param", "damping.damping_factor", "--out", "f.yaml"],
-}
-
-
-def _srenv(argv: list[str], capsys: pytest.CaptureFixture) -> tuple[int, str]:
-    try:
-        rc = main(argv)
-    except SystemExit as ex:  # argparse-level refusals exit from inside main
-        rc = ex.code
-    return rc, capsys.readouterr().err
-
-
-def _agents(argv: list[str], capsys: pytest.CaptureFixture) -> tuple[int, str]:
-    from agents.__main__ import main as agents_main
-
-    try:
-        rc = agents_main(argv)
-    except SystemExit as ex:
-        rc = ex.code
-    return rc, capsys.readouterr().err
-
-
-def _one_line(rc: int, err: str, *needles: str, code: int = 2) -> str:
-    lines = [ln for ln in err.splitlines() if ln.strip()]
-    assert rc == code, err[-2000:]
-    assert len(lines) == 1 and "Traceback" not in err, err[-2000:]
-    assert len(lines[0]) < 600
-    for n in needles:
-        assert n in lines[0], (n, lines[0])
-    return lines[0]
-
-
-def _nothing_left(d: Path, before: set[str]) -> None:
-    assert sorted(set(os.listdir(d)) - before) == []
-
-
-def _card(path: Path, n: int = 200, period_s: float = 10.0) -> None:
-    t = np.arange(n) * period_s / n
-    x = 1.2 * (1 - np.cos(2 * np.pi * t / period_s))
-    f = 40e3 + 8e3 * np.sin(2 * np.pi * t / period_s)
-    np.savetxt(path, np.c_[t, x, f], delimiter=",", header=CARD_HEADER, comments="")
-
 
 # ------------------------------------------------------------------------------------------- flags
 FLAG_CASES = [pytest.param(cmd, flag, text, id=f"{cmd}{flag}={text[:12]}")
@@ -88,9 +31,9 @@ def test_every_declared_srenv_flag_refuses_bad_values(cmd: str, flag: str, text:
                                                      capsys: pytest.CaptureFixture,
                                                      monkeypatch: pytest.MonkeyPatch) -> None:
     monkeypatch.chdir(tmp_path)
-    rc, err = _srenv([*BASE_ARGV[cmd], f"{flag}={text}"], capsys)
-    _one_line(rc, err, flag, short_repr(text, 60)[:30], "expected")
-    _nothing_left(tmp_path, set())
+    rc, err = run_srenv([*BASE_ARGV[cmd], f"{flag}={text}"], capsys)
+    one_line(rc, err, flag, short_repr(text, 60)[:30], "expected")
+    nothing_left(tmp_path, set())
 
 
 AGENT_FLAG_CASES = [pytest.param(cmd, flag, text, id=f"agents-{cmd}{flag}={text[:12]}")
@@ -104,9 +47,9 @@ def test_every_declared_agents_flag_refuses_bad_values(cmd: str, flag: str, text
                                                       capsys: pytest.CaptureFixture,
                                                       monkeypatch: pytest.MonkeyPatch) -> None:
     monkeypatch.chdir(tmp_path)
-    rc, err = _agents([*AGENT_BASE[cmd], f"{flag}={text}"], capsys)
-    _one_line(rc, err, flag, "expected")
-    _nothing_left(tmp_path, set())
+    rc, err = run_agents([*AGENT_BASE[cmd], f"{flag}={text}"], capsys)
+    one_line(rc, err, flag, "expected")
+    nothing_left(tmp_path, set())
 
 
 def _typed_actions(parser: argparse.ArgumentParser) -> dict[str, dict[str, Any]]:
@@ -174,9 +117,9 @@ def test_outputs_are_checked_before_any_work(cmd: str, flag: str, path: str, nee
         else:
             argv += [flag, path]
     before = set(os.listdir(tmp_path))
-    rc, err = _srenv(argv, capsys)
-    _one_line(rc, err, "expected", *([] if path == "same" else [flag, needle]))
-    _nothing_left(tmp_path, before)
+    rc, err = run_srenv(argv, capsys)
+    one_line(rc, err, "expected", *([] if path == "same" else [flag, needle]))
+    nothing_left(tmp_path, before)
     assert (tmp_path / f"target{sfx}").read_bytes() == b"keep me" and (tmp_path / f"link{sfx}").is_symlink()
 
 
@@ -191,9 +134,9 @@ def test_the_same_file_for_two_outputs_is_refused(tmp_path: Path) -> None:
 def test_agents_evaluate_refuses_a_symlinked_plot_before_any_work(tmp_path: Path, capsys: pytest.CaptureFixture) -> None:
     (tmp_path / "target.png").write_bytes(b"keep me")
     os.symlink(tmp_path / "target.png", tmp_path / "link.png")
-    rc, err = _agents(["evaluate", "--policy", "rocking", "--episodes", "1", "--plot", str(tmp_path / "link.png")],
+    rc, err = run_agents(["evaluate", "--policy", "rocking", "--episodes", "1", "--plot", str(tmp_path / "link.png")],
                       capsys)
-    _one_line(rc, err, "--plot", "symbolic link")
+    one_line(rc, err, "--plot", "symbolic link")
     assert (tmp_path / "target.png").read_bytes() == b"keep me" and (tmp_path / "link.png").is_symlink()
 
 
@@ -228,288 +171,14 @@ def test_ctrl_c_is_one_line_and_exit_130_everywhere(cmd: str, tmp_path: Path, ca
         argv = {"train": ["train", "x.yaml"], "evaluate": ["evaluate", "--policy", "rocking"],
                 "quickstart": ["quickstart"], "benchmark": ["benchmark", "b.yaml"], "replay": ["replay", "r.json"],
                 "convert-stats": ["convert-stats", "x_vecnormalize.pkl"]}[name]
-        rc, err = _agents(argv, capsys)
+        rc, err = run_agents(argv, capsys)
     else:
         mod, fn = SRENV_COMMANDS[cmd].rsplit(".", 1)
         import importlib
 
         monkeypatch.setattr(importlib.import_module(mod), fn, interrupted)
-        rc, err = _srenv(BASE_ARGV[cmd], capsys)
-    _one_line(rc, err, "interrupted", code=130)
-    _nothing_left(tmp_path, set())
+        rc, err = run_srenv(BASE_ARGV[cmd], capsys)
+    one_line(rc, err, "interrupted", code=130)
+    nothing_left(tmp_path, set())
 
 
-# ------------------------------------------------------------------------ report and config fields
-def _field_cases(kinds: tuple[str, ...]) -> list[Any]:
-    return [pytest.param(kind, name, v, id=f"{kind}:{name}={short_repr(v, 12)}")
-            for kind in kinds for name, d in ag_inputs.FIELDS[kind].items() for v in d.bad_values()]
-
-
-@pytest.mark.parametrize(("kind", "name", "value"), _field_cases(tuple(ag_inputs.FIELDS)))
-def test_every_declared_file_field_refuses_bad_values(kind: str, name: str, value: Any) -> None:
-    with pytest.raises(ConfigError) as ex:
-        ag_inputs.field(kind, name, value, "where.")
-    msg = str(ex.value)
-    assert f"where.{name}" in msg and "expected" in msg and len(msg.splitlines()) == 1
-
-
-BENCH_CASES = [("workers", "workers: 1000000\n", "workers"),
-               ("seeds-count", "test:\n  seeds: {start: 100000, count: 1000000000}\n", "test.seeds.count"),
-               ("seeds-start", "test:\n  seeds: {start: -1, count: 3}\n", "test.seeds.start"),
-               ("seeds-list", "test:\n  seeds: [1, abc]\n", "test.seeds[1]"),
-               ("octal", "workers: 010\n", "ambiguous"),
-               ("duplicate", "workers: 2\nworkers: 3\n", "duplicate key 'workers'"),
-               ("syntax", "workers: [2\n", "valid YAML"),
-               ("alias-bomb", "".join(f"{k}: &{k} [{', '.join([f'*{p}'] * 10)}]\n" for p, k in zip("abcdef", "bcdefg"))
-                .replace("*a", "x"), "aliases"),
-               ("run-n-timesteps", ("agents:\n  runs:\n    ppo: {config: configs/train/ppo_v1.yaml, seeds: [0], "
-                                    "overrides: {n_timesteps: 1.0e+30}}\n"), "n_timesteps")]
-
-
-@pytest.mark.parametrize(("text", "needle"), [pytest.param(t, n, id=i) for i, t, n in BENCH_CASES])
-def test_bad_benchmark_yaml_is_one_line_exit_2(text: str, needle: str, tmp_path: Path,
-                                               capsys: pytest.CaptureFixture) -> None:
-    root = Path(__file__).resolve().parents[1]
-    base = (root / "configs" / "benchmark" / "v1_quick.yaml").read_text()
-    key = text.split(":")[0]
-    # the case's block replaces the same top-level block of the quick benchmark
-    kept = [blk for blk in base.split("\n") if blk]
-    out, skip = [], False
-    for line in kept:
-        top = line and not line.startswith((" ", "#"))
-        if top:
-            skip = line.split(":")[0] == key
-        if not skip:
-            out.append(line)
-    (tmp_path / "b.yaml").write_text("\n".join(out) + "\n" + text)
-    rc, err = _agents(["benchmark", str(tmp_path / "b.yaml"), "--out-dir", str(tmp_path / "o")], capsys)
-    _one_line(rc, err, needle)
-    assert not (tmp_path / "o").exists()
-
-
-def _each_episode(rep: dict, key: str, value: Any) -> None:
-    for p in rep["policies"].values():
-        for e in p.get("episodes", []):
-            if value is None:
-                e.pop(key, None)
-            else:
-                e[key] = value
-
-
-REPORT_CASES = [
-    ("episodes-without-reward", lambda r: _each_episode(r, "reward", None), "a seed and a reward"),
-    ("episodes-not-mappings", lambda r: r["policies"]["pump_off"].__setitem__("episodes", [1, 2]), "a seed and a reward"),
-    ("reward-string", lambda r: _each_episode(r, "reward", "x"), "episodes[0].reward"),
-    ("reward-nan", lambda r: _each_episode(r, "reward", float("nan")), "episodes[0].reward"),
-    ("seed-negative", lambda r: _each_episode(r, "seed", -4), "episodes[0].seed"),
-    ("policy-not-mapping", lambda r: r["policies"].__setitem__("pump_off", [1]), "expected a mapping"),
-    ("params-out-of-range", lambda r: r["policies"]["pump_off"].__setitem__("params", {"threshold": 7}),
-     "params.threshold"),
-    ("params-not-mapping", lambda r: r["policies"]["pump_off"].__setitem__("params", "x"), "params"),
-    ("env-kwargs-int-keys", lambda r: r.__setitem__("env_kwargs", {"1": 1, 2: 2}), "env_kwargs"),
-]
-
-
-@pytest.mark.parametrize(("mutate", "needle"), [pytest.param(m, n, id=i) for i, m, n in REPORT_CASES])
-def test_replay_refuses_a_bad_report_before_any_episode(mutate: Any, needle: str, tmp_path: Path,
-                                                        capsys: pytest.CaptureFixture) -> None:
-    root = Path(__file__).resolve().parents[1]
-    rep = json.loads((root / "docs" / "benchmark.json").read_text())
-    mutate(rep)
-    path = tmp_path / "rep.json"
-    path.write_text(json.dumps(rep, allow_nan=True))
-    if "env_kwargs" in needle:  # JSON keys are strings: the check is on the reader's side
-        from agents.inputs import report_env_kwargs
-
-        with pytest.raises(ConfigError, match="env_kwargs"):
-            report_env_kwargs({"1": 1, 2: 2})
-        return
-    rc, err = _agents(["replay", str(path), "--policy", "pump_off", "--episodes", "1"], capsys)
-    _one_line(rc, err, needle, "expected")
-
-
-# ------------------------------------------------------------------------ checkpoint and normaliser files
-def _npz(path: Path, **over: Any) -> None:
-    arrays = {"mean": np.zeros(4), "var": np.ones(4), "clip_obs": 10.0, "epsilon": 1e-8, **over}
-    np.savez(path, **{k: v for k, v in arrays.items() if v is not None})
-
-
-NPZ_CASES = [("missing-var", {"var": None}, "missing var"), ("nan-mean", {"mean": np.array([np.nan, 0, 0, 0])}, "finite"),
-             ("negative-var", {"var": -np.ones(4)}, "var >= 0"), ("shape", {"var": np.ones(3)}, "one shape"),
-             ("huge", {"mean": np.zeros(10**5), "var": np.ones(10**5)}, "values"),
-             ("clip-inf", {"clip_obs": np.inf}, "clip_obs"), ("eps-zero", {"epsilon": 0.0}, "epsilon"),
-             ("eps-array", {"epsilon": np.ones(2)}, "scalar"), ("truncated", "truncated", "readable"),
-             ("not-npz", "garbage", "readable")]
-
-
-@pytest.mark.parametrize(("over", "needle"), [pytest.param(o, n, id=i) for i, o, n in NPZ_CASES])
-def test_bad_obs_norm_npz_is_one_line(over: Any, needle: str, tmp_path: Path) -> None:
-    p = tmp_path / "m_obs_norm.npz"
-    if over == "truncated":
-        _npz(p)
-        p.write_bytes(p.read_bytes()[:150])
-    elif over == "garbage":
-        p.write_bytes(os.urandom(300))
-    else:
-        _npz(p, **over)
-    with pytest.raises(ConfigError) as ex:
-        from agents.rollout_v1 import ObsNormalizer
-
-        ObsNormalizer.load(str(p))
-    assert needle in str(ex.value) and len(str(ex.value).splitlines()) == 1
-
-
-MODEL_CASES = [("obs-shape-1e9", lambda: ag_inputs.shape([10**9], "model", "observation_space._shape[]", "obs"),
-                "obs[0]"),
-               ("obs-shape-product", lambda: ag_inputs.shape([100, 100], "model", "observation_space._shape[]", "obs"),
-                "at most 4096"),
-               ("obs-shape-negative", lambda: ag_inputs.shape([-3], "model", "observation_space._shape[]", "obs"),
-                "obs[0]"),
-               ("net-arch-huge", lambda: ag_inputs.net_arch([200000, 200000], "net_arch"), "net_arch[0]"),
-               ("net-arch-dict", lambda: ag_inputs.net_arch({"pi": [64, 10**7]}, "net_arch"), "net_arch.pi[1]"),
-               ("net-arch-deep", lambda: ag_inputs.net_arch([8] * 100, "net_arch"), "at most 16"),
-               ("rllib-list", lambda: ag_inputs.policy_json([1, 2], "p.json"), "a JSON mapping"),
-               ("checkpoint-list", lambda: ag_inputs.checkpoint_progress([1], "ckpt"), "num_timesteps"),
-               ("checkpoint-negative", lambda: ag_inputs.checkpoint_progress({"num_timesteps": -1, "iterations": 1},
-                                                                             "ckpt"), "ckpt: num_timesteps"),
-               ("rllib-missing", lambda: ag_inputs.policy_json({"algo": "PPO"}, "p.json"), "missing"),
-               ("rllib-hiddens", lambda: ag_inputs.policy_json(
-                   {"algo": "PPO", "model_config": {"fcnet_hiddens": [10**6]}, "observation_shape": [4],
-                    "action_shape": [2], "action_low": [-1, -1], "action_high": [1, 1]}, "p.json"), "fcnet_hiddens"),
-               ("baseline-type", lambda: ag_inputs.baseline_params("pump_off", [1], "params"), "mapping"),
-               ("baseline-value", lambda: ag_inputs.baseline_params("fillage_pi", {"kp": "x"}, "params"), "params.kp"),
-               ("baseline-unknown", lambda: ag_inputs.baseline_params("pump_off", {"evil": 1}, "params"), "params.evil")]
-
-
-@pytest.mark.parametrize(("call", "needle"), [pytest.param(c, n, id=i) for i, c, n in MODEL_CASES])
-def test_model_metadata_is_bounded_before_any_allocation(call: Any, needle: str) -> None:
-    with pytest.raises(ConfigError) as ex:
-        call()
-    assert needle in str(ex.value) and "expected" in str(ex.value)
-
-
-# ------------------------------------------------------------------------------- env kwargs and actions
-ENV_CASES = [("overrides-string", {"overrides": "task.interval_s=600"}, "overrides"),
-             ("overrides-int-keys", {"overrides": {1: 2}}, "overrides"),
-             ("overrides-list", {"overrides": ["a"]}, "overrides"),
-             ("episode-steps", {"task__episode_hours": 8760, "task__interval_s": 10}, "task.episode_hours")]
-
-
-@pytest.mark.parametrize("env_id", ["srenv/SuckerRod-v0", "srenv/SuckerRod-v1"])
-@pytest.mark.parametrize(("kwargs", "needle"), [pytest.param(k, n, id=i) for i, k, n in ENV_CASES])
-def test_bad_env_kwargs_are_named(env_id: str, kwargs: dict, needle: str) -> None:
-    import gymnasium as gym
-
-    import srenv  # noqa: F401
-
-    with pytest.raises(ConfigError, match=needle):
-        gym.make(env_id, **kwargs)
-
-
-@pytest.mark.parametrize("value", CARD_POINTS.bad_values())
-def test_card_points_is_declared_and_bounded(value: Any) -> None:
-    import gymnasium as gym
-
-    import srenv  # noqa: F401
-
-    with pytest.raises(ConfigError, match="card_points"):
-        gym.make("srenv/SuckerRod-v0", card_points=value)
-
-
-def test_numpy_scalars_are_numbers_and_bad_actions_are_named() -> None:
-    import gymnasium as gym
-
-    import srenv  # noqa: F401
-
-    e = gym.make("srenv/SuckerRod-v0", control__spm_max=np.float32(8.0), card_points=np.int64(16),
-                 control__max_episode_steps=np.int64(2))
-    assert e.unwrapped.base_cfg.control.max_episode_steps == 2
-    assert e.unwrapped.base_cfg.control.spm_max == 8.0 and e.observation_space.shape == (40,)
-    e.reset(seed=0)
-    for bad in ("ab", {"a": 1}, None, [1, 2, 3], [[1], [2, 3]], object(), [np.nan, 0.0]):
-        with pytest.raises(ValueError, match=r"^action = .*expected 2 finite numbers"):
-            e.step(bad)
-
-
-# ---------------------------------------------------------------- first-round classes that still failed
-def test_a_number_with_a_leading_zero_is_refused_not_read_as_octal(tmp_path: Path) -> None:
-    from srenv.config import CONFIG_DIR, load_config
-
-    text = (CONFIG_DIR / f"{FIG3}.yaml").read_text()
-    import re
-
-    (tmp_path / "w.yaml").write_text(re.sub(r"(?m)^(\s+)spm: .*$", r"\1spm: 010", text, count=1))
-    with pytest.raises(ConfigError, match="010 is ambiguous"):
-        load_config(tmp_path / "w.yaml")
-    with pytest.raises(ConfigError, match=r"surface.spm.*'010'"):
-        load_config(FIG3, ["surface.spm=010"])
-    assert load_config(FIG3, ["surface.spm=10"]).surface.spm == 10
-
-
-@pytest.mark.parametrize(("config", "argv", "flag"), [
-    ("conventional_fig4", ["--stroke-length-m", "2.0"], "--stroke-length-m"),
-    (FIG7, ["--spm", "5"], "--spm"),
-    (FIG7, ["--strokes", "2"], "--strokes"),
-    (FIG3, ["--pull-velocity-m-s", "1"], "--pull-velocity-m-s"),
-    ("measured", ["--spm", "5"], "--spm"),
-])
-def test_a_flag_the_surface_motion_ignores_is_refused(config: str, argv: list[str], flag: str, tmp_path: Path,
-                                                      capsys: pytest.CaptureFixture,
-                                                      monkeypatch: pytest.MonkeyPatch) -> None:
-    monkeypatch.chdir(tmp_path)
-    extra = []
-    if config == "measured":
-        _card(tmp_path / "card.csv")
-        config, extra = FIG3, ["--set", "surface.motion=measured", "--set", "surface.measured_card_csv=card.csv"]
-    rc, err = _srenv(["simulate", config, *extra, *argv, "--out", "o.csv"], capsys)
-    _one_line(rc, err, flag, "surface.motion", "ignored")
-    assert not (tmp_path / "o.csv").exists()
-
-
-@pytest.mark.parametrize(("set_", "field"), [
-    ([], "surface.measured_card_csv"),
-    (["--set", "surface.measured_spm=0.001"], "surface.measured_spm"),
-])
-def test_a_measured_cards_own_period_bounds_the_run(set_: list[str], field: str, tmp_path: Path,
-                                                    capsys: pytest.CaptureFixture,
-                                                    monkeypatch: pytest.MonkeyPatch) -> None:
-    """A 20-row card whose stroke lasts 1e5 s (or a measured_spm of 1e-3) is 1e8 time steps a stroke."""
-    monkeypatch.chdir(tmp_path)
-    _card(tmp_path / "card.csv", n=20, period_s=1e5 if not set_ else 10.0)
-    rc, err = _srenv(["simulate", FIG3, "--set", "surface.motion=measured", "--set",
-                      "surface.measured_card_csv=card.csv", *set_, "--strokes", "1", "--out", "o.csv"], capsys)
-    _one_line(rc, err, field, "200000 time steps")
-    assert not (tmp_path / "o.csv").exists()
-
-
-def test_fit_refuses_a_param_without_effect_and_its_json_is_strict(tmp_path: Path, capsys: pytest.CaptureFixture,
-                                                                  monkeypatch: pytest.MonkeyPatch) -> None:
-    monkeypatch.chdir(tmp_path)
-    _card(tmp_path / "card.csv")
-    rc, err = _srenv(["fit", "card.csv", "--config", FIG3, "--param", "economics.oil_price_usd_m3",
-                      "--strokes", "1", "--out", "f.yaml"], capsys)
-    _one_line(rc, err, "--param", "economics.oil_price_usd_m3", "change the simulated card")
-    assert not (tmp_path / "f.yaml").exists()
-
-
-def test_agents_benchmark_refuses_a_symlinked_output_before_any_work(tmp_path: Path,
-                                                                     capsys: pytest.CaptureFixture) -> None:
-    root = Path(__file__).resolve().parents[1]
-    out = tmp_path / "o"
-    out.mkdir()
-    (tmp_path / "target.json").write_text("keep me")
-    os.symlink(tmp_path / "target.json", out / "benchmark.json")
-    rc, err = _agents(["benchmark", str(root / "configs" / "benchmark" / "v1_quick.yaml"), "--quick", "--out-dir",
-                       str(out)], capsys)
-    _one_line(rc, err, "--out-dir", "symbolic link")
-    assert (tmp_path / "target.json").read_text() == "keep me" and sorted(os.listdir(out)) == ["benchmark.json"]
-
-
-def test_agents_summary_line_is_strict_json(capsys: pytest.CaptureFixture) -> None:
-    from agents.__main__ import _print_json
-
-    _print_json({"a": [float("nan"), np.float32("inf"), 1, np.float64(2.5)], "b": {"c": (np.nan,)}})
-
-    def refuse(token: str) -> None:
-        raise ValueError(token)
-    assert json.loads(capsys.readouterr().out, parse_constant=refuse) == {"a": [None, None, 1, 2.5], "b": {"c": [None]}}

@@ -71,6 +71,10 @@ class CardFit:
             raise ConfigError("--param", "", "at least one config field to fit")
         if len(set(self.params)) != len(self.params):
             raise ConfigError("--param", " ".join(self.params), "each field once")
+        for k in self.params:  # the card drives the model: its period and motion are data, not parameters
+            if k.startswith("surface.measured_"):
+                raise ConfigError("--param", k, "a model field (the card's own period and motion are measured, "
+                                  "not fitted)")
         self.meta = [_field_meta(k)[1] for k in self.params]
         raw = apply_overrides(read_raw(config), list(overrides or []) + [
             "surface.motion=measured", f"surface.measured_card_csv={self.card_path}"])
