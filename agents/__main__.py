@@ -19,7 +19,6 @@ from typing import Any
 import yaml
 
 EXIT_BAD_INPUT = 2
-EXIT_INTERRUPTED = 130
 QUICK_CONFIG = Path(__file__).resolve().parent.parent / "configs" / "train" / "ppo_quick.yaml"
 QUICK_BENCHMARK = Path(__file__).resolve().parent.parent / "configs" / "benchmark" / "v1_quick.yaml"
 
@@ -35,10 +34,6 @@ def _flag(command: str, flag: str) -> Any:
     from .inputs import FLAGS
 
     return FLAGS[command][flag].parse
-
-
-def _raise_on_sigterm(signum: int, frame: object) -> None:
-    raise KeyboardInterrupt(f"signal {signum}")  # every `finally` runs: workers stopped, temporaries removed
 
 
 def _key_value(text: str) -> tuple[str, Any]:
@@ -217,7 +212,9 @@ def main(argv: list[str] | None = None) -> int:
     commands = {"train": cmd_train, "evaluate": cmd_evaluate, "quickstart": cmd_quickstart,
                 "convert-stats": cmd_convert_stats, "benchmark": cmd_benchmark,
                 "replay": cmd_replay}
-    previous = signal.signal(signal.SIGTERM, _raise_on_sigterm) if argv is None else None
+    from srenv.interrupts import EXIT_INTERRUPTED, raise_on_sigterm
+
+    previous = signal.signal(signal.SIGTERM, raise_on_sigterm) if argv is None else None
     try:
         result = commands[args.command](args)
     except (ConfigError, TrainConfigError, ValueError, FileNotFoundError) as exc:

@@ -22,7 +22,6 @@ from __future__ import annotations
 import json
 import math
 import os
-import signal
 from collections.abc import Callable, Iterable, Sequence
 from concurrent.futures import ProcessPoolExecutor
 from multiprocessing import get_context
@@ -211,9 +210,7 @@ class Runner:
 
     def __enter__(self) -> Self:
         if self.workers > 1:
-            # workers ignore Ctrl-C (the terminal sends it to the whole group): the driver reports it in one line
-            self._pool = ProcessPoolExecutor(self.workers, mp_context=get_context("spawn"), initializer=signal.signal,
-                                             initargs=(signal.SIGINT, signal.SIG_IGN))
+            self._pool = ProcessPoolExecutor(self.workers, mp_context=get_context("spawn"))
         return self
 
     def __exit__(self, *exc: object) -> None:
@@ -233,7 +230,10 @@ class Runner:
                 if progress:
                     progress(1)
             return out
-        futures = [self._pool.submit(fn, j) for j in jobs]
+        from srenv.interrupts import workers_ignore_sigint
+
+        with workers_ignore_sigint():  # workers start on submit; Ctrl-C is reported by this driver alone
+            futures = [self._pool.submit(fn, j) for j in jobs]
         out = []
         for f in futures:
             out.append(f.result())

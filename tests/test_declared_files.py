@@ -306,3 +306,25 @@ def test_fit_refuses_the_cards_own_period_as_a_parameter(tmp_path: Path, capsys:
                         capsys)
     one_line(rc, err, "--param", "surface.measured_spm", "measured, not fitted")
     assert sorted(os.listdir(tmp_path)) == ["card.csv"]
+
+
+# ------------------------------------------------------------ card contents: the realism branch's checks
+_T = np.arange(200) * 10.0 / 200
+CARD_CASES = [("not-closed", {"pos": _T * 0.2}), ("zero-stroke", {"pos": np.full(200, 1.0)}),
+              ("loads-1e300", {"load": np.full(200, 1e300)}), ("positions-1e300", {"pos": 1e300 * (1 - np.cos(_T))}),
+              ("all-zero-loads", {"load": np.zeros(200)})]
+
+
+@pytest.mark.xfail(reason="card checks: realism branch", strict=False)
+@pytest.mark.parametrize("over", [pytest.param(o, id=i) for i, o in CARD_CASES])
+def test_a_degenerate_card_is_refused_by_diagnose(over: dict, tmp_path: Path, capsys: pytest.CaptureFixture,
+                                                  monkeypatch: pytest.MonkeyPatch) -> None:
+    monkeypatch.chdir(tmp_path)
+    t = _T
+    x = over.get("pos", 1.2 * (1 - np.cos(2 * np.pi * t / 10.0)))
+    f = over.get("load", 40e3 + 8e3 * np.sin(2 * np.pi * t / 10.0))
+    np.savetxt(tmp_path / "card.csv", np.c_[t, x, f], delimiter=",",
+               header="t_s,polished_rod_position_m,polished_rod_load_n", comments="")
+    rc, err = run_srenv(["diagnose", "card.csv", "--config", FIG3, "--out", "p.csv"], capsys)
+    one_line(rc, err, "card.csv", "expected")
+    assert sorted(os.listdir(tmp_path)) == ["card.csv"]

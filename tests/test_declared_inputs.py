@@ -182,3 +182,43 @@ def test_ctrl_c_is_one_line_and_exit_130_everywhere(cmd: str, tmp_path: Path, ca
     nothing_left(tmp_path, set())
 
 
+
+
+def test_ctrl_c_to_a_sweep_and_its_workers_is_one_line_and_leaves_nothing(tmp_path: Path) -> None:
+    """The terminal sends SIGINT to the whole process group: the workers ignore it, the driver reports it."""
+    import signal
+    import subprocess
+    import sys
+    import time
+
+    root = Path(__file__).resolve().parents[1]
+    p = subprocess.Popen([sys.executable, "-m", "srenv.cli", "sweep", "paper_fig7_pullout", "--param",
+                          "surface.pull_velocity_m_s", "--values", "0.5,1,2,3", "--duration-s", "30", "--workers", "2",
+                          "--out", str(tmp_path / "s.csv")], cwd=tmp_path, stdout=subprocess.PIPE,
+                         stderr=subprocess.PIPE, text=True, start_new_session=True,
+                         env={**os.environ, "PYTHONPATH": str(root)})
+    try:
+        deadline = time.time() + 60
+        while time.time() < deadline and p.poll() is None and len(_children(p.pid)) < 2:
+            time.sleep(0.1)
+        assert p.poll() is None, "the sweep ended before its workers were seen"
+        time.sleep(1.0)
+        os.killpg(p.pid, signal.SIGINT)
+        _, err = p.communicate(timeout=60)
+    finally:
+        if p.poll() is None:
+            os.killpg(p.pid, signal.SIGKILL)
+    one_line(p.returncode, err, "interrupted", code=130)
+    assert list(tmp_path.iterdir()) == []
+
+
+def _children(pid: int) -> list[int]:
+    out = []
+    for d in Path("/proc").iterdir():
+        if d.name.isdigit():
+            try:
+                if int((d / "stat").read_text().rsplit(")", 1)[1].split()[1]) == pid:
+                    out.append(int(d.name))
+            except (OSError, IndexError, ValueError):
+                continue
+    return out

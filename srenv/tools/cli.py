@@ -15,11 +15,11 @@ import numpy as np
 
 from ..declarations import MAX_STROKES, OUTPUTS, add_number  # noqa: F401  (MAX_STROKES: re-exported)
 from ..errors import ConfigError, NumericFailure, SolverFailure
+from ..interrupts import EXIT_INTERRUPTED, raise_on_sigterm
 from ..outputs import atomic_write_all, check_outputs, json_line
 
 EXIT_BAD_INPUT = 2
 EXIT_SOLVER = 3
-EXIT_INTERRUPTED = 130
 DEFAULT_STROKES = 3
 # flags that only some surface motions use: with another motion they would be ignored without a word
 MOTION_FLAGS = {
@@ -28,12 +28,6 @@ MOTION_FLAGS = {
     "pull_velocity_m_s": ("pullout",),
     "strokes": ("harmonic", "conventional", "measured"),  # a pull-out runs for --duration-s
 }
-
-
-def _raise_on_sigterm(signum: int, frame: object) -> None:
-    # SIGTERM becomes an exception, so that every `finally` runs: temporary files are removed, Ray and
-    # worker processes shut down (a killed command leaves nothing behind)
-    raise KeyboardInterrupt(f"signal {signum}")
 
 
 class _Parser(argparse.ArgumentParser):
@@ -200,7 +194,7 @@ def main(argv: list[str] | None = None) -> int:
     args = build_parser().parse_args(argv)
     previous = None
     if argv is None:  # the command itself, not a test calling main() in-process
-        previous = signal.signal(signal.SIGTERM, _raise_on_sigterm)
+        previous = signal.signal(signal.SIGTERM, raise_on_sigterm)
     try:
         rc = args.func(args)
     except ConfigError as exc:

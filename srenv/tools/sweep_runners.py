@@ -5,7 +5,6 @@ from __future__ import annotations
 
 import math
 import os
-import signal
 import time
 import warnings
 from typing import Any
@@ -104,9 +103,10 @@ def run_local(cases: list[Case], duration_s: float, settle_fraction: float, work
     from tqdm import tqdm
 
     n = min(workers or os.cpu_count() or 1, len(cases))
-    # workers ignore Ctrl-C (the terminal sends it to the whole group): the driver alone reports it, in one line
-    pool = multiprocessing.get_context("spawn").Pool(n, initializer=signal.signal, initargs=(signal.SIGINT,
-                                                                                            signal.SIG_IGN))
+    from ..interrupts import workers_ignore_sigint
+
+    with workers_ignore_sigint():  # Ctrl-C is reported by this driver alone, in one line
+        pool = multiprocessing.get_context("spawn").Pool(n)
     try:
         out: list[dict[str, float] | None] = [None] * len(cases)
         jobs = [(c.index, c.raw, duration_s, settle_fraction) for c in cases]
