@@ -53,7 +53,4 @@ def build_vec_env(cfg: TrainConfig, n_envs: int, seed: int, subproc: bool) -> An
 
     factory = partial(make_env, cfg.env_id, **cfg.env_kwargs)
     cls = SubprocVecEnv if subproc and n_envs > 1 else DummyVecEnv
-    from srenv.interrupts import workers_ignore_sigint
-
-    with workers_ignore_sigint():  # subprocess envs start here: Ctrl-C is reported by the trainer alone
-        return make_vec_env(factory, n_envs=n_envs, seed=seed, vec_env_cls=cls)
+    return make_vec_env(factory, n_envs=n_envs, seed=seed, vec_env_cls=cls)

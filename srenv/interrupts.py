@@ -19,9 +19,10 @@ def raise_on_sigterm(signum: int, frame: object) -> None:
 
 @contextlib.contextmanager
 def workers_ignore_sigint() -> Iterator[None]:
-    """Start worker processes inside this block: they inherit SIGINT ignored (a spawned Python keeps an
-    ignored SIGINT), so the Ctrl-C the terminal sends to the whole group is reported by the driver alone,
-    even while a worker is still importing. The driver's own handler is back on exit."""
+    """Start worker processes inside this block (keep it short: the start calls only): SIGINT is ignored
+    meanwhile, and a spawned Python inherits an ignored SIGINT and keeps it, so the workers never see the
+    Ctrl-C the terminal sends to the whole group (no traceback from a worker, even one still importing);
+    the driver reports it. A Ctrl-C that arrives during the block itself (milliseconds) is lost."""
     if threading.current_thread() is not threading.main_thread():  # only the main thread may set handlers
         yield
         return
