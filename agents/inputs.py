@@ -4,7 +4,8 @@
 
 The declarations are :class:`srenv.declarations.Number` (type, unit, range, where a bound comes from), so a
 refusal is the same one line as srenv's: the flag or field, the value, what is expected
-(``ConfigError``: exit 2). ``tests/test_declared_inputs.py`` generates its cases from these tables.
+(``ConfigError``: exit 2). ``tests/test_declared_inputs.py`` (flags) and ``tests/test_declared_files.py``
+(fields) generate their cases from these tables.
 """
 
 from __future__ import annotations

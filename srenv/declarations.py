@@ -2,8 +2,8 @@
 unit and range, and where a bound that follows from resources comes from.
 
 The parsers build their argparse types from these (``Number.parse``), the file readers check with them
-(``Number.check``), and ``tests/test_declared_inputs.py`` generates its refusal cases from them
-(``Number.bad_texts``), so a flag or field added here is bounded and tested by construction; a test also
+(``Number.check``), and ``tests/test_declared_inputs.py`` / ``test_declared_files.py`` generate their refusal
+cases from them (``Number.bad_texts`` / ``bad_values``), so a flag or field added here is bounded and tested by construction; a test also
 fails when a parser holds a typed flag that is not declared here. A refusal is one line: the flag or field,
 the value as given (cut to a bounded length) and what is expected.
 """
@@ -34,6 +34,9 @@ class Number:
     lo_open: bool = True
     why: str = ""  # where the bound comes from (memory, wall time, a config field's range)
 
+    def _fmt(self, x: float) -> str:
+        return str(int(x)) if self.kind is int else f"{x:g}"
+
     def expected(self) -> str:
         if self.kind is int:
             what = "a positive integer" if self.lo_open and self.lo == 0 else "an integer"
@@ -44,11 +47,11 @@ class Number:
         if self.hi is not None:
             left = "(" if self.lo_open else "["
             if self.lo == 0 and self.lo_open:
-                what += f" at most {self.hi:g}"
+                what += f" at most {self._fmt(self.hi)}"
             else:
-                what += f" within {left}{self.lo:g}, {self.hi:g}]"
+                what += f" within {left}{self._fmt(self.lo)}, {self._fmt(self.hi)}]"
         elif not (self.lo == 0 and self.lo_open):
-            what += f" {'above' if self.lo_open else 'at least'} {self.lo:g}"
+            what += f" {'above' if self.lo_open else 'at least'} {self._fmt(self.lo)}"
         return what
 
     def _in_range(self, x: float) -> bool:
