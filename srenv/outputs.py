@@ -18,6 +18,9 @@ from typing import Any
 
 from .errors import ConfigError, NumericFailure
 
+_NO_LINK = "a path that is not a symbolic link (an output is never written through a link nor replaces one; " \
+           "name the target itself)"
+
 
 def check_output_path(flag: str, path: str | None, suffixes: tuple[str, ...]) -> None:
     """Refuse an output path before any work: wrong suffix, a symbolic link, a directory, a missing or
@@ -28,8 +31,7 @@ def check_output_path(flag: str, path: str | None, suffixes: tuple[str, ...]) ->
     if p.suffix.lower() not in suffixes:
         raise ConfigError(flag, path, "a file name ending in " + " or ".join(suffixes))
     if p.is_symlink():
-        raise ConfigError(flag, path, "a path that is not a symbolic link (an output is never written through "
-                          "a link nor replaces one; name the target itself)")
+        raise ConfigError(flag, path, _NO_LINK)
     if p.is_dir():
         raise ConfigError(flag, path, "a file path (this is a directory)")
     parent = p.parent if str(p.parent) else Path(".")
@@ -74,6 +76,9 @@ def atomic_write_all(items: Iterable[tuple[str | Path, Callable[[str], object]]]
     failure, Ctrl-C or SIGTERM (once :func:`main` installed its handler) during any writer leaves none of
     the files and no temporary; the results get the usual permissions (0666 minus the umask)."""
     items = [(Path(p), w) for p, w in items]
+    for path, _ in items:  # the policy holds for every writer, whether or not it checked its paths first
+        if path.is_symlink():
+            raise ConfigError("output", str(path), _NO_LINK)
     temps: list[str] = []
     renamed: list[Path] = []
     at = items[0][0] if items else Path(".")  # the file being written, for the error line
