@@ -29,7 +29,15 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from .train_config import ENV_ID, TrainConfigError, _expect, _positive_int, _yaml12_float, read_train_yaml
+from .train_config import (
+    ENV_ID,
+    TrainConfigError,
+    _expect,
+    _positive_int,
+    _yaml12_float,
+    declared,
+    read_train_yaml,
+)
 
 BACKEND = "rllib"
 _HARNESS_KEYS = {"backend", "algo", "env_id", "env_kwargs", "n_timesteps", "num_env_runners",
@@ -98,9 +106,7 @@ def parse_rllib_config(data: Any, source: str = "<dict>") -> RLlibTrainConfig:
     algo = str(data.get("algo", "")).lower()
     configs = algorithm_configs()
     _expect(algo in configs, "algo", data.get("algo"), "one of " + ", ".join(configs))
-    from .inputs import FIELDS
-
-    runners = FIELDS["train"]["num_env_runners"].check(data.get("num_env_runners", 2), "train config: num_env_runners")
+    runners = declared("num_env_runners", data.get("num_env_runners", 2))
     num_cpus = data.get("num_cpus")
     _expect(num_cpus is None or (isinstance(num_cpus, int) and num_cpus > 0), "num_cpus", num_cpus,
             "a positive integer or null")

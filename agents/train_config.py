@@ -92,12 +92,24 @@ def _expect(cond: bool, key: str, value: Any, what: str) -> None:
         raise TrainConfigError(f"train config: {key} = {value!r}: expected {what}")
 
 
+def declared(key: str, value: Any) -> int:
+    """A field declared in agents/inputs.py (type and bound), refused as a TrainConfigError."""
+    from srenv.errors import ConfigError, short_repr
+
+    from .inputs import FIELDS
+
+    try:
+        return FIELDS["train"][key].check(value, key)
+    except ConfigError as exc:  # the training YAML's own message form: "train config: key = value: expected ..."
+        raise TrainConfigError(f"train config: {key} = {short_repr(value)}: expected {exc.expected}") from None
+
+
 def _positive_int(data: dict, key: str, default: int) -> int:
     from .inputs import FIELDS
 
     v = data.get(key, default)
     if key in FIELDS["train"]:  # declared with a bound (agents/inputs.py)
-        return FIELDS["train"][key].check(v, f"train config: {key}")
+        return declared(key, v)
     _expect(isinstance(v, int) and not isinstance(v, bool) and v > 0, key, v, "a positive integer")
     return int(v)
 
@@ -124,9 +136,7 @@ def parse_train_config(data: Any, source: str = "<dict>") -> TrainConfig:
             "sb3 here (backend: rllib is read by agents.rllib_config)")
     algo = str(data.get("algo", "")).lower()
     _expect(algo in algorithms(), "algo", data.get("algo"), "one of " + ", ".join(algorithms()))
-    from .inputs import FIELDS
-
-    n_envs = FIELDS["train"]["n_envs"].check(data.get("n_envs") or 0, "train config: n_envs")
+    n_envs = declared("n_envs", data.get("n_envs") or 0)
     normalize = data.get("normalize", False)
     _expect(isinstance(normalize, (bool, dict)), "normalize", normalize, "true, false or a mapping")
     env_kwargs = data.get("env_kwargs") or {}
