@@ -21,8 +21,8 @@ code = r'''
 import sys, time, json
 # the flat module names: the only ones a checkout from before the packages has (and aliases since, srenv/_compat.py)
 from srenv.config import load_config
-from srenv.simulator import Simulator
-from srenv.bench import CASES
+from srenv.simulation.simulator import Simulator
+from srenv.tools.bench import CASES
 strokes = int(sys.argv[1])
 sims = {n: Simulator(load_config(n)) for n in CASES}
 for s in sims.values(): s.run_stroke(record=False)

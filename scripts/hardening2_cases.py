@@ -25,7 +25,7 @@ import numpy as np
 
 ROOT = Path(__file__).resolve().parents[1]
 PY = sys.executable
-SRENV = [PY, "-m", "srenv.cli"]
+SRENV = [PY, "-m", "srenv.tools.cli"]
 AGENTS = [PY, "-m", "agents"]
 FIG3 = "paper_fig3_vertical"
 LIMIT = 3 * 2**30
@@ -169,15 +169,15 @@ def agents_file_cases(c: Cases) -> None:
            setup=_report(lambda r: r["policies"]["pump_off"].__setitem__("params", {"threshold": "high"})))
     c.case("replay: env kwargs 8760 h at 10 s", rp, setup=_report(lambda r: r["env_kwargs"].update(
         {"episode_hours": 8760, "interval_s": 10})))
-    npz = "from agents.rollout_v1 import ObsNormalizer as O; import sys; O.load(sys.argv[2])"
+    npz = "from agents.evaluation.normalizer import ObsNormalizer as O; import sys; O.load(sys.argv[2])"
     c.case("obs-norm npz without keys", [*PY_C, npz, "{d}/n.npz"],
            setup=lambda d: np.savez(d / "n.npz", mean=np.zeros(3)))
     c.case("obs-norm npz truncated", [*PY_C, npz, "{d}/n.npz"],
            setup=lambda d: (np.savez(d / "n.npz", mean=np.zeros(3), var=np.ones(3), clip_obs=10.0, epsilon=1e-8),
                             (d / "n.npz").write_bytes((d / "n.npz").read_bytes()[:120])))
-    c.case("model zip observation shape 1e9", [*PY_C, ("from agents.model_io import space_shape; space_shape("
+    c.case("model zip observation shape 1e9", [*PY_C, ("from agents.evaluation.model_io import space_shape; space_shape("
                                                "{'observation_space': {'_shape': [10**9]}}, 'observation_space', 'm.zip')")])
-    c.case("model zip net_arch [200000, 200000]", [*PY_C, ("from agents.model_io import policy_kwargs; policy_kwargs("
+    c.case("model zip net_arch [200000, 200000]", [*PY_C, ("from agents.evaluation.model_io import policy_kwargs; policy_kwargs("
                                                    "{'policy_kwargs': {'net_arch': '[200000, 200000]'}}, 'm.zip')")])
     c.case("RLlib srenv_policy.json a list", [*PY_C, ("from agents.inputs import policy_json; "
                                               "policy_json([1, 2], 'srenv_policy.json')")])

@@ -2,7 +2,7 @@
 
     PYTHONPATH=. python scripts/qp_in_the_loop.py [CONFIG ...]      # default: default paper_fig4_deviated
 
-Modes (all exact: the trajectories agree to 1e-8, tests/test_simulator.py): the default certified reuse
+Modes (all exact: the trajectories agree to 1e-8, tests/srenv/simulation/test_simulator.py): the default certified reuse
 with up to ``simulation.max_corrections`` exact corrections; ``simulation.max_corrections: 0`` (a ProxSuite
 solve at every stick/slip pattern change); ``simulation.always_qp: true`` (a ProxSuite solve every step).
 Medians of 3 rounds, modes interleaved in each round (a shared machine slows all alike), after a warm-up

@@ -1,14 +1,10 @@
 """srenv: exact nonsmooth finite-element sucker-rod pump simulator and Gymnasium environment."""
 
-from . import _compat
 from .config import WellConfig, load_config
 from .errors import ConfigError, SolverFailure
 
-# the deprecated flat module names (srenv.simulator, srenv.metrics, ...) as aliases of the packaged ones
-_compat.install()
-
 __all__ = ["ConfigError", "Simulator", "SolverFailure", "WellConfig", "load_config"]
-__version__ = "0.1.0"
+__version__ = "0.2.0"
 
 ENV_ID = "srenv/SuckerRod-v0"
 ENV_ID_V1 = "srenv/SuckerRod-v1"
@@ -37,14 +33,9 @@ def register_envs() -> None:
             # entry point by string: importing srenv stays light (the kernel compiles only when an env is made)
             gymnasium.register(id=env_id, entry_point=entry_point, kwargs=dict(kwargs),
                                max_episode_steps=None, reward_threshold=None, nondeterministic=False)
-    # v1 is another task, not an upgrade of v0 (kept on purpose, for reproducibility). gymnasium would warn
-    # "v0 is out of date, upgrade to v1" on every make of v0 -- wrong advice, and a warning that breaks
-    # warnings-as-errors checks -- because it takes the highest registered version of a name as its successor.
-    # Its lookup skips specs without a version: so v1's spec is left out of that lookup (its id, kwargs and
-    # make are unchanged; only EnvSpec.version reads None).
-    spec_v1 = gymnasium.registry.get(ENV_ID_V1)
-    if spec_v1 is not None:
-        spec_v1.version = None
+    # The registry is left as gymnasium makes it: v0 and v1 are versions of one name, so gymnasium's make of
+    # v0 issues its DeprecationWarning "out of date, consider v1" (hidden by Python's default filters outside
+    # __main__). v0 stays, with its numbers, for reproducibility.
 
 
 register_envs()

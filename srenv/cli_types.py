@@ -18,6 +18,10 @@ def positive_int(name: str, hi: int | None = None) -> Callable[[str], int]:
     return Number(name, int, hi=hi).parse
 
 
+def nonneg_int(name: str) -> Callable[[str], int]:
+    return Number(name, int, lo=0, lo_open=False).parse
+
+
 def bounded(parse: Callable[[str], float], name: str, unit: str, hi: float) -> Callable[[str], float]:
     def check(text: str) -> float:
         x = parse(text)

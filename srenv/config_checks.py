@@ -12,9 +12,27 @@ from .surface_unit.unit_catalogue import conventional_unit
 
 
 def _check_consistency(cfg: WellConfig) -> None:
-    """Cross-field checks (each names the offending field)."""
+    """Cross-field checks (each names the offending field), section by section."""
     if not cfg.rod.tapers:
         raise ConfigError("rod.tapers", [], "at least one taper")
+    _check_pump(cfg)
+    _check_tubing(cfg)
+    f = cfg.friction
+    if f.law == "nonmonotone" and f.kinetic_coefficient > f.coefficient:
+        raise ConfigError("friction.kinetic_coefficient", f.kinetic_coefficient,
+                          f"a coefficient <= friction.coefficient = {f.coefficient} (static)")
+    _check_survey(cfg)
+    if cfg.surface.motion == "conventional":
+        _check_conventional_unit(cfg.surface)
+    if cfg.surface.motion == "measured":  # a bad card file is refused at load time, before any work
+        from .surface_unit.measured_motion import load_measured_motion
+
+        load_measured_motion(cfg.surface.measured_card_csv, cfg.surface.measured_spm)
+    _check_control(cfg)
+    _check_intake_and_diameters(cfg)
+
+
+def _check_pump(cfg: WellConfig) -> None:
     p = cfg.pump
     if p.load_source == "loads" and not p.upstroke_load_n > p.downstroke_load_n:
         raise ConfigError("pump.downstroke_load_n", p.downstroke_load_n,
@@ -37,6 +55,10 @@ def _check_consistency(cfg: WellConfig) -> None:
         if p.gas_polytropic_exponent < 1:
             raise ConfigError("pump.gas_polytropic_exponent", p.gas_polytropic_exponent,
                               "an exponent >= 1 (1 isothermal, 1.3 adiabatic natural gas)")
+
+
+def _check_tubing(cfg: WellConfig) -> None:
+    p = cfg.pump
     tb = cfg.tubing
     if not tb.anchored:
         if tb.inner_diameter_mm >= tb.outer_diameter_mm:
@@ -50,10 +72,9 @@ def _check_consistency(cfg: WellConfig) -> None:
                               "two chamber models are not combined)")
         if p.law != "constant":
             raise ConfigError("tubing.anchored", tb.anchored, "true with pump.law 'nonmonotone'")
-    f = cfg.friction
-    if f.law == "nonmonotone" and f.kinetic_coefficient > f.coefficient:
-        raise ConfigError("friction.kinetic_coefficient", f.kinetic_coefficient,
-                          f"a coefficient <= friction.coefficient = {f.coefficient} (static)")
+
+
+def _check_survey(cfg: WellConfig) -> None:
     st = cfg.survey.stations
     for i in range(1, len(st)):
         if not st[i].md_m > st[i - 1].md_m:
@@ -64,12 +85,9 @@ def _check_consistency(cfg: WellConfig) -> None:
                           f"a depth in m reaching the pump at {cfg.rod_length_m} m (sum of taper lengths)")
     if st and st[0].md_m != 0:
         raise ConfigError("survey.stations[0].md_m", st[0].md_m, "0 m (the survey starts at the surface)")
-    if cfg.surface.motion == "conventional":
-        _check_conventional_unit(cfg.surface)
-    if cfg.surface.motion == "measured":  # a bad card file is refused at load time, before any work
-        from .surface_unit.measured_motion import load_measured_motion
 
-        load_measured_motion(cfg.surface.measured_card_csv, cfg.surface.measured_spm)
+
+def _check_control(cfg: WellConfig) -> None:
     c = cfg.control
     if c.spm_min >= c.spm_max:
         raise ConfigError("control.spm_max", c.spm_max, f"strokes/min above control.spm_min = {c.spm_min}")
@@ -86,6 +104,10 @@ def _check_consistency(cfg: WellConfig) -> None:
     if s.qp_solver not in _known_solvers():
         raise ConfigError("simulation.qp_solver", s.qp_solver,
                           "an installed qpsolvers backend: " + ", ".join(_known_solvers()))
+
+
+def _check_intake_and_diameters(cfg: WellConfig) -> None:
+    p = cfg.pump
     if cfg.inflow.model != "none":
         i = cfg.inflow
         if i.tubing_outer_diameter_mm >= i.casing_inner_diameter_mm:
@@ -114,7 +136,7 @@ MAX_EPISODE_STEPS = 20_000  # env steps of one v1 episode (task.episode_hours / 
 
 
 def node_count(cfg: WellConfig) -> int:
-    """Nodes of the FE mesh :func:`srenv.rod.build_mesh` builds (whole elements per taper, plus the top)."""
+    """Nodes of the FE mesh :func:`srenv.physics.rod.build_mesh` builds (whole elements per taper, plus the top)."""
     h = cfg.simulation.element_length_m
     return 1 + sum(max(1, math.ceil(t.length_m / h - 1e-9)) for t in cfg.rod.tapers)
 

@@ -14,7 +14,8 @@ from pathlib import Path
 
 
 def shipped_dir(kind: str) -> Path:
-    """The directory of shipped ``kind`` files (``"wells"`` or ``"units"``), installed or in the checkout."""
+    """The directory of shipped ``kind`` files (``"wells"``, ``"units"``, ``"train"`` or ``"benchmark"``),
+    installed or in the checkout."""
     package = resources.files("srenv")
     installed = package / "configs" / kind
     if installed.is_dir():

@@ -33,7 +33,7 @@ def run_srenv(argv: list[str], capsys: pytest.CaptureFixture) -> tuple[int, str]
 
 
 def run_agents(argv: list[str], capsys: pytest.CaptureFixture) -> tuple[int, str]:
-    from agents.__main__ import main as agents_main
+    from agents.cli import main as agents_main
 
     try:
         rc = agents_main(argv)

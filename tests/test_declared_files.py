@@ -135,7 +135,7 @@ def test_bad_obs_norm_npz_isone_line(over: Any, needle: str, tmp_path: Path) -> 
     else:
         _npz(p, **over)
     with pytest.raises(ConfigError) as ex:
-        from agents.rollout_v1 import ObsNormalizer
+        from agents.evaluation.normalizer import ObsNormalizer
 
         ObsNormalizer.load(str(p))
     assert needle in str(ex.value) and len(str(ex.value).splitlines()) == 1
@@ -288,7 +288,7 @@ def test_agents_benchmark_refuses_a_symlinked_output_before_any_work(tmp_path: P
 
 
 def test_agents_summary_line_is_strict_json(capsys: pytest.CaptureFixture) -> None:
-    from agents.__main__ import _print_json
+    from agents.cli import _print_json
 
     _print_json({"a": [float("nan"), np.float32("inf"), 1, np.float64(2.5)], "b": {"c": (np.nan,)}})
 

@@ -61,8 +61,8 @@ def _typed_actions(parser: argparse.ArgumentParser) -> dict[str, dict[str, Any]]
 def test_every_typed_flag_is_declared() -> None:
     """A parser's typed flag is its declaration's parse (so it has a type, unit and range, and the cases
     above cover it): srenv and agents alike."""
-    from agents.__main__ import _key_value
-    from agents.__main__ import build_parser as agents_parser
+    from agents.cli import _key_value
+    from agents.cli import build_parser as agents_parser
     from srenv.tools.cli import build_parser
 
     for table, parser, free in ((FLAGS, build_parser(), set()), (ag_inputs.FLAGS, agents_parser(), {_key_value})):
@@ -164,7 +164,7 @@ def test_ctrl_c_is_one_line_and_exit_130_everywhere(cmd: str, tmp_path: Path, ca
         raise KeyboardInterrupt
     monkeypatch.chdir(tmp_path)
     if cmd.startswith("agents-"):
-        import agents.__main__ as am
+        import agents.cli as am
 
         name = cmd.removeprefix("agents-")
         monkeypatch.setattr(am, "cmd_" + name.replace("-", "_"), interrupted)
@@ -192,7 +192,7 @@ def test_ctrl_c_to_a_sweep_and_its_workers_is_one_line_and_leaves_nothing(tmp_pa
     import time
 
     root = Path(__file__).resolve().parents[1]
-    p = subprocess.Popen([sys.executable, "-m", "srenv.cli", "sweep", "paper_fig7_pullout", "--param",
+    p = subprocess.Popen([sys.executable, "-m", "srenv.tools.cli", "sweep", "paper_fig7_pullout", "--param",
                           "surface.pull_velocity_m_s", "--values", "0.5,1,2,3", "--duration-s", "30", "--workers", "2",
                           "--out", str(tmp_path / "s.csv")], cwd=tmp_path, stdout=subprocess.PIPE,
                          stderr=subprocess.PIPE, text=True, start_new_session=True,

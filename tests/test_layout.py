@@ -1,12 +1,11 @@
-"""The package layout (docs/scale.md, "Layout"): deprecated flat names alias the very modules, no import cycles
-between modules or packages, no module over 400 lines, entry points that resolve."""
+"""The repository's layout (docs/scale.md, "Layout"), across ``srenv/`` and ``agents/``: no import cycles between
+modules or packages, no module over 400 lines, no function over 80 (numba-jitted kernels excepted), the old flat
+names gone, entry points that resolve."""
 
 from __future__ import annotations
 
 import ast
 import importlib
-import pickle
-import pkgutil
 import re
 import subprocess
 import sys
@@ -15,54 +14,17 @@ from pathlib import Path
 import pytest
 
 import srenv
-from srenv._compat import ALIASES, new_name
 
 SRENV = Path(srenv.__file__).parent
 REPO = SRENV.parent
+PACKAGES = ("srenv", "agents")  # every package of the repository (tests and scripts are not modules)
 MAX_LINES = 400
-
-
-@pytest.mark.parametrize("old", sorted(ALIASES))
-def test_every_flat_name_is_the_moved_module(old: str) -> None:
-    new = importlib.import_module(ALIASES[old])
-    assert importlib.import_module(old) is new
-    assert sys.modules[old] is new and new.__name__ == ALIASES[old] and new.__spec__.name == ALIASES[old]
-    # `from srenv.X import Y` gives the object the new module holds
-    public = [k for k, v in vars(new).items() if not k.startswith("__") and getattr(v, "__module__", None) == new.__name__]
-    if hasattr(new, "__path__"):  # a package: its first module
-        public = [next(pkgutil.iter_modules(new.__path__)).name]
-    assert public, f"{new.__name__} defines no name"
-    imported = __import__(old, fromlist=[public[0]])  # what `from {old} import {name}` executes
-    assert getattr(imported, public[0]) is getattr(new, public[0])
-
-
-def test_a_moved_subpackage_aliases_its_modules() -> None:
-    import srenv.laws.valve as old_valve
-    from srenv.laws import rod_friction
-
-    from srenv.physics.laws import valve
-
-    assert old_valve is valve and rod_friction is importlib.import_module("srenv.physics.laws.rod_friction")
-    assert new_name("srenv.laws.gas_spring") == "srenv.physics.laws.gas_spring"
-    assert new_name("srenv.config") is None and new_name("srenv.simulatorx") is None
-
-
-def test_a_pickle_naming_the_old_module_loads_the_new_object() -> None:
-    from srenv.analysis.pump_card import analyse_pump_card
-
-    assert pickle.loads(b"csrenv.pump_card\nanalyse_pump_card\n.") is analyse_pump_card  # protocol 0: GLOBAL
-
-
-def test_monkeypatching_the_old_name_patches_the_new_module(monkeypatch: pytest.MonkeyPatch) -> None:
-    from srenv.analysis import metrics
-
-    monkeypatch.setattr("srenv.metrics.ROD_GRADE_TENSILE_PA", {"X": 1.0})
-    assert metrics.ROD_GRADE_TENSILE_PA == {"X": 1.0}
+MAX_FUNCTION_LINES = 80
 
 
 def _modules() -> dict[str, Path]:
     out = {}
-    for path in SRENV.rglob("*.py"):
+    for path in (p for top in PACKAGES for p in (REPO / top).rglob("*.py")):
         parts = list(path.relative_to(REPO).with_suffix("").parts)
         if parts[-1] == "__init__":
             parts.pop()
@@ -131,24 +93,29 @@ def _cycles(graph: dict[str, set[str]]) -> list[list[str]]:
 
 
 def _package(module: str) -> str:
-    """srenv.<package> for a module of a subpackage, the module itself at the top level."""
+    """<top>.<package> for a module of a subpackage, the module itself at the top level."""
     parts = module.split(".")
-    return ".".join(parts[:2]) if len(parts) > 2 or (SRENV / parts[-1]).is_dir() and len(parts) == 2 else module
+    return ".".join(parts[:2]) if len(parts) > 2 or (REPO.joinpath(*parts)).is_dir() and len(parts) == 2 else module
 
 
 def test_no_import_cycles_between_modules_or_packages() -> None:
     modules = _modules()
     graph = {m: _imports(m, p, modules) for m, p in modules.items()}
     assert _cycles(graph) == []
-    # the package `srenv` itself (its __init__) is every module's parent: it is left out of the package graph
+    # a top package itself (its __init__) is every module's parent: it is left out of the package graph
     packages: dict[str, set[str]] = {}
     for m, deps in graph.items():
-        if m != "srenv":
-            packages.setdefault(_package(m), set()).update(_package(d) for d in deps if d != "srenv")
+        if m not in PACKAGES:
+            packages.setdefault(_package(m), set()).update(_package(d) for d in deps if d not in PACKAGES)
     for p, deps in packages.items():
         deps.discard(p)
     assert _cycles(packages) == []
     assert "srenv.physics" not in packages["srenv.numerics"] or "srenv.numerics" not in packages["srenv.physics"]
+    # the agents' layers: policies below evaluation below training below benchmark, srenv never above
+    order = ["agents.envs", "agents.policies", "agents.evaluation", "agents.training", "agents.benchmark"]
+    for low, high in ((a, b) for i, a in enumerate(order) for b in order[i + 1:]):
+        assert high not in packages[low], f"{low} imports {high}"
+    assert not any(d.startswith("agents") for p, deps in packages.items() if p.startswith("srenv") for d in deps)
 
 
 def test_no_module_over_400_lines() -> None:
@@ -156,12 +123,36 @@ def test_no_module_over_400_lines() -> None:
     assert long == {}
 
 
+def test_no_function_over_80_lines() -> None:
+    """A compiled numba kernel may stay whole (splitting it costs speed); every other function is short."""
+    long = {}
+    for m, p in _modules().items():
+        for node in ast.walk(ast.parse(p.read_text())):
+            if isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef)):
+                n = node.end_lineno - node.lineno + 1
+                if n > MAX_FUNCTION_LINES and not any("jit" in ast.unparse(d) for d in node.decorator_list):
+                    long[f"{m}.{node.name}"] = n
+    assert long == {}
+
+
+def test_the_flat_names_are_gone() -> None:
+    """0.2.0 removed the silent aliases of the flat layout: an old name is not importable, a new one is."""
+    for old in ("srenv.simulator", "srenv.metrics", "srenv.cli", "srenv.laws", "srenv.rllib"):
+        with pytest.raises(ModuleNotFoundError):
+            importlib.import_module(old)
+    assert importlib.import_module("srenv.physics.laws.valve").__name__ == "srenv.physics.laws.valve"
+
+
 def test_entry_points_resolve() -> None:
-    script = re.search(r'^srenv = "([\w.]+):(\w+)"', (REPO / "pyproject.toml").read_text(), re.MULTILINE)
+    text = (REPO / "pyproject.toml").read_text()
+    script = re.search(r'^srenv = "([\w.]+):(\w+)"', text, re.MULTILINE)
     module, func = script.groups()
     assert callable(getattr(importlib.import_module(module), func))
-    for flat in ("srenv.cli", "srenv.tools.cli"):  # python -m with the flat name too (the alias runs the new one)
-        p = subprocess.run([sys.executable, "-m", flat, "--help"], capture_output=True, text=True, timeout=120,
-                           cwd=REPO, check=False)
-        assert p.returncode == 0 and "simulate" in p.stdout, p.stderr
-        assert "RuntimeWarning" not in p.stderr
+    # the wheel installs agents/ as srenv_agents: its entry point names the same module under that name
+    agents_script = re.search(r'^srenv-agents = "srenv_agents\.([\w.]+):(\w+)"', text, re.MULTILINE)
+    assert callable(getattr(importlib.import_module("agents." + agents_script.group(1)), agents_script.group(2)))
+    for argv in (["srenv.tools.cli", "--help"], ["agents", "--help"]):
+        p = subprocess.run([sys.executable, "-m", *argv], capture_output=True, text=True, timeout=120, cwd=REPO,
+                           check=False)
+        assert p.returncode == 0 and "usage" in p.stdout, p.stderr
+        assert "Warning" not in p.stderr

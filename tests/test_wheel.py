@@ -1,26 +1,22 @@
-"""The built wheel is a library: it ships the well configs and the unit catalogue, installs no top-level
-``agents`` package, and, unpacked and imported from another directory, makes every registered srenv env and
-runs ``srenv simulate`` on a shipped name.
+"""The built wheel is a library: it ships the well configs, the unit catalogue and the training and benchmark
+YAMLs, installs the agents as ``srenv_agents`` (no top-level ``agents`` package), and, unpacked and imported
+from another directory, makes every registered srenv env and runs ``srenv simulate`` on a shipped name.
 
-The wheel is built from a copy of the sources (``pip wheel`` writes build/ and *.egg-info into the tree it
-builds) without build isolation (no download); the subprocess sees only the unpacked wheel and the
-dependencies installed in this interpreter, and checks that srenv is imported from the wheel.
+The wheel (the ``wheel`` fixture of conftest.py) is built from a copy of the sources; the subprocess sees only
+the unpacked wheel and the dependencies installed in this interpreter, and checks that srenv is imported from
+the wheel.
 """
 
 from __future__ import annotations
 
 import json
 import os
-import shutil
 import subprocess
 import sys
 import zipfile
 from pathlib import Path
 
-import pytest
-
 ROOT = Path(__file__).resolve().parents[1]
-SOURCES = ("srenv", "configs", "setup.py", "pyproject.toml", "README.md")
 
 PROBE = r"""
 import json, os, sys
@@ -41,44 +37,25 @@ try:
     main(["simulate", "paper_fig3_vertical", "--strokes", "1", "--out", "card.csv"])
 except SystemExit as exc:
     assert not exc.code, f"simulate exited {exc.code}"
+# the agents under their installed name: relative imports, configs found as package data, module:id env ids
+import srenv_agents.cli, srenv_agents.training.residual_env as residual_env
+from srenv_agents.cli import QUICK_BENCHMARK
+assert srenv_agents.cli.__file__.startswith(site) and QUICK_BENCHMARK.is_file(), QUICK_BENCHMARK
+assert residual_env.RESIDUAL_ENV_ID.startswith("srenv_agents.training.residual_env:")
 print("PROBE " + json.dumps({"ids": ids, "shipped": shipped_configs(), "file": srenv.__file__}))
 """
-
-
-def _has_build_backend() -> bool:
-    """setuptools >= 68 (pyproject's build requirement) in this interpreter."""
-    from importlib.metadata import PackageNotFoundError, version
-
-    try:
-        return int(version("setuptools").split(".")[0]) >= 68
-    except (PackageNotFoundError, ValueError):
-        return False
-
-
-@pytest.fixture(scope="module")
-def wheel(tmp_path_factory: pytest.TempPathFactory) -> Path:
-    tmp = tmp_path_factory.mktemp("wheel")
-    src = tmp / "src"
-    src.mkdir()
-    for name in SOURCES:
-        if (ROOT / name).is_dir():
-            shutil.copytree(ROOT / name, src / name, ignore=shutil.ignore_patterns("__pycache__"))
-        else:
-            shutil.copy2(ROOT / name, src / name)
-    cmd = [sys.executable, "-m", "pip", "wheel", "--no-deps", "-q", str(src), "-w", str(tmp / "dist")]
-    if _has_build_backend():
-        cmd.insert(4, "--no-build-isolation")  # build with the installed setuptools: nothing downloaded
-    p = subprocess.run(cmd, capture_output=True, text=True, timeout=300, check=False)
-    assert p.returncode == 0, p.stderr[-2000:]
-    (whl,) = (tmp / "dist").glob("srenv-*.whl")
-    return whl
 
 
 def test_wheel_contents(wheel: Path) -> None:
     names = zipfile.ZipFile(wheel).namelist()
     tops = {n.split("/", 1)[0] for n in names}
     assert "agents" not in tops  # python -m agents runs from a checkout; the name is too generic to install
-    assert {t for t in tops if not t.endswith(".dist-info")} == {"srenv"}
+    assert {t for t in tops if not t.endswith(".dist-info")} == {"srenv", "srenv_agents"}
+    agents = {str(p.parent.relative_to(ROOT)) for p in (ROOT / "agents").rglob("__init__.py")}
+    assert all(f"srenv_{pkg}/__init__.py" in names for pkg in agents), agents
+    assert "srenv/configs/benchmark/v1_quick.yaml" in names and "srenv/configs/train/ppo_v1.yaml" in names
+    entry_points = next(n for n in names if n.endswith(".dist-info/entry_points.txt"))
+    assert "srenv-agents = srenv_agents.cli:main" in zipfile.ZipFile(wheel).read(entry_points).decode()
     wells = sorted(p.name for p in (ROOT / "configs" / "wells").glob("*.yaml"))
     assert wells and all(f"srenv/configs/wells/{w}" in names for w in wells)
     assert "srenv/configs/units/catalogue.yaml" in names

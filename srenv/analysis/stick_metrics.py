@@ -1,5 +1,5 @@
 """Rest (stick) episodes, slip amplitude, load oscillation and the stick-slip index of traces; definitions in the
-docstring of :mod:`srenv.metrics` (which re-exports these)."""
+docstring of :mod:`srenv.analysis.metrics` (which re-exports these)."""
 
 from __future__ import annotations
 

@@ -1,11 +1,11 @@
-"""One compiled pass over a recorded stroke for :mod:`srenv.stroke_summary` (the env's per-step summary).
+"""One compiled pass over a recorded stroke for :mod:`srenv.analysis.stroke_summary` (the env's per-step summary).
 
 The summary used to call ten numpy-level metrics, each a few Python calls and array temporaries; on every env
 step, right after the compiled kernel, those calls cost as much as ~10 % of the stroke. Here the same
-definitions (:mod:`srenv.metrics`, :mod:`srenv.stick_metrics`, :mod:`srenv.pump_card`) are evaluated by one
+definitions (:mod:`srenv.analysis.metrics`, :mod:`srenv.analysis.stick_metrics`, :mod:`srenv.analysis.pump_card`) are evaluated by one
 compiled call that reads each trace column once. Same values: exact for maxima, minima, counts, order
 statistics and crossings; the card area and the slip residual differ from the numpy forms at most by the
-order of summation (``tests/test_stroke_pass.py`` pins them against the metrics functions).
+order of summation (``tests/srenv/simulation/test_stroke_pass.py`` pins them against the metrics functions).
 """
 
 from __future__ import annotations
@@ -23,7 +23,7 @@ _Q_DOWN, _Q_UP = 0.10, 0.85
 def _trace_figures(t: np.ndarray, ua: np.ndarray, prl: np.ndarray, ub: np.ndarray, vb: np.ndarray, half: int,
                    rest_tol: float, min_rest_steps: int) -> tuple:
     """(max step jitter of t, PPRL, MPRL, polished-rod stroke, card area, pump stroke, plunger rest episodes,
-    peak-to-peak of the slip residual) of one trace; definitions in :mod:`srenv.metrics`.
+    peak-to-peak of the slip residual) of one trace; definitions in :mod:`srenv.analysis.metrics`.
 
     ``half`` is the half-width in samples of the slip moving average (``stick_metrics._centered_residual``)."""
     n = t.size
@@ -124,7 +124,7 @@ def _first_fall(x: np.ndarray, f: np.ndarray, start: int, length: int, level: fl
 @njit(cache=True)
 def pump_card_figures(x: np.ndarray, f: np.ndarray) -> tuple:
     """(stroke, downstroke level, upstroke level, x_min, crossings at 50 %, 90 % and 10 % of the transfer on the
-    downstroke) of one pump card, as :func:`srenv.pump_card.analyse_pump_card` reads it."""
+    downstroke) of one pump card, as :func:`srenv.analysis.pump_card.analyse_pump_card` reads it."""
     a = f.copy()
     down, i_down = _percentile(a, _Q_DOWN, 0)
     up, _ = _percentile(a, _Q_UP, i_down + 1)
@@ -157,7 +157,7 @@ def stroke_pass(t: np.ndarray, ua: np.ndarray, prl: np.ndarray, ub: np.ndarray, 
 @njit(cache=True)
 def goodman_pct(fmax_eq: np.ndarray, fmin_eq: np.ndarray, e: np.ndarray, shift: np.ndarray, area: np.ndarray,
                 quarter_tensile: np.ndarray) -> np.ndarray:
-    """:func:`srenv.metrics.goodman_loading_pct` (SF = 1) of the true loads ``N_eq - shift`` at elements `e`
+    """:func:`srenv.analysis.metrics.goodman_loading_pct` (SF = 1) of the true loads ``N_eq - shift`` at elements `e`
     (``quarter_tensile`` = T / 4): inf where no allowable range is left."""
     out = np.empty(e.size)
     for k in range(e.size):

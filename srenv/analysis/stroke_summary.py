@@ -52,7 +52,7 @@ def _taper_top_data(sim: Simulator) -> tuple[np.ndarray, np.ndarray, np.ndarray,
 
 def goodman_per_taper(sim: Simulator, fmax_eq: np.ndarray, fmin_eq: np.ndarray) -> np.ndarray:
     """Goodman loading % (RP 11BR range form, SF = 1) at the top of each taper, from true loads
-    (N = N_eq - p A): :func:`srenv.metrics.goodman_loading_pct` of :func:`srenv.metrics.taper_stress_range`,
+    (N = N_eq - p A): :func:`srenv.analysis.metrics.goodman_loading_pct` of :func:`srenv.analysis.metrics.taper_stress_range`,
     compiled on the few taper tops (the numpy calls cost more than their arithmetic here)."""
     e, area, shift, tensile = _taper_top_data(sim)
     return goodman_pct(fmax_eq, fmin_eq, e, shift, area, tensile / 4)
@@ -72,8 +72,8 @@ def slip_window_s(t_s: np.ndarray, f1_hz: float) -> float:
 
 def _card_class(stroke: float, down: float, up: float, x_min: float, x_mid: float, x90: float,
                 x10: float) -> tuple[str, float]:
-    """(card class, fillage) of :func:`srenv.pump_card.analyse_pump_card` from
-    :func:`srenv.stroke_pass.pump_card_figures`."""
+    """(card class, fillage) of :func:`srenv.analysis.pump_card.analyse_pump_card` from
+    :func:`srenv.analysis.stroke_pass.pump_card_figures`."""
     fluid = up - down
     if not stroke > 0 or fluid <= NO_LOAD_FRACTION * max(abs(up), abs(down), 1.0):
         return "no_fluid_load", 0.0
@@ -85,8 +85,8 @@ def _card_class(stroke: float, down: float, up: float, x_min: float, x_mid: floa
 
 def _stroke_figures(sim: Simulator, tr: dict, last_tr: dict, n_strokes: int, rod_eps: np.ndarray) -> tuple:
     """(card metrics, stick-slip components, (card class, card fillage)) of a trace and of the last stroke's pump
-    card by one compiled pass (:mod:`srenv.stroke_pass`), with the checks of
-    :func:`srenv.stick_metrics.stick_slip_index`."""
+    card by one compiled pass (:mod:`srenv.analysis.stroke_pass`), with the checks of
+    :func:`srenv.analysis.stick_metrics.stick_slip_index`."""
     t = tr["t_s"]
     n = t.size
     if n < 2:

@@ -1,5 +1,5 @@
 """Checks and small transforms shared by the trace metrics (``metrics``, ``stick_metrics``): 1-D float arrays,
-uniform sampling, linear detrending. Conventions in :mod:`srenv.metrics`."""
+uniform sampling, linear detrending. Conventions in :mod:`srenv.analysis.metrics`."""
 
 from __future__ import annotations
 

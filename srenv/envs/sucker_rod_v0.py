@@ -1,8 +1,8 @@
 """``srenv/SuckerRod-v0``: choose the stroke rate and length of a beam-pumped well, stroke by stroke.
 
-The physical system is :class:`srenv.simulator.Simulator` (exact nonsmooth FE rod string, valve law,
-friction, inflow and fillage); the reward and the rod-failure monitor live in :mod:`srenv.reward`; the
-cards are drawn by :mod:`srenv.render`. This module only composes them.
+The physical system is :class:`srenv.simulation.simulator.Simulator` (exact nonsmooth FE rod string, valve law,
+friction, inflow and fillage); the reward and the rod-failure monitor live in :mod:`srenv.task.reward`; the
+cards are drawn by :mod:`srenv.analysis.render`. This module only composes them.
 
 Constructor
 -----------
@@ -43,13 +43,13 @@ Observation space
 
 Reward
 ------
-See :mod:`srenv.reward`: ``reward_production - stick-slip - peak-load (- failure)``; each term is in
+See :mod:`srenv.task.reward`: ``reward_production - stick-slip - peak-load (- failure)``; each term is in
 ``info`` as ``reward_production``, ``reward_stick_slip``, ``reward_peak_load``, ``reward_failure`` and
 they sum to the reward.
 
 Info
 ----
-The stroke metrics of :func:`srenv.stroke_summary.summarize` (``pprl_n``, ``mprl_n``, ``fillage``,
+The stroke metrics of :func:`srenv.analysis.stroke_summary.summarize` (``pprl_n``, ``mprl_n``, ``fillage``,
 ``production_m3_day``, ``goodman_pct``, ``goodman_max_pct``, ``stick_slip_index``,
 ``plunger_extra_stick_episodes``, ``certified_steps``, ``corrected_steps``, ``qp_steps``,
 ``solver_calls``, ...), ``spm``, ``stroke_length_m``, ``fluid_level_m``, the reward terms, and
@@ -59,7 +59,7 @@ Episode end
 -----------
 terminated: rod failure (Goodman loading above ``reward.failure_goodman_pct``) or an unrecoverable step-QP
 failure (``info["failure"]``, never raised from ``step``); truncated: ``control.max_episode_s`` of simulated
-time (the horizon: returns are time integrals, see :mod:`srenv.reward`) or ``control.max_episode_steps``.
+time (the horizon: returns are time integrals, see :mod:`srenv.task.reward`) or ``control.max_episode_steps``.
 If the solver fails before any stroke of the step completed, the metrics in ``info`` are the previous
 step's and only ``reward_failure`` is non-zero (nothing was produced or loaded in that step).
 

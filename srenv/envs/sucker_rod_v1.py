@@ -1,11 +1,11 @@
 """``srenv/SuckerRod-v1``: run a beam-pumped well for profit, from what a rod-pump controller measures.
 
-A family of wells (:mod:`srenv.well_family`: depth, tapered rod design, pump, survey, friction, water cut,
+A family of wells (:mod:`srenv.task.well_family`: depth, tapered rod design, pump, survey, friction, water cut,
 inflow) with fixed train and test splits; the reservoir's inflow changes within an episode; one step is a
 control interval of well time (default 5 min) in which the unit pumps at an average stroke rate, intermittently
 below the VSD's minimum speed, down to idle; the reward is the well's profit rate in USD per hour of well time
-(:mod:`srenv.economics`). The physical system is the exact nonsmooth FE simulator
-(:class:`srenv.simulator.Simulator`) run interval by interval by :class:`srenv.interval.IntervalRunner`
+(:mod:`srenv.task.economics`). The physical system is the exact nonsmooth FE simulator
+(:class:`srenv.simulation.simulator.Simulator`) run interval by interval by :class:`srenv.task.interval.IntervalRunner`
 (exact strokes + a quasi-steady fast-forward whose error is measured); this module composes them.
 
 Constructor
@@ -23,7 +23,7 @@ Constructor
 ``reset(seed=S)`` on a split draws well number ``S mod N`` of that split (so a test episode is reproduced by
 its seed) and the episode's randomness (initial fluid level, inflow step) from the seeded ``np_random``;
 ``reset()`` without a seed draws the well from ``np_random``. ``info["well_id"]`` names the well
-(``"train-017"``). The test split is for final evaluation only: :func:`srenv.well_family.check_split` refuses it
+(``"train-017"``). The test split is for final evaluation only: :func:`srenv.task.well_family.check_split` refuses it
 to tuning and training code.
 
 Action space
@@ -40,14 +40,14 @@ Flat float32 ``Box(-10, 10)``; names in ``FIELD_OBS_NAMES`` / ``PRIVILEGED_OBS_N
 :func:`obs_index`). Field (77): the last pumped stroke's surface card (load-cell load / the unit's PPRL rating on
 32 positions per branch), the running SPM and average SPM (/ ``spm_max``), stroke (-1..1 over its range), duty
 (fraction of the last interval pumped), idle time since the pump last ran (h), the controller's fillage
-estimate read off the downhole card (``task.fillage_estimator``: :func:`srenv.interval.controller_fillage`), mean and peak polished-rod power (/ rating x max speed), PPRL and
+estimate read off the downhole card (``task.fillage_estimator``: :func:`srenv.task.interval.controller_fillage`), mean and peak polished-rod power (/ rating x max speed), PPRL and
 MPRL (/ rating), time remaining (fraction of the horizon), the last acoustic fluid-level shot (level above the
 pump / pump depth, every ``task.level_shot_interval_h``) and its age (/ horizon). Privileged (88) adds the true
 annulus level, intake pressure, true fillage, current inflow (/ nominal) and the hidden well parameters.
 
 Reward
 ------
-USD per hour of well time, the sum of ``info["reward_*"]`` (:data:`srenv.economics.REWARD_TERMS`): revenue,
+USD per hour of well time, the sum of ``info["reward_*"]`` (:data:`srenv.task.economics.REWARD_TERMS`): revenue,
 inventory (the value of the change in annulus liquid, so draining it earns nothing net: the horizon cannot
 reward it), energy, fatigue, stick-slip, peak load, fluid pound, VSD ramp, failure. ``info["cost"]`` >= 0 is the
 constraint cost (overload, compression, pound; parts in ``info["cost_*"]``).

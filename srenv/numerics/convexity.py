@@ -1,7 +1,7 @@
 """Convexity of the step problem with nonmonotone laws (design §2): each law gives its slope.
 
 With j = j1 - j2 the step objective 1/2 v'K*v - b'v + j1(v) - j2(v) is convex iff K* - diag(s) is positive
-definite, s_i = sup j2_i'' the steepest negative slope of node i's law (srenv.laws: ``valve.slope`` at the
+definite, s_i = sup j2_i'' the steepest negative slope of node i's law (srenv.physics.laws: ``valve.slope`` at the
 pump, ``rod_friction.slope`` on the rod). K* is tridiagonal, so its LDL' pivots decide it.
 
 Violation is an error by default (``simulation.nonconvex_step: error``) and a warning with

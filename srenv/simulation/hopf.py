@@ -14,7 +14,7 @@ with F'(V) = -(C0 - C) c_v exp(-c_v V) < 0: the friction slope is a negative dam
     v_H = ln(c_v (C0 - C) / b) / c_v       (none if c_v (C0 - C) <= b: stable at every V).
 
 :class:`SpringBlock` integrates this system with the SAME compiled step machinery as the rod
-(:func:`srenv.kernel.advance`, built by :func:`srenv.kernel_layout.build`, on a one-node model: the block is the "pump" node carrying the nonmonotone
+(:func:`srenv.numerics.kernel.advance`, built by :func:`srenv.numerics.kernel_layout.build`, on a one-node model: the block is the "pump" node carrying the nonmonotone
 law of paper eq. 32, the spring is the single element to the prescribed top). The trapezoidal Newmark
 rule (beta = 1/4, gamma = 1/2) maps the continuous stability boundary Re(lambda) = 0 onto |z| = 1
 exactly, so with converged DC iterations the simulated threshold equals v_H up to the resolution of the

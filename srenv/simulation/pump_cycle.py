@@ -2,7 +2,7 @@
 at the top, the gas chamber's start, and the idle-time hooks of the v1 env (a mix-in of Simulator).
 
 The kernel stops at every plunger reversal (EVENT); :meth:`PumpCycle._on_event` decides whether it is a
-valve cycle and updates the valve law's record (srenv.laws.valve.PARAMS) and the plunger extremes
+valve cycle and updates the valve law's record (srenv.physics.laws.valve.PARAMS) and the plunger extremes
 (kernel_layout.PROGRESS) for the rest of the run.
 """
 
@@ -19,7 +19,7 @@ GAS_MIN_DELAY_FRACTION = 0.01
 
 
 class PumpCycle:
-    """Valve-cycle bookkeeping of :class:`srenv.simulator.Simulator` (uses its cfg, annulus, gas, law)."""
+    """Valve-cycle bookkeeping of :class:`srenv.simulation.simulator.Simulator` (uses its cfg, annulus, gas, law)."""
 
     def _intake_pa(self) -> float:
         return self.annulus.intake_pressure_pa() if self.annulus is not None else self.cfg.pump.intake_pressure_pa

@@ -126,7 +126,7 @@ class Simulator(PumpCycle):
                                  fr.law == "nonmonotone")
 
     def _check_convexity(self, dt: float | None = None) -> None:
-        """Warn or fail when a nonmonotone law makes the step problem nonconvex (srenv.convexity).
+        """Warn or fail when a nonmonotone law makes the step problem nonconvex (srenv.numerics.convexity).
 
         The slopes are the laws' own (laws.valve.slope, laws.rod_friction.slope); the rod's side force
         depends on the axial force, estimated here from the static string with the plunger at P+ and at P0

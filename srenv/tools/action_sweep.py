@@ -2,7 +2,7 @@
 
 ``srenv sweep`` studies the simulator; this studies the *reward*: it resets a v1 env with a fixed seed and
 takes one step at each setpoint, so neighbouring setpoints see the same well, level and inflow. Used by the
-continuity test (``tests/test_env_v1.py``) and by ``scripts/reward_sweep.py`` (the figure in docs/task.md).
+continuity test (``tests/srenv/envs/test_env_v1.py``) and by ``scripts/reward_sweep.py`` (the figure in docs/task.md).
 """
 
 from __future__ import annotations

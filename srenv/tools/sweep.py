@@ -16,7 +16,7 @@ Metrics (CSV columns, unit in every name) are taken over the samples after ``--s
 ``plunger_stick_episodes`` (rests of >= 2 steps with the plunger velocity exactly 0), ``plunger_extra_
 stick_episodes`` (beyond the two valve reversals per stroke; equal to the former in a pull-out),
 ``slip_amplitude_m`` (half peak-to-peak of du = u_B - u_A about its moving average over one natural period,
-:func:`srenv.metrics.slip_amplitude_m`), polished-rod load peak, minimum and oscillation, and the DC/QP
+:func:`srenv.analysis.metrics.slip_amplitude_m`), polished-rod load peak, minimum and oscillation, and the DC/QP
 effort. The critical value of each set (stdout JSON) is the lowest swept value from which on every case
 has no extra plunger stick episode; it lies in (``last_sticking_...``, ``critical_...``]. The amplitude is
 not used for it: a decaying transient leaves a small nonzero amplitude in any finite run.

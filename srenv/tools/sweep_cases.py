@@ -1,5 +1,5 @@
 """The cases of a sweep: parameter sets from ``--grid`` / ``--case``, each run at every ``--values`` entry; the
-metric columns every backend reports (see :mod:`srenv.sweep`)."""
+metric columns every backend reports (see :mod:`srenv.tools.sweep`)."""
 
 from __future__ import annotations
 

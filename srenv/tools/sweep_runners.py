@@ -1,5 +1,5 @@
 """How a sweep's cases run: in this process, in a local pool of processes (pipes only, no listener), or as Ray
-tasks on a cluster named by ``--address``; every backend gives the same rows (see :mod:`srenv.sweep`)."""
+tasks on a cluster named by ``--address``; every backend gives the same rows (see :mod:`srenv.tools.sweep`)."""
 
 from __future__ import annotations
 
@@ -129,9 +129,12 @@ def run_ray(cases: list[Case], duration_s: float, settle_fraction: float, worker
     connecting. No local Ray is ever started here (module docstring: it would listen on every interface)."""
     import logging
 
-    import ray
     from tqdm import tqdm
 
+    try:
+        import ray
+    except ModuleNotFoundError:  # the core install has no Ray: one line, exit 2
+        raise ConfigError("--address", address, "an installed Ray (pip install 'srenv[rllib]')") from None
     if not address:
         raise ConfigError("--address", address, "the address of a running Ray cluster (local runs use "
                           "run_local, which opens no network port)")

@@ -1,0 +1,205 @@
+"""The benchmark's YAML (``configs/benchmark/*.yaml``): read, checked before any work, ``quick:`` merged.
+
+Checks: seed lists (``[..]`` or ``{start, count}``), tuning on the training split only (the test split is
+refused), tuning / validation / test seeds pairwise disjoint, known baseline names, agent runs with a
+readable training YAML that does not train on the test split, residual bases.
+"""
+
+from __future__ import annotations
+
+import copy
+from pathlib import Path
+from typing import Any
+
+from srenv.safe_yaml import load_yaml_file
+from srenv.shipped import shipped_dir
+
+from ..envs import ENV_ID_V1
+from ..inputs import FIELDS, seeds
+from ..policies.factory import BASELINE_NAMES
+from ..policies.residual import RESIDUAL_BASES, check_scales
+from ..training.tuning import refuse_test_split
+
+Z95 = 1.959963984540054
+
+
+class BenchmarkConfigError(ValueError):
+    """A benchmark YAML that cannot be used; the message names the key, the value and what is expected."""
+
+
+# -------------------------------------------------------------------------------------------- config
+_REPLACED = ("space", "runs")  # a quick block's search space / agent runs replace the full ones
+
+
+def _deep_merge(base: dict, over: dict) -> dict:
+    out = copy.deepcopy(base)
+    for k, v in over.items():
+        merge = isinstance(v, dict) and isinstance(out.get(k), dict) and k not in _REPLACED
+        out[k] = _deep_merge(out[k], v) if merge else copy.deepcopy(v)
+    return out
+
+
+def _seeds(value: Any, key: str) -> list[int]:
+    """A seed list: ``[1, 2, 3]`` or ``{start: S, count: N}``, bounded (agents/inputs.py)."""
+    return seeds(value, key)
+
+
+def load_benchmark_config(path: str | Path, quick: bool = False) -> dict[str, Any]:
+    """Read and check a benchmark YAML (``quick``: merge its ``quick:`` block); the resolved dict."""
+    p = Path(path)
+    if not p.is_file():
+        raise FileNotFoundError(f"benchmark config {path}: no such file")
+    raw = load_yaml_file(p, "benchmark config")  # bounded: alias bombs, duplicate keys, syntax in one line
+    if not isinstance(raw, dict):
+        raise BenchmarkConfigError(f"benchmark config {path}: expected a mapping")
+    cfg = _deep_merge(raw, raw.get("quick") or {}) if quick else copy.deepcopy(raw)
+    cfg.pop("quick", None)
+    cfg["source"] = str(path)
+    cfg.setdefault("env_id", ENV_ID_V1)
+    cfg.setdefault("env_kwargs", {"observation": "field"})
+    if "scenario" in cfg["env_kwargs"]:
+        raise BenchmarkConfigError("benchmark config: env_kwargs.scenario: expected none (the protocol sets "
+                                   "train for tuning/training and test for the evaluation)")
+    hist = cfg.setdefault("history", [])
+    if not (isinstance(hist, list) and all(isinstance(h, str) for h in hist)):
+        raise BenchmarkConfigError(f"benchmark config: history = {str(hist)[:120]!r}: expected a list of strings "
+                                   "(one line per earlier test evaluation)")
+    cfg["workers"] = FIELDS["benchmark"]["workers"].check(cfg.setdefault("workers", 2))
+    sets = _check_splits(cfg)
+    bl = cfg.setdefault("baselines", {})
+    for name in bl:
+        if name not in BASELINE_NAMES:
+            raise BenchmarkConfigError(f"benchmark config: baselines.{name}: expected one of {BASELINE_NAMES}")
+    ag = cfg.setdefault("agents", {})
+    sel = ag.setdefault("selection", "mean")
+    if sel not in ("mean", "best_on_validation"):
+        raise BenchmarkConfigError(f"benchmark config: agents.selection = {sel!r}: expected mean or "
+                                   "best_on_validation")
+    if sel == "best_on_validation" and not cfg["validation"]["seeds"]:
+        raise BenchmarkConfigError("benchmark config: agents.selection = best_on_validation needs "
+                                   "validation.seeds")
+    runs = ag.setdefault("runs", {})
+    if not isinstance(runs, dict):
+        raise BenchmarkConfigError(f"benchmark config: agents.runs = {runs!r}: expected a mapping algo -> run")
+    for algo, run in runs.items():
+        _check_run(algo, run)
+    for algo, run in runs.items():
+        if run.get("teacher") is not None:
+            _check_teacher(algo, run, runs, sets["tuning"] | sets["validation"])
+    return cfg
+
+
+def _check_splits(cfg: dict[str, Any]) -> dict[str, set[int]]:
+    """The tuning, validation and test seeds, resolved in ``cfg`` and checked disjoint; their sets."""
+    for part in ("tuning", "test"):
+        if not isinstance(cfg.get(part), dict) or "seeds" not in cfg[part]:
+            raise BenchmarkConfigError(f"benchmark config: {part}: expected a mapping with seeds")
+        cfg[part]["seeds"] = _seeds(cfg[part]["seeds"], f"{part}.seeds")
+    cfg["tuning"].setdefault("scenario", "train")
+    refuse_test_split(cfg["tuning"]["scenario"], "tune")
+    val = cfg.setdefault("validation", {"seeds": []})
+    val["seeds"] = _seeds(val["seeds"], "validation.seeds") if val.get("seeds") else []
+    sets = {"tuning": set(cfg["tuning"]["seeds"]), "validation": set(val["seeds"]), "test": set(cfg["test"]["seeds"])}
+    for a, b in (("tuning", "test"), ("validation", "test"), ("tuning", "validation")):
+        if sets[a] & sets[b]:
+            raise BenchmarkConfigError(f"benchmark config: {a}.seeds and {b}.seeds share "
+                                       f"{sorted(sets[a] & sets[b])[:5]}: expected disjoint seed sets")
+    return sets
+
+
+def _check_run(algo: str, run: Any) -> None:
+    """One ``agents.runs`` entry: its training YAML (read now, not after the tuning), seeds and residual."""
+    from ..training.config import load_train_config
+
+    if not isinstance(run, dict) or "config" not in run:
+        raise BenchmarkConfigError(f"benchmark config: agents.runs.{algo}: expected {{config: YAML, seeds: [...]}}")
+    run["config"] = str(_resolve(run["config"]))
+    run["seeds"] = _seeds(run.get("seeds", [0, 1, 2]), f"agents.runs.{algo}.seeds")
+    if not isinstance(run.get("ensemble", False), bool) or (run.get("ensemble") and len(run["seeds"]) < 2):
+        raise BenchmarkConfigError(f"benchmark config: agents.runs.{algo}.ensemble = {run.get('ensemble')!r}: "
+                                   "expected true or false (true needs >= 2 seeds)")
+    over = run.get("overrides")
+    if over is not None and not (isinstance(over, dict) and all(isinstance(k, str) for k in over)):
+        raise BenchmarkConfigError(f"benchmark config: agents.runs.{algo}.overrides = {str(over)[:80]!r}: "
+                                   "expected a mapping of training-YAML keys")
+    tc = load_train_config(run["config"], over)  # checks the YAML and its overrides now, not after tuning
+    refuse_test_split(tc.env_kwargs.get("scenario", "train"), "train")
+    res = run.get("residual")
+    if res is not None and (not isinstance(res, dict) or res.get("base", "best_tuned") not in
+                            ("best_tuned", *RESIDUAL_BASES)):
+        raise BenchmarkConfigError(f"benchmark config: agents.runs.{algo}.residual = {res!r}: expected "
+                                   "{base: best_tuned | best_constant | pump_off | fillage_pi, scale: S}")
+    if res is not None and res.get("shaping") not in (None, "potential"):
+        raise BenchmarkConfigError(f"benchmark config: agents.runs.{algo}.residual.shaping = "
+                                   f"{res.get('shaping')!r}: expected potential or nothing")
+    if res is not None:
+        extra = set(res) - {"base", "scale", "idle_scale", "shaping"}
+        if extra:
+            raise BenchmarkConfigError(f"benchmark config: agents.runs.{algo}.residual: unknown key(s) "
+                                       f"{sorted(extra)}: expected base, scale, idle_scale, shaping")
+        try:
+            check_scales(res.get("scale"), res.get("idle_scale"))
+        except ValueError as exc:
+            raise BenchmarkConfigError(f"benchmark config: agents.runs.{algo}.{exc}") from None
+
+
+def _int_in(value: Any, lo: int, hi: int) -> bool:
+    return isinstance(value, int) and not isinstance(value, bool) and lo <= value <= hi
+
+
+def _check_teacher(algo: str, run: dict[str, Any], runs: dict[str, Any], held: set[int]) -> None:
+    """A teacher-student run (agents/training/distill.py): its teachers are this run's seeds on the privileged
+    observation, its students start from ``students_from``'s models of the same seeds."""
+    from ..training.distill import DISTILL_KEYS, SEED_STRIDE
+
+    key = f"benchmark config: agents.runs.{algo}.teacher"
+    t = run["teacher"]
+    if not isinstance(t, dict) or set(t) - DISTILL_KEYS or not {"students_from", "iterations", "episodes",
+                                                                  "seed_start"} <= set(t):
+        raise BenchmarkConfigError(f"{key} = {str(t)[:120]!r}: expected {{students_from: RUN, iterations: N, "
+                                   "episodes: N, seed_start: S[, idle_scale: X]}}")
+    src = runs.get(t["students_from"]) if isinstance(t["students_from"], str) else None
+    if src is None or t["students_from"] == algo or src.get("teacher"):
+        raise BenchmarkConfigError(f"{key}.students_from = {t['students_from']!r}: expected another run of "
+                                   f"agents.runs without a teacher (one of {sorted(set(runs) - {algo})})")
+    res, src_res = run.get("residual"), src.get("residual")
+    if not res or not src_res or any(res.get(k, d) != src_res.get(k, d) for k, d in
+                                      (("base", "best_tuned"), ("scale", None), ("idle_scale", None))):
+        raise BenchmarkConfigError(f"{key}: expected a residual run whose base, scale and idle_scale are those of "
+                                   f"{t['students_from']} (the students start from its models)")
+    if src["seeds"] != run["seeds"]:
+        raise BenchmarkConfigError(f"{key}.students_from = {t['students_from']!r}: its seeds {src['seeds']} "
+                                   f"differ from this run's {run['seeds']}: expected the same (one student each)")
+    for name, lo, hi in (("iterations", 1, 20), ("episodes", 1, 500), ("seed_start", 0, 10**9)):
+        if not _int_in(t[name], lo, hi):
+            raise BenchmarkConfigError(f"{key}.{name} = {t[name]!r}: expected an integer in [{lo}, {hi}]")
+    if t["iterations"] * t["episodes"] > SEED_STRIDE:
+        raise BenchmarkConfigError(f"{key}: iterations x episodes = {t['iterations'] * t['episodes']}: expected "
+                                   f"at most {SEED_STRIDE} (each student's episodes are seeds "
+                                   f"seed_start + {SEED_STRIDE} x seed + 0, 1, ...)")
+    try:
+        check_scales(res.get("scale"), t.get("idle_scale"))
+    except ValueError as exc:
+        raise BenchmarkConfigError(f"{key}.{str(exc).removeprefix('residual.')}") from None
+    used = {s for seed in run["seeds"] for s in distill_seeds(t, seed)}
+    if used & held:
+        raise BenchmarkConfigError(f"{key}.seed_start = {t['seed_start']!r}: its episodes share seeds "
+                                   f"{sorted(used & held)[:5]} with tuning or validation: expected disjoint seeds")
+
+
+def distill_seeds(teacher: dict[str, Any], seed: int) -> list[int]:
+    """The training-split episodes one student's DAgger rolls out (agents/training/distill.py)."""
+    from ..training.distill import SEED_STRIDE
+
+    start = teacher["seed_start"] + SEED_STRIDE * seed
+    return list(range(start, start + teacher["iterations"] * teacher["episodes"]))
+
+
+def _resolve(path: str | Path) -> Path:
+    """A training config named in a benchmark YAML: as given, else ``configs/...`` where srenv ships it
+    (the checkout's ``configs/``, or the wheel's package data)."""
+    p = Path(path)
+    if p.is_absolute() or p.exists() or len(p.parts) < 3 or p.parts[0] != "configs":
+        return p
+    return shipped_dir(p.parts[1]).joinpath(*p.parts[2:])
+

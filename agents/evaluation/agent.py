@@ -1,0 +1,68 @@
+"""Policies built from a *policy spec*: a picklable dict naming a baseline or trained models, so episodes can
+run in worker processes that build their own env and policy:
+
+- ``{"kind": "baseline", "name": "pump_off", "params": {...}}`` (:mod:`agents.policies.factory`),
+- ``{"kind": "agent", "path": "x.zip", "obs_norm": "x_obs_norm.npz" | None}`` (an SB3 model and the
+  observation normalisation it was trained with, stored as npz; both are read as data, nothing is unpickled),
+  optionally with ``"residual": {"base", "params", "scale"[, "idle_scale"]}`` (:mod:`agents.policies.residual`),
+- ``{"kind": "ensemble", "members": [{"path", "obs_norm"}, ...], "residual": ... | None}``: the mean of the
+  members' actions (:mod:`agents.policies.ensemble`).
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+
+from ..policies.ensemble import EnsemblePolicy
+from ..policies.factory import make_baseline
+from ..policies.field import obs_names_of
+from ..policies.residual import ResidualAgentPolicy
+from .model_io import algorithms, detect_algo, load_policy, read_data, space_shape
+from .normalizer import ObsNormalizer
+
+
+class AgentPolicy:
+    """An SB3 model (PPO, SAC, ...) with its observation normaliser, deterministic by default.
+
+    The zip is read as data (:func:`agents.evaluation.model_io.load_policy`: the network rebuilt from its plain-text
+    kwargs, weights loaded tensors-only), so a model file cannot run code; the spaces are the Box shapes
+    the zip records, in the action box [-1, 1] of the v1 contract.
+    """
+
+    def __init__(self, path: str, obs_norm: str | None = None) -> None:
+        import gymnasium as gym
+
+        self.path = path
+        data = read_data(path)
+        obs_shape, act_shape = space_shape(data, "observation_space", path), space_shape(data, "action_space", path)
+        self.observation_space = gym.spaces.Box(-np.inf, np.inf, obs_shape, np.float32)
+        self.action_space = gym.spaces.Box(-1.0, 1.0, act_shape, np.float32)
+        self.model = load_policy(path, algorithms()[detect_algo(path)], self.observation_space, self.action_space)
+        self.norm = ObsNormalizer.load(obs_norm) if obs_norm else None
+        if self.norm is not None and self.norm.mean.shape != obs_shape:
+            raise ValueError(f"{obs_norm}: statistics of shape {self.norm.mean.shape} do not fit the model "
+                             f"{path} (observation shape {obs_shape})")
+
+    def predict(self, observation: Any, state: Any = None, episode_start: Any = None,
+                deterministic: bool = True) -> tuple[np.ndarray, Any]:
+        if self.norm is not None:
+            observation = self.norm(observation)
+        return self.model.predict(observation, state=state, episode_start=episode_start,
+                                  deterministic=deterministic)
+
+
+def build_policy(spec: dict[str, Any], env: Any) -> Any:
+    if spec["kind"] == "baseline":
+        return make_baseline(spec["name"], spec.get("params", {}), obs_names_of(env))
+    if spec["kind"] in ("agent", "ensemble"):
+        if spec["kind"] == "agent":
+            agent: Any = AgentPolicy(spec["path"], spec.get("obs_norm"))
+        else:
+            agent = EnsemblePolicy([AgentPolicy(m["path"], m.get("obs_norm")) for m in spec["members"]])
+        res = spec.get("residual")
+        if res:
+            return ResidualAgentPolicy(agent, res["base"], res["params"], res["scale"], res.get("idle_scale"))
+        return agent
+    raise ValueError(f"policy spec kind = {spec.get('kind')!r}: expected baseline, agent or ensemble")

@@ -1,0 +1,180 @@
+"""The tests' shared doubles, for every test file under tests/ (import them: ``from conftest import ...``).
+
+1. :class:`FakeSuckerRodV1` (:data:`FAKE_ENV`, the id with its module for worker processes): a tiny stand-in
+   for ``srenv/SuckerRod-v1`` that implements only its contract (docs: notes/v1_contract): the field
+   observation's names, the action map, ``info`` keys, the train/test splits by ``reset(seed)``,
+   ``env.unwrapped.cfg`` / ``well`` / ``inflow_multiplier`` / ``time_s``, deep-copyable. The physics is a tank:
+   the annulus fills from an inflow that falls with the level and steps once per episode; the pump lifts
+   ``k * SPM * stroke`` while there is liquid. Fast enough for unit tests of the harness (thousands of steps per
+   second); it says nothing about the real well.
+2. :func:`assert_cli_refuses`: one check for the CLI's bad-input contract, shared by the tests of each command
+   that reads a file.
+3. The ``wheel`` fixture: srenv's wheel, built once per session (tests/test_wheel.py, test_core_install.py).
+"""
+
+from __future__ import annotations
+
+import shutil
+import subprocess
+import sys
+from dataclasses import dataclass, field
+from pathlib import Path
+from types import SimpleNamespace
+
+import gymnasium as gym
+import numpy as np
+import pytest
+
+ENV_ID = "agents-fake/SuckerRod-v1"
+CARD = [f"card_up_{i:02d}" for i in range(32)] + [f"card_down_{i:02d}" for i in range(32)]
+FIELD_OBS_NAMES = tuple(CARD + ["spm", "avg_spm", "stroke", "duty", "idle_s", "fillage_est", "power_mean",
+                                "power_peak", "pprl", "mprl", "time_remaining", "level_shot",
+                                "level_shot_age"])
+PRIVILEGED_OBS_NAMES = (*FIELD_OBS_NAMES, "level", "inflow")  # the field names, then the hidden truth
+N_WELLS = {"train": 20, "test": 10}
+
+
+@dataclass(frozen=True)
+class FakeWell:
+    well_id: str
+    cfg: SimpleNamespace
+    hidden: dict = field(default_factory=dict)
+
+
+def _well(split: str, number: int) -> FakeWell:
+    rng = np.random.default_rng((0 if split == "train" else 1) * 1000 + number)
+    control = SimpleNamespace(spm_min=3.0, spm_max=float(rng.uniform(8, 12)), stroke_min_m=1.0,
+                              stroke_max_m=float(rng.uniform(2.0, 3.0)))
+    task = SimpleNamespace(interval_s=300.0, episode_hours=4.0)
+    surface = SimpleNamespace(spm=float(rng.uniform(4, 8)), stroke_length_m=1.5)
+    cfg = SimpleNamespace(control=control, task=task, surface=surface)
+    hidden = {"inflow_m3_day": float(rng.uniform(10, 40)), "k_m3_day": float(rng.uniform(1.5, 3.0))}
+    return FakeWell(f"{split}-{number:03d}", cfg, hidden)
+
+
+class FakeSuckerRodV1(gym.Env):
+    metadata = {"render_modes": []}  # noqa: RUF012 (gymnasium's own convention)
+
+    def __init__(self, scenario: str = "train", observation: str = "field") -> None:
+        if scenario not in N_WELLS:
+            raise ValueError(f"scenario = {scenario!r}: expected train or test")
+        if observation not in ("field", "privileged"):
+            raise ValueError(f"observation = {observation!r}: expected field or privileged")
+        self.scenario, self.observation = scenario, observation
+        self.obs_names = FIELD_OBS_NAMES if observation == "field" else PRIVILEGED_OBS_NAMES
+        self.observation_space = gym.spaces.Box(-2.0, 2.0, (len(self.obs_names),), np.float32)
+        self.action_space = gym.spaces.Box(-1.0, 1.0, (2,), np.float32)
+        self.well = _well(scenario, 0)
+        self.cfg = self.well.cfg
+
+    def inflow_multiplier(self, t_s: float) -> float:
+        return 1.0 if t_s < self._t_step else self._step_to
+
+    def reset(self, *, seed: int | None = None, options: dict | None = None):
+        super().reset(seed=seed)
+        number = (seed if seed is not None else int(self.np_random.integers(1 << 30))) % N_WELLS[self.scenario]
+        self.well = _well(self.scenario, number)
+        self.cfg = self.well.cfg
+        self.time_s, self.k = 0.0, 0
+        self.horizon = int(self.cfg.task.episode_hours * 3600 / self.cfg.task.interval_s)
+        self._t_step = float(self.np_random.uniform(0.3, 0.7)) * self.horizon * self.cfg.task.interval_s
+        self._step_to = float(self.np_random.uniform(0.5, 1.5))
+        self.stored_m3, self.fill, self.last_a0 = 2.0, 1.0, 0.0
+        self._last = {"spm": 0.0, "avg": 0.0, "stroke": 1.5, "duty": 0.0, "idle": 0.0}
+        return self._obs(), {"well_id": self.well.well_id}
+
+    def _obs(self) -> np.ndarray:
+        c = self.cfg.control
+        o = np.zeros(len(FIELD_OBS_NAMES), np.float32)
+        o[:64] = self.fill * np.sin(np.linspace(0, np.pi, 64)) * 0.5
+        vals = [self._last["spm"] / c.spm_max, self._last["avg"] / c.spm_max,
+                2 * (self._last["stroke"] - c.stroke_min_m) / (c.stroke_max_m - c.stroke_min_m) - 1,
+                self._last["duty"], self._last["idle"] / 3600, self.fill, 0.3, 0.5, 0.6, 0.2,
+                1 - self.k / self.horizon, self.stored_m3 / 10, 0.0]
+        o[64:] = vals
+        if self.observation == "privileged":
+            q = self.well.hidden["inflow_m3_day"] * self.inflow_multiplier(self.time_s)
+            o = np.concatenate([o, np.array([self.stored_m3 / 10, q / 40], np.float32)])
+        return o
+
+    def step(self, action):
+        c, h, task = self.cfg.control, self.well.hidden, self.cfg.task
+        a = np.clip(np.asarray(action, np.float64), -1, 1)
+        avg = 0.5 * (a[0] + 1) * c.spm_max
+        stroke = c.stroke_min_m + 0.5 * (a[1] + 1) * (c.stroke_max_m - c.stroke_min_m)
+        spm, duty = (avg, 1.0) if avg >= c.spm_min else (c.spm_min, avg / c.spm_min)
+        dt_day = task.interval_s / 86400
+        q_in = h["inflow_m3_day"] * self.inflow_multiplier(self.time_s) * max(0.0, 1 - self.stored_m3 / 20)
+        cap = h["k_m3_day"] * spm * stroke * duty * dt_day
+        avail = self.stored_m3 + q_in * dt_day
+        lifted = min(cap, avail)
+        prev = self.stored_m3
+        self.stored_m3 = avail - lifted
+        if duty > 0:
+            self.fill = lifted / cap if cap > 0 else 1.0
+        hours = task.interval_s / 3600
+        terms = {"reward_revenue": 60.0 * lifted / dt_day / 24, "reward_inventory": 20.0 * (self.stored_m3 - prev) / hours,
+                 "reward_energy": -0.4 * spm * stroke * duty, "reward_pound": -3.0 * (1 - self.fill) * spm * duty,
+                 "reward_ramp": -2.0 * abs(a[0] - self.last_a0)}
+        self.last_a0 = a[0]
+        reward = float(sum(terms.values()))
+        self.time_s += task.interval_s
+        self.k += 1
+        self._last = {"spm": spm if duty > 0 else 0.0, "avg": avg, "stroke": stroke, "duty": duty,
+                          "idle": 0.0 if duty > 0 else self._last["idle"] + task.interval_s}
+        info = {"well_id": self.well.well_id, **terms, "cost": 0.1 * (1 - self.fill) * duty,
+                "cost_pound": 0.1 * (1 - self.fill) * duty, "spm": spm, "avg_spm": avg, "duty": duty,
+                "stroke_length_m": stroke, "fillage": self.fill, "fillage_est": self.fill,
+                "production_m3_day": lifted / dt_day, "oil_m3_day": 0.5 * lifted / dt_day,
+                "inflow_m3_day": q_in, "fluid_level_m": self.stored_m3 * 10}
+        return self._obs(), reward, False, self.k >= self.horizon, info
+
+
+if ENV_ID not in gym.registry:
+    gym.register(ENV_ID, entry_point=FakeSuckerRodV1)
+
+FAKE_ENV = f"{__name__}:{ENV_ID}"  # gymnasium's module:id form: a spawned worker imports this module to find it
+
+
+def assert_cli_refuses(args: list[str], out: Path, *needles: str) -> str:
+    """``python -m srenv.tools.cli ARGS`` exits 2 with one stderr line holding every needle, and writes no ``out``."""
+    p = subprocess.run([sys.executable, "-m", "srenv.tools.cli", *args], check=False, capture_output=True, text=True)
+    assert p.returncode == 2
+    lines = p.stderr.strip().splitlines()
+    assert len(lines) == 1 and all(n in lines[0] for n in needles), p.stderr
+    assert not out.exists()
+    return lines[0]
+
+
+# ------------------------------------------------------------------------------------------------ the wheel
+ROOT = Path(__file__).resolve().parents[1]
+SOURCES = ("srenv", "agents", "configs", "setup.py", "pyproject.toml", "README.md")
+
+
+def _has_build_backend() -> bool:
+    """setuptools >= 68 (pyproject's build requirement) in this interpreter."""
+    from importlib.metadata import PackageNotFoundError, version
+
+    try:
+        return int(version("setuptools").split(".")[0]) >= 68
+    except (PackageNotFoundError, ValueError):
+        return False
+
+
+@pytest.fixture(scope="session")
+def wheel(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    tmp = tmp_path_factory.mktemp("wheel")
+    src = tmp / "src"
+    src.mkdir()
+    for name in SOURCES:
+        if (ROOT / name).is_dir():
+            shutil.copytree(ROOT / name, src / name, ignore=shutil.ignore_patterns("__pycache__"))
+        else:
+            shutil.copy2(ROOT / name, src / name)
+    cmd = [sys.executable, "-m", "pip", "wheel", "--no-deps", "-q", str(src), "-w", str(tmp / "dist")]
+    if _has_build_backend():
+        cmd.insert(4, "--no-build-isolation")  # build with the installed setuptools: nothing downloaded
+    p = subprocess.run(cmd, capture_output=True, text=True, timeout=300, check=False)
+    assert p.returncode == 0, p.stderr[-2000:]
+    (whl,) = (tmp / "dist").glob("srenv-*.whl")
+    return whl
