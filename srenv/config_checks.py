@@ -43,7 +43,10 @@ def _check_pump(cfg: WellConfig) -> None:
         if not p.downstroke_load_n < p.dynamic_load_n <= p.upstroke_load_n:
             raise ConfigError("pump.dynamic_load_n", p.dynamic_load_n,
                               "a load in N between pump.downstroke_load_n and pump.upstroke_load_n")
-    if p.intake_gas_fraction > 0 or p.intake_glr_m3_m3 > 0:
+    if p.fillage < 1 and (p.intake_gas_fraction > 0 or p.intake_glr_m3_m3 > 0 or cfg.inflow.model != "none"):
+        raise ConfigError("pump.fillage", p.fillage, "1 when pump.intake_gas_fraction, pump.intake_glr_m3_m3 or "
+                          "an inflow model sets the pump's fill (one measure of it)")
+    if p.intake_gas_fraction > 0 or p.intake_glr_m3_m3 > 0 or p.fillage < 1:
         if p.intake_gas_fraction > 0 and p.intake_glr_m3_m3 > 0:
             raise ConfigError("pump.intake_glr_m3_m3", p.intake_glr_m3_m3,
                               "0 when pump.intake_gas_fraction is given (one measure of the free gas)")
@@ -67,7 +70,7 @@ def _check_tubing(cfg: WellConfig) -> None:
         if tb.anchor_depth_m >= cfg.rod_length_m:
             raise ConfigError("tubing.anchor_depth_m", tb.anchor_depth_m,
                               f"a depth in m above the pump ({cfg.rod_length_m} m)")
-        if p.intake_gas_fraction > 0 or p.intake_glr_m3_m3 > 0:
+        if p.intake_gas_fraction > 0 or p.intake_glr_m3_m3 > 0 or p.fillage < 1:
             raise ConfigError("tubing.anchored", tb.anchored, "true when the intake carries free gas (the "
                               "two chamber models are not combined)")
         if p.law != "constant":

@@ -59,6 +59,9 @@ class TaperConfig:
                            "(MATERIAL_DEFAULTS) unless given")
     tensile_strength_pa: float = num(0.0, unit="Pa", check="nonneg", hi=1.0e10,
                                      doc="T for Goodman; 0 = from the grade (steel, sinker bar) or the material")
+    damping_scale: float = num(1.0, unit="-", check="nonneg", hi=100.0,
+                               doc="this taper's viscous damping per length = the string's (damping.*) x this "
+                                   "factor (e.g. guided rods, sinker bars in a tight annulus); 1 = as the string")
 
 
 # Per-material defaults filled in for fields a taper does not give (config_from_dict). Fiberglass: a typical
@@ -84,6 +87,10 @@ class DampingConfig:
                                 doc="Gibbs dimensionless factor nu: c = rho*A*pi*a*nu/(2L)")
     fluid_viscosity_pa_s: float = num(0.01, unit="Pa*s", check="nonneg", hi=100.0)
     tubing_inner_diameter_mm: float = num(62.0, unit="mm", hi=500.0)
+    stiffness_proportional_s: float = num(0.0, unit="s", check="nonneg", hi=1.0,
+                                          doc="Kelvin-Voigt retardation time tau: element force EA/L (du + tau dv); "
+                                              "damps mode k by zeta_k = tau w_k / 2 (the string's high modes: "
+                                              "couplings, guides, fluid); 0 = off (docs/realism.md)")
 
 
 @dataclass(frozen=True)
@@ -134,6 +141,14 @@ class PumpConfig:
     gas_polytropic_exponent: float = num(1.0, unit="-", lo=1.0, hi=2.0, doc="k of p V^k = const in the chamber (1 = isothermal)")
     clearance_volume_fraction: float = num(0.05, unit="-", check="nonneg", hi=10.0,
                                            doc="unswept chamber volume / swept volume at surface.stroke_length_m")
+    fluid_column_mass_kg: float = num(0.0, unit="kg", check="nonneg", hi=1.0e6,
+                                      doc="liquid column lifted with the rising plunger, as a mass at the plunger "
+                                          "(rho L A_pl^2 / (A_t - A_r), physics/pump.fluid_column_mass_kg); its "
+                                          "inertia adds to the pump load on the upstroke; 0 = off (docs/realism.md)")
+    fillage: float = num(1.0, unit="-", hi=1.0,
+                         doc="predictive input: liquid share of the plunger's displacement; < 1 is free gas at the "
+                             "intake whose compression takes 1 - fillage of the stroke at pump.intake_pressure_pa "
+                             "(physics/pump.py); 1 = full (docs/realism.md)")
 
 
 @dataclass(frozen=True)

@@ -90,8 +90,8 @@ def _resample_periodic(t: np.ndarray, y: np.ndarray, t0: float, period: float, m
 
 
 def march(cfg: WellConfig, u0_m: np.ndarray, n0_eq_n: np.ndarray, period_s: float, harmonics: int,
-          segment_length_m: float | None = None, friction: bool = True, v_eps_fraction: float = 0.02
-          ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+          segment_length_m: float | None = None, friction: bool = True, v_eps_fraction: float = 0.02,
+          kv_tau_s: float = 0.0) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """March (u, N_eq) from the polished rod to the pump over one periodic stroke sampled at m equal times.
     Returns (u, N_eq, u_t) at the pump, u positive down."""
     sg = segments(cfg, segment_length_m)
@@ -130,6 +130,8 @@ def march(cfg: WellConfig, u0_m: np.ndarray, n0_eq_n: np.ndarray, period_s: floa
     for k in range(len(sg.h_m)):
         nhat = source(uh, nhat, k, 0.5)
         ea, h = sg.ea_n[k], sg.h_m[k]
+        if kv_tau_s:  # Kelvin-Voigt: the complex modulus EA (1 + i w tau) per harmonic
+            ea = ea * (1.0 + iw * kv_tau_s)
         lam = np.sqrt((-sg.rho_a_kg_m[k] * (n * w0) ** 2 + iw * sg.c_n_s_m2[k]) / ea + 0j)
         ch = np.cosh(lam * h)
         lh = lam * h
@@ -141,11 +143,28 @@ def march(cfg: WellConfig, u0_m: np.ndarray, n0_eq_n: np.ndarray, period_s: floa
     return time(uh), time(nhat), time(iw * uh)
 
 
+KV_MAX_GAIN = 10.0
+
+
+def kv_harmonic_cap(cfg: WellConfig, period_s: float) -> int:
+    """With Kelvin-Voigt damping (tau > 0) the march from the surface amplifies harmonic n by about
+    exp(zeta_n w_n T), zeta_n = tau w_n / 2, T the string's wave travel time: harmonics beyond a gain of
+    KV_MAX_GAIN would amplify the card's noise more than they carry signal, and are dropped."""
+    tau = cfg.damping.stiffness_proportional_s
+    if not tau > 0:
+        return 10**9
+    mesh = build_mesh(cfg.rod, min(cfg.simulation.element_length_m, 25.0))
+    travel = float(np.sum(mesh.length_m / np.sqrt(mesh.ea_n / mesh.rho_a_kg_m)))
+    w_max = math.sqrt(2.0 * math.log(KV_MAX_GAIN) / (tau * travel))
+    return max(4, int(w_max * period_s / (2 * math.pi)))
+
+
 def diagnose_card(cfg: WellConfig, t_s: np.ndarray, position_m: np.ndarray, load_n: np.ndarray,
                   harmonics: int = DEFAULT_HARMONICS, period_s: float | None = None,
                   segment_length_m: float | None = None, friction: bool = True) -> PumpCard:
     """Pump card of the last stroke of a surface card (time, polished-rod position upward, load)."""
     period = stroke_period_s(t_s, position_m) if period_s is None else float(period_s)
+    harmonics = min(harmonics, kv_harmonic_cap(cfg, period))
     dt = float(np.median(np.diff(t_s)))
     keep = t_s > t_s[-1] - period + 0.5 * dt
     t, x, f = t_s[keep], position_m[keep], load_n[keep]
@@ -161,7 +180,8 @@ def diagnose_card(cfg: WellConfig, t_s: np.ndarray, position_m: np.ndarray, load
     if f_sb > 0:  # the stuffing box's share of the measured load: opposite to the polished rod's velocity
         vx = np.gradient(np.r_[xs[-1], xs, xs[0]])[1:-1]
         fs = fs - f_sb * np.sign(vx)
-    ub, nb, vb = march(cfg, -xs, fs + p_top * sg_top.top_area_m2, period, harmonics, segment_length_m, friction)
+    ub, nb, vb = march(cfg, -xs, fs + p_top * sg_top.top_area_m2, period, harmonics, segment_length_m, friction,
+                       kv_tau_s=cfg.damping.stiffness_proportional_s)
     tt = t[0] + np.arange(m) * (period / m)
     # back onto the input's own times (the same base as the surface card)
     pos = np.interp(t, np.r_[tt, tt[0] + period], np.r_[-ub, -ub[0]])
@@ -171,8 +191,8 @@ def diagnose_card(cfg: WellConfig, t_s: np.ndarray, position_m: np.ndarray, load
 
 
 # ------------------------------------------------------------------------------------------ card in, summary out
-def read_surface_card(path: str) -> dict[str, np.ndarray]:
-    return read_card_csv(path, "CARD.csv", CARD_COLUMNS)
+def read_surface_card(path: str, reverse: bool = False) -> dict[str, np.ndarray]:
+    return read_card_csv(path, "CARD.csv", CARD_COLUMNS, reverse=reverse)
 
 
 def summary(cfg: WellConfig, card: PumpCard) -> dict:

@@ -99,6 +99,20 @@ def concave_shift(fric_p, valve_p, v, fric_s, shift):
     valve.concave_shift(valve_p, v, shift)
 
 
+@njit(cache=True)
+def kv_work(energy, kv, ea_len, u, v, prev_v, a, dt, beta, gamma, ua_old, ua_new, va_old, va_new):
+    """Work of the Kelvin-Voigt element forces tau EA/L dv over the step (trapezoidal in the element's
+    velocity difference, over its strain increment), added to the viscous energy."""
+    c2 = beta * dt / gamma
+    uj_old, uj_new, vj_old, vj_new = ua_old, ua_new, va_old, va_new
+    for e in range(u.shape[0]):
+        vpr = prev_v[e] + dt * (1.0 - gamma) * a[e]
+        ui_new = u[e] + dt * prev_v[e] + dt * dt * (0.5 - beta) * a[e] - c2 * vpr + c2 * v[e]
+        d_strain = (ui_new - uj_new) - (u[e] - uj_old)
+        energy[E_VISC] += 0.5 * kv * ea_len[e] * ((v[e] - vj_new) + (prev_v[e] - vj_old)) * d_strain
+        uj_old, uj_new, vj_old, vj_new = u[e], ui_new, prev_v[e], v[e]
+
+
 @njit(cache=True, inline="always")
 def events(valve_p, prog, ub, vb):
     """After the step: gas chamber valves, plunger extremes, and a plunger reversal (True: return EVENT;
@@ -150,6 +164,7 @@ def steps(const, fric_p, valve_p, prog, cnt, ksd, kso, kd, ko, md, mo, cd, f, ea
     maxcorr, tolv, toll, always_qp = c.max_corrections, c.tol_v_m_s, c.tol_lambda, c.always_qp
     dc_tol, dc_max = c.dc_tol_m_s, c.dc_max_iterations
     c1 = 1.0 / (gamma * dt)
+    kv_tau = c.kv_tau_s
     n = u.shape[0]
     while p.step < k_end:
         k = p.step
@@ -175,6 +190,13 @@ def steps(const, fric_p, valve_p, prog, cnt, ksd, kso, kd, ko, md, mo, cd, f, ea
                 b0[i] += c1 * mo[i] * b[i + 1]
             b0[i] -= ku
         b0[0] -= kc * ua_new + mc * aa_new
+        if kv_tau != 0.0:  # the top column of C_K = tau K, moved over like K's
+            b0[0] -= kv_tau * kc * va_new
+        if vp.fluid_kg != 0.0:  # the liquid column rides on the rising plunger: extra mass at the pump node
+            if p.have_qp == 0:
+                vp.fluid_dk = c1 * vp.fluid_kg if p.plunger_dir < 0 else 0.0
+                ksd[n - 1] += vp.fluid_dk
+            b0[n - 1] += vp.fluid_dk * b[n - 1]  # b holds the predicted velocities here
         # -- bounds: the laws' intervals
         if p.have_qp == 0:
             if nonsmooth:
@@ -243,6 +265,10 @@ def steps(const, fric_p, valve_p, prog, cnt, ksd, kso, kd, ko, md, mo, cd, f, ea
             if i < n - 1:
                 kv += kso[i] * v[i + 1]
             lam[i] = b[i] - kv - shift[i] if nonmono else b[i] - kv
+        if vp.fluid_dk != 0.0:  # the column's inertia m a is part of the pump's force on the rod
+            lam[n - 1] += vp.fluid_dk * (v[n - 1] - (prev_v[n - 1] + dt * (1.0 - gamma) * a[n - 1]))
+            ksd[n - 1] -= vp.fluid_dk
+            vp.fluid_dk = 0.0
         if vp.lin_dk != 0.0 or vp.lin_shift_n != 0.0:
             # the plunger's whole reaction: friction part + the gas spring moved into K* and b
             lam[n - 1] += vp.lin_shift_n + vp.lin_dk * v[n - 1]
@@ -254,6 +280,8 @@ def steps(const, fric_p, valve_p, prog, cnt, ksd, kso, kd, ko, md, mo, cd, f, ea
         ua_old = top[TOP_U]
         va_old = top[TOP_V]
         du_a = ua_new - ua_old
+        if kv_tau != 0.0:  # Kelvin-Voigt work, before u and prev_v move on (kv = 0: nothing changes)
+            kv_work(energy, kv_tau, ea_len, u, v, prev_v, a, dt, beta, gamma, ua_old, ua_new, va_old, va_new)
         for i in range(n):
             vo = prev_v[i]  # v_n: `v` already holds v_{n+1}
             vpr = vo + dt * (1.0 - gamma) * a[i]
@@ -270,6 +298,8 @@ def steps(const, fric_p, valve_p, prog, cnt, ksd, kso, kd, ko, md, mo, cd, f, ea
         energy[E_GRAV] += c.top_load_n * du_a
         # polished-rod load from the top node's equation (includes its half element's weight/inertia)
         n0 = c.top_ea_len_n_m * (u[0] - ua_new)
+        if kv_tau != 0.0:
+            n0 += kv_tau * c.top_ea_len_n_m * (v[0] - va_new)
         prl_eq = (n0 + c.top_load_n - c.top_mass_kg * aa_new - c.top_coupling_mass_kg * a[0]
                   - c.top_damping_n_s_m * va_new)
         energy[E_TOP] += -0.5 * (prl_eq + top[TOP_PRL]) * du_a
@@ -283,6 +313,8 @@ def steps(const, fric_p, valve_p, prog, cnt, ksd, kso, kd, ko, md, mo, cd, f, ea
         for e in range(n):
             if e > 0:
                 ne = ea_len[e] * (u[e] - u[e - 1])
+                if kv_tau != 0.0:
+                    ne += kv_tau * ea_len[e] * (v[e] - v[e - 1])
             emax[e] = max(emax[e], ne)
             emin[e] = min(emin[e], ne)
         # -- recording: paths, stick episodes, statuses of the smooth nodes, the per-step record

@@ -56,6 +56,9 @@ CONSTANTS = np.dtype([
     ("top_load_n", "f8"), ("top_coupling_stiffness_n_m", "f8"), ("top_ea_len_n_m", "f8"),
     # p A at the pump and at the top: equivalent force -> true load in the record
     ("pump_pressure_force_n", "f8"), ("top_pressure_force_n", "f8"),
+    # Kelvin-Voigt (stiffness-proportional) damping C_K = tau K: enters K*, the top element's force and the
+    # viscous work; 0 leaves every formula as it was (docs/realism.md)
+    ("kv_tau_s", "f8"),
 ])
 PROGRESS = np.dtype([("step", "i8"), ("dc_iterations", "i8"), ("have_qp", "i8"), ("plunger_dir", "i8"),
                      ("event", "i8"), ("ub_max_m", "f8"), ("ub_min_m", "f8")])
@@ -137,11 +140,15 @@ def work(n: int) -> Work:
     return Work(**fields)
 
 
-def kstar(stiffness, mass, damping, dt_s: float, beta: float, gamma: float) -> tuple[np.ndarray, np.ndarray]:
+def kstar(stiffness, mass, damping, dt_s: float, beta: float, gamma: float, kv_tau_s: float = 0.0
+          ) -> tuple[np.ndarray, np.ndarray]:
     """K* on the free nodes from the whole string's (diagonal, off-diagonal) stiffness and mass and damping
-    diagonal (top node first)."""
+    diagonal (top node first); a Kelvin-Voigt damping tau K adds tau to K's factor (the velocity form's
+    K* = M/(gamma dt) + C + (beta dt/gamma + tau) K stays tridiagonal)."""
     (kd, ko), (md, mo), cd = stiffness, mass, damping
     c1, c2 = 1.0 / (gamma * dt_s), beta * dt_s / gamma
+    if kv_tau_s:
+        c2 = c2 + kv_tau_s
     return (c1 * md + cd + c2 * kd)[1:].copy(), (c1 * mo + c2 * ko)[1:].copy()
 
 
@@ -150,7 +157,8 @@ def build(*, dt_s: float, beta: float, gamma: float, stiffness, mass, damping: n
           scratch: Work, energy: np.ndarray, n_steps: int, record: bool, max_corrections: int,
           dc_max_iterations: int, dc_tolerance_m_s: float, tol_v_m_s: float = 1e-13, tol_lambda: float = 1e-12,
           always_qp: bool = False, nonsmooth: bool = True, pump_pressure_force_n: float = 0.0,
-          top_pressure_force_n: float = 0.0, plunger_dir: int = 0, ub_extremes_m=(0.0, 0.0)) -> Stepper:
+          top_pressure_force_n: float = 0.0, plunger_dir: int = 0, ub_extremes_m=(0.0, 0.0),
+          kv_tau_s: float = 0.0) -> Stepper:
     """The kernel's arguments for one run of `n_steps` steps from the whole string's matrices (top node first:
     ``stiffness`` and ``mass`` as (diagonal, off-diagonal), ``damping`` and ``load_n`` diagonals)."""
     (kd, ko), (md, mo) = stiffness, mass
@@ -164,10 +172,11 @@ def build(*, dt_s: float, beta: float, gamma: float, stiffness, mass, damping: n
     c["top_mass_kg"], c["top_coupling_mass_kg"], c["top_damping_n_s_m"] = md[0], mo[0], damping[0]
     c["top_load_n"], c["top_coupling_stiffness_n_m"], c["top_ea_len_n_m"] = load_n[0], ko[0], ea_len_n_m[0]
     c["pump_pressure_force_n"], c["top_pressure_force_n"] = pump_pressure_force_n, top_pressure_force_n
+    c["kv_tau_s"] = kv_tau_s
     progress = np.zeros(1, PROGRESS)
     progress["plunger_dir"] = plunger_dir
     progress["ub_max_m"], progress["ub_min_m"] = ub_extremes_m
-    ksd, kso = kstar(stiffness, mass, damping, dt_s, beta, gamma)
+    ksd, kso = kstar(stiffness, mass, damping, dt_s, beta, gamma, kv_tau_s)
     model = Model(ksd, kso, kd[1:], ko[1:], md[1:], mo[1:], damping[1:], load_n[1:], ea_len_n_m)
     out = Output(np.empty((N_REC, n_steps if record else 0)), energy, np.full(n, -np.inf), np.full(n, np.inf),
                  np.zeros(n, dtype=np.int64))

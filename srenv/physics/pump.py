@@ -56,6 +56,27 @@ def true_loads_n(law: ValveLaw, p_out_pa: float, rod_area_m2: float) -> tuple[fl
 STANDARD_PRESSURE_PA = 101325.0
 
 
+def fluid_column_mass_kg(density_kg_m3: float, length_m: float, plunger_area_m2: float, tubing_area_m2: float,
+                         rod_area_m2: float) -> float:
+    """The liquid column above a rising plunger as a mass at the plunger: the column in the tubing-rod
+    annulus moves at v A_pl / (A_t - A_r), so its kinetic energy is (1/2) rho L A_pl^2 / (A_t - A_r) v^2."""
+    return density_kg_m3 * length_m * plunger_area_m2 ** 2 / max(tubing_area_m2 - rod_area_m2, 1e-9)
+MAX_FILLAGE_GAS_FRACTION = 0.95
+
+
+def gas_fraction_for_fillage(fillage: float, p_in_pa: float, p_d_pa: float, k: float = 1.0,
+                             clearance_fraction: float = 0.05) -> float:
+    """Free-gas fraction of the intake mixture whose compression from p_in to p_d takes (1 - fillage) of the
+    plunger's stroke (GasChamber.compression_travel_m over a full upstroke):
+    phi = (1 - f) / ((1 + clearance) (1 - (p_in / p_d)^(1/k))), at most MAX_FILLAGE_GAS_FRACTION."""
+    if not fillage < 1.0:
+        return 0.0
+    p_in = max(p_in_pa, STANDARD_PRESSURE_PA)
+    squeeze = 1.0 - (p_in / max(p_d_pa, p_in * (1.0 + 1e-9))) ** (1.0 / k)
+    phi = (1.0 - fillage) / ((1.0 + clearance_fraction) * max(squeeze, 1e-12))
+    return float(min(max(phi, 0.0), MAX_FILLAGE_GAS_FRACTION))
+
+
 @dataclass(frozen=True)
 class GasChamber:
     """Free gas in the pump chamber (ideal gas, polytropic p V^k = const, liquid incompressible).
@@ -78,12 +99,19 @@ class GasChamber:
     glr_m3_m3: float = 0.0
 
     @classmethod
-    def from_config(cls, pump: PumpConfig, nominal_stroke_m: float) -> GasChamber | None:
-        if pump.intake_gas_fraction <= 0 and pump.intake_glr_m3_m3 <= 0:
+    def from_config(cls, pump: PumpConfig, nominal_stroke_m: float, p_d_pa: float | None = None
+                    ) -> GasChamber | None:
+        """The chamber of the config's free gas: its fraction or GLR, or the fraction that gives
+        ``pump.fillage`` at the config's intake pressure and the discharge pressure p_d."""
+        phi = pump.intake_gas_fraction
+        if pump.fillage < 1 and p_d_pa is not None:
+            phi = gas_fraction_for_fillage(pump.fillage, pump.intake_pressure_pa, p_d_pa,
+                                           pump.gas_polytropic_exponent, pump.clearance_volume_fraction)
+        if phi <= 0 and pump.intake_glr_m3_m3 <= 0:
             return None
         a = plunger_area_m2(pump)
         return cls(a, pump.clearance_volume_fraction * a * nominal_stroke_m, pump.gas_polytropic_exponent,
-                   pump.intake_gas_fraction, pump.intake_glr_m3_m3)
+                   phi, pump.intake_glr_m3_m3)
 
     def fraction(self, p_in_pa: float) -> float:
         """Free-gas volume fraction of the intake mixture at p_in."""

@@ -24,6 +24,7 @@ class Mesh:
     ea_n: np.ndarray           # element axial stiffness E*A
     rho_a_kg_m: np.ndarray     # element mass per length (rod + couplings)
     taper: np.ndarray          # element -> taper index
+    damping_scale: np.ndarray | None = None  # per taper (rod.tapers[i].damping_scale); None = all 1
 
     @property
     def n_nodes(self) -> int:
@@ -51,7 +52,9 @@ def build_mesh(rod: RodConfig, element_length_m: float) -> Mesh:
             ea.append(t.youngs_modulus_pa * area)
             rhoa.append(t.density_kg_m3 * area + t.coupling_mass_kg_per_m)
             taper.append(k)
-    return Mesh(np.array(xs), np.array(lens), np.array(areas), np.array(ea), np.array(rhoa), np.array(taper))
+    scale = np.array([t.damping_scale for t in rod.tapers], dtype=float)
+    return Mesh(np.array(xs), np.array(lens), np.array(areas), np.array(ea), np.array(rhoa), np.array(taper),
+                scale if np.any(scale != 1.0) else None)
 
 
 def tridiag_assemble(elem: np.ndarray, diag_w: float, off_w: float) -> tuple[np.ndarray, np.ndarray]:
@@ -94,6 +97,13 @@ def damping_per_length(mesh: Mesh, cfg: DampingConfig) -> np.ndarray:
     ``annulus_shear``: laminar Couette flow between rod (radius r) and tubing (radius R):
     c = 2*pi*mu / ln(R/r).
     """
+    c = _damping_per_length(mesh, cfg)
+    if mesh.damping_scale is not None:  # per-taper factors (1 everywhere leaves c untouched)
+        c = c * mesh.damping_scale[mesh.taper]
+    return c
+
+
+def _damping_per_length(mesh: Mesh, cfg: DampingConfig) -> np.ndarray:
     if cfg.model == "none":
         return np.zeros(len(mesh.length_m))
     if cfg.model == "dimensionless":

@@ -98,6 +98,7 @@ class PumpCycle:
     def _valve_record(self) -> np.ndarray:
         """The valve law's kernel record for a run: the law, the fluid-pound plan and the gas chamber."""
         rec = valve_law_record.make(self.law, self.void, self.void_until)
+        rec["fluid_kg"] = self.cfg.pump.fluid_column_mass_kg
         if self.gas is not None:
             cfg = self.cfg
             rec["gas_mode"] = int(self._gas[0])

@@ -97,7 +97,8 @@ class Simulator(PumpCycle):
         self.annulus = None
         if cfg.inflow.model != "none":
             self.annulus = Annulus(cfg.inflow, cfg.fluid, float(x[-1]), self.survey.tvd)
-        self.gas = GasChamber.from_config(cfg.pump, self.surface.stroke_length_m(cfg.surface.stroke_length_m))
+        self.gas = GasChamber.from_config(cfg.pump, self.surface.stroke_length_m(cfg.surface.stroke_length_m),
+                                          self.p_pump_pa + cfg.pump.discharge_overpressure_pa)
         tb = cfg.tubing
         self.tubing_stiffness_n_m = 0.0  # anchored: the barrel does not move
         if not tb.anchored:  # the free tubing between the anchor (or the surface) and the pump, as a spring
@@ -118,7 +119,8 @@ class Simulator(PumpCycle):
 
     def _kstar(self, dt: float) -> tuple[np.ndarray, np.ndarray]:
         s = self.cfg.simulation
-        return L.kstar(self._k, self._m, self._c, dt, s.newmark_beta, s.newmark_gamma)
+        return L.kstar(self._k, self._m, self._c, dt, s.newmark_beta, s.newmark_gamma,
+                       self.cfg.damping.stiffness_proportional_s)
 
     def _friction_record(self) -> np.ndarray:
         fr = self.cfg.friction
@@ -281,7 +283,7 @@ class Simulator(PumpCycle):
             always_qp=self.always_qp, nonsmooth=not self.linear_reference,
             pump_pressure_force_n=self.p_pump_pa * self.area_bottom_m2,
             top_pressure_force_n=self.p_top_pa * self.area_top_m2, plunger_dir=self.pl_dir,
-            ub_extremes_m=(self._ub_max, self._ub_min))
+            ub_extremes_m=(self._ub_max, self._ub_min), kv_tau_s=self.cfg.damping.stiffness_proportional_s)
 
     def _run(self, va: np.ndarray, dt: float, record: bool, spm: float, stroke: float) -> RunResult:
         n_steps = len(va)

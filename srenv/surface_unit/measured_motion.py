@@ -24,13 +24,16 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import ConfigError
+from .card_checks import check_card
 
 MIN_SAMPLES = 16
 
 
 def read_card_csv(path: str | Path, field: str, required: tuple[str, ...],
-                  optional: tuple[str, ...] = ()) -> dict[str, np.ndarray]:
-    """Named numeric columns of a CSV with a header row; one ConfigError naming `field` on any defect."""
+                  optional: tuple[str, ...] = (), reverse: bool = False) -> dict[str, np.ndarray]:
+    """Named numeric columns of a CSV with a header row (and optionally a unit row under it, field units
+    converted to the SI unit the column's name ends in); one ConfigError naming `field` on any defect. A card
+    (with ``polished_rod_position_m``) passes ``card_checks.check_card``; `reverse` reverses it in time."""
     p = Path(path)
     if not str(path):
         raise ConfigError(field, str(path), "a path to a CSV file")
@@ -49,6 +52,9 @@ def read_card_csv(path: str | Path, field: str, required: tuple[str, ...],
         raise ConfigError(field, str(path), "a CSV whose header names the columns " + ", ".join(required)
                           + f" (missing {', '.join(missing)}; found {', '.join(header) or 'none'})")
     data = rows[1:]
+    units = _unit_row(data[0], header, field, str(path)) if data else {}
+    if units:
+        data = data[1:]
     if len(data) < MIN_SAMPLES:
         raise ConfigError(field, str(path), f"at least {MIN_SAMPLES} data rows (found {len(data)})")
     out: dict[str, np.ndarray] = {}
@@ -65,10 +71,45 @@ def read_card_csv(path: str | Path, field: str, required: tuple[str, ...],
         if not np.all(np.isfinite(col)):
             i = int(np.argmax(~np.isfinite(col)))
             raise ConfigError(field, str(path), f"finite numbers in column {name} (row {i + 1} is {col[i]})")
-        out[name] = col
+        out[name] = col * units.get(name, 1.0)
     if "t_s" in out and not np.all(np.diff(out["t_s"]) > 0):
         i = int(np.argmax(np.diff(out["t_s"]) <= 0)) + 2
         raise ConfigError(field, str(path), f"strictly increasing t_s (data row {i} does not advance)")
+    if "polished_rod_position_m" in out:
+        x, f = check_card(out["polished_rod_position_m"], out.get("polished_rod_load_n"), field, str(path), reverse)
+        out["polished_rod_position_m"] = x
+        if f is not None:
+            out["polished_rod_load_n"] = f
+        if reverse:  # the samples run backwards in time; their time stamps stay as they were
+            for k in out:
+                if k not in ("t_s", "polished_rod_position_m", "polished_rod_load_n"):
+                    out[k] = out[k][::-1].copy()
+    return out
+
+
+_SI_SUFFIX = {"_m": "m", "_n": "N", "_s": "s", "_pa": "Pa", "_kg_m": "kg/m", "_m3_day": "m^3/day"}
+
+
+def _unit_row(row: list[str], header: list[str], field: str, source: str) -> dict[str, float]:
+    """{column: factor to SI} of a unit row (the first row under the header, all of it non-numeric), or {}."""
+    from ..field_units import same_dimension
+
+    cells = [c.strip() for c in row]
+    def numeric(c: str) -> bool:
+        try:
+            float(c)
+            return True
+        except ValueError:
+            return False
+    if not cells or any(numeric(c) for c in cells if c):
+        return {}
+    out = {}
+    for name, unit in zip(header, cells):
+        si = next((u for suf, u in sorted(_SI_SUFFIX.items(), key=lambda kv: -len(kv[0]))
+                   if name.endswith(suf)), None)
+        if si is None or not unit:
+            continue
+        out[name] = same_dimension(unit, si, f"{field} unit row, column {name}")
     return out
 
 

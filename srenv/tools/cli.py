@@ -187,6 +187,9 @@ def build_parser() -> argparse.ArgumentParser:
 
     add_diagnose(sub)
     add_fit(sub)
+    from .validate import add_parser as add_validate  # field records (docs/realism.md)
+
+    add_validate(sub)
     return p
 
 

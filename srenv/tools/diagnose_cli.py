@@ -31,7 +31,7 @@ def cmd_diagnose(args: argparse.Namespace) -> int:
 
     check_outputs({flag: (getattr(args, flag[2:]), sfx) for flag, sfx in OUTPUTS["diagnose"].items()})
     cfg = load_config(args.config, list(args.set or []))
-    cols = read_surface_card(args.card)
+    cols = read_surface_card(args.card, args.reverse)
     t, x, f = cols["t_s"], cols["polished_rod_position_m"], cols["polished_rod_load_n"]
     period = 60.0 / args.spm if args.spm else None
     if period is not None and t[-1] - t[0] < period * (1 - 1e-6) - 2 * float(np.median(np.diff(t))):
@@ -60,4 +60,5 @@ def add_parser(sub) -> None:
     add_number(d, "diagnose", "--harmonics", default=DEFAULT_HARMONICS,
                help=f"Fourier harmonics kept (default {DEFAULT_HARMONICS})")
     d.add_argument("--no-friction", action="store_true", help="skip the deviated-well friction correction")
+    d.add_argument("--reverse", action="store_true", help="the card is stored in reverse time: reverse it")
     d.set_defaults(func=cmd_diagnose)

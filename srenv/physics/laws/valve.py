@@ -21,7 +21,10 @@ from .gas_spring import GAS_FIELDS, gas_active
 # void: 0 no fluid-pound plan, 1 planned (liquid level at void_until_m), 2 the plunger is in the void now
 PARAMS = np.dtype([("lo_n", np.float64), ("hi_n", np.float64), ("drop_n", np.float64),
                    ("v0_m_s", np.float64), ("nonmonotone", np.int64), ("void", np.int64),
-                   ("void_until_m", np.float64), *GAS_FIELDS])
+                   ("void_until_m", np.float64), *GAS_FIELDS,
+                   # the liquid column that moves with the plunger while it rises (pump.fluid_column_mass_kg)
+                   # and its term in K*_BB this step (c1 x the mass, 0 while the plunger does not rise)
+                   ("fluid_kg", np.float64), ("fluid_dk", np.float64)])
 
 
 def make(law: ValveLaw, void: int = 0, void_until_m: float = 0.0) -> np.ndarray:

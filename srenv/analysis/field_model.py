@@ -1,0 +1,160 @@
+"""The well model of a field record: a srenv config (as a dict, SI) built from the record's description, and
+the pump's state read off a diagnosis (the vendor's analysis where the record has one, srenv's own diagnosis
+of the measured card otherwise). No field is fitted to the surface card here.
+
+What follows from the description (docs/realism.md):
+- each taper's mass per length is the record's weight in lb/ft (rod body plus couplings): the steel body's
+  share is the body density times the area, the rest is ``coupling_mass_kg_per_m``;
+- the liquid's density is the well test's water cut mixing the water's specific gravity and the oil's API
+  gravity (or the record's fluid density);
+- the pump sits at its own depth, below the listed rods where the record says so: the liquid column between
+  the rod string's end and the pump adds rho g dz to the discharge pressure at the plunger, which enters
+  the valve law as an intake pressure lower by the same amount (the upstroke load
+  (p_out - p_in) A_pl is then exact); the rod end's true load keeps the pressure at the rod end;
+- a pump that does not fill (fillage f < 1) is ``pump.fillage``: free gas in the intake whose compression
+  takes (1 - f) of the stroke (``physics.pump.gas_fraction_for_fillage``).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from ..physics.rod import GRAVITY_M_S2
+from .field_record import FieldRecord
+
+STEEL_DENSITY_KG_M3 = 7850.0
+DEFAULT_DAMPING_FACTOR = 0.02        # the vendor's own range on 11708328 (0.009-0.038; docs/realism.md)
+DEFAULT_KV_TAU_S = 0.03              # Kelvin-Voigt retardation time of the string (docs/realism.md)
+MIN_INTAKE_PA = 101325.0       # a pump intake below atmospheric is read as pumped off at one atmosphere
+CLEARANCE_FRACTION = 0.05
+TUBING_ID_M = 0.062            # 2 7/8-in tubing (srenv's tubing default) where the record names none
+
+
+def _qp_solver() -> str:
+    """The project's default backend where installed (proxqp), else the first installed one."""
+    try:
+        import qpsolvers
+
+        avail = list(qpsolvers.available_solvers)
+    except ImportError:
+        return "proxqp"
+    return "proxqp" if "proxqp" in avail or not avail else min(avail)
+
+
+def tapers(rec: FieldRecord) -> list[dict]:
+    out = []
+    for t in rec.tapers:
+        area = math.pi / 4 * t["diameter_m"] ** 2
+        body = STEEL_DENSITY_KG_M3 * area
+        out.append({"diameter_mm": 1e3 * t["diameter_m"], "length_m": t["length_m"],
+                    "youngs_modulus_pa": t["youngs_modulus_pa"], "density_kg_m3": STEEL_DENSITY_KG_M3,
+                    "coupling_mass_kg_per_m": max(t["weight_kg_m"] - body, 0.0),
+                    "grade": t["grade"] if t["grade"] in ("C", "K", "D") else "D"})
+    return out
+
+
+def pump_column_pa(rec: FieldRecord) -> float:
+    """rho g dz of the liquid between the rod string's end and the pump (0 when the rods reach the pump)."""
+    dz = max(rec.pump_depth_m - rec.rod_length_m, 0.0)
+    incl = math.radians(rec.survey[-1]["inclination_deg"]) if rec.survey else 0.0
+    return rec.fluid_density_kg_m3 * GRAVITY_M_S2 * dz * math.cos(incl)
+
+
+def fluid_column_kg(rec: FieldRecord, tubing_inner_diameter_m: float = TUBING_ID_M) -> float:
+    """The liquid column lifted with the plunger as a mass at the plunger, summed over the tapers' annuli
+    (and the gap below the rods at the bottom taper's area); the records give no tubing: 2 7/8-in by default."""
+    from ..physics.pump import fluid_column_mass_kg
+
+    a_t = math.pi / 4 * tubing_inner_diameter_m ** 2
+    a_pl = math.pi / 4 * rec.plunger_diameter_m ** 2
+    lengths = [t["length_m"] for t in rec.tapers]
+    lengths[-1] += max(rec.pump_depth_m - rec.rod_length_m, 0.0)
+    return float(sum(fluid_column_mass_kg(rec.fluid_density_kg_m3, h, a_pl, a_t, math.pi / 4 * t["diameter_m"] ** 2)
+                     for h, t in zip(lengths, rec.tapers)))
+
+
+def pump_tvd_m(rec: FieldRecord) -> float:
+    """True vertical depth of the pump from the record's survey (minimum curvature approximated by the
+    trapezoidal rule on cos(inclination) every metre; vertical without a survey)."""
+    if not rec.survey:
+        return rec.pump_depth_m
+    md = np.array([s["md_m"] for s in rec.survey])
+    inc = np.radians([s["inclination_deg"] for s in rec.survey])
+    grid = np.linspace(0.0, rec.pump_depth_m, max(int(rec.pump_depth_m), 2))
+    c = np.cos(np.interp(grid, md, inc))
+    return float(np.sum(0.5 * (c[1:] + c[:-1]) * np.diff(grid)))
+
+
+def discharge_pressure_pa(rec: FieldRecord) -> float:
+    """Hydrostatic tubing pressure at the pump: tubing-head pressure plus the liquid column."""
+    return rec.tubing_pressure_pa + rec.fluid_density_kg_m3 * GRAVITY_M_S2 * pump_tvd_m(rec)
+
+
+def pump_drag_n(rec: FieldRecord, fluid_load_n: float | None, intake_pressure_pa: float) -> float:
+    """The plunger's friction read off a diagnosed fluid load: the diagnosed load step between the upstroke
+    and downstroke plateaus is (p_d - p_in) A_pl + 2 P_f, so P_f = (F_fluid - (p_d - p_in) A_pl) / 2 with the
+    hydrostatic p_d (0 when the diagnosis carries no more than the pressures)."""
+    if fluid_load_n is None:
+        return 0.0
+    a_pl = math.pi / 4 * rec.plunger_diameter_m ** 2
+    return max(0.0, 0.5 * (fluid_load_n - (discharge_pressure_pa(rec) - intake_pressure_pa) * a_pl))
+
+
+def well_config(rec: FieldRecord, card_csv: str, intake_pressure_pa: float, fillage: float = 1.0,
+                plunger_friction_n: float = 0.0, damping_factor: float = DEFAULT_DAMPING_FACTOR,
+                friction_coefficient: float = 0.0) -> dict:
+    """The config dict of the record's well, driven by the measured motion in `card_csv` (t_s, position)."""
+    stations = [{"md_m": 0.0, "inclination_deg": 0.0, "azimuth_deg": 0.0}] + [
+        s for s in rec.survey if 0.0 < s["md_m"]] if rec.survey else []
+    p_in_model = max(intake_pressure_pa - pump_column_pa(rec), MIN_INTAKE_PA)  # the gas law needs p_in > 0
+    return {
+        "name": "field-record",
+        "description": f"built from {rec.source} by srenv validate",
+        "rod": {"tapers": tapers(rec)},
+        "fluid": {"density_kg_m3": rec.fluid_density_kg_m3, "wellhead_pressure_pa": rec.tubing_pressure_pa},
+        "pump": {"load_source": "pressures", "plunger_diameter_mm": 1e3 * rec.plunger_diameter_m,
+                 "intake_pressure_pa": p_in_model, "plunger_friction_n": plunger_friction_n,
+                 "fillage": min(max(fillage, 0.05), 1.0), "clearance_volume_fraction": CLEARANCE_FRACTION},
+        "damping": {"model": "dimensionless", "damping_factor": damping_factor,
+                    "stiffness_proportional_s": DEFAULT_KV_TAU_S},
+        "survey": {"stations": stations},
+        "friction": {"coefficient": friction_coefficient},
+        "surface": {"motion": "measured", "measured_card_csv": card_csv, "measured_spm": rec.spm,
+                    "stroke_length_m": float(rec.position_m.max() - rec.position_m.min())},
+        "simulation": {"qp_solver": _qp_solver()},
+    }
+
+
+def unit_from_record(rec: FieldRecord):
+    """The record's conventional (class I) unit from its inline API dimensions (A, C, I, K, P, R, rotation),
+    or None when the record names another geometry or lacks a dimension. Ratings are not used here."""
+    from ..surface_unit.beam_unit import BeamUnitGeometry, ConventionalUnit
+
+    u = rec.unit
+    if str(u.get("geometry") or "").upper() != "C" or any(u.get(k) is None for k in "ACIKPR"):
+        return None
+    rot = str(u.get("rotation") or "").lower().replace(" ", "")
+    rotation = "counterclockwise" if rot.startswith(("c.clock", "counter", "ccw")) else "clockwise"
+    g = BeamUnitGeometry(designation="C-record", a_m=u["A"], c_m=u["C"], i_m=u["I"], k_m=u["K"], p_m=u["P"],
+                         crank_radii_m=(u["R"],), rotation=rotation, torque_rating_nm=1.0,
+                         structural_unbalance_n=u.get("structural_unbalance_n") or 0.0, max_stroke_m=1.0,
+                         max_load_n=1.0)
+    return ConventionalUnit(g)
+
+
+def unit_kinematics_check(rec: FieldRecord) -> dict | None:
+    """The record's unit at constant crank speed against its measured polished-rod position: stroke error and
+    the RMS position difference (best time alignment over the card's samples), in % of the measured stroke."""
+    cu = unit_from_record(rec)
+    if cu is None:
+        return None
+    n = len(rec.position_m)
+    stroke = float(np.ptp(rec.position_m))
+    base = cu.theta_bottom + 2 * np.pi * np.arange(n) / n
+    best = min(float(np.sqrt(np.mean((np.asarray(cu.position_m(base - 2 * np.pi * k / n)) - rec.position_m) ** 2)))
+               for k in range(n))
+    return {"unit_stroke_error_pct": 100.0 * (cu.stroke_m / stroke - 1.0),
+            "unit_position_rms_pct_of_stroke": 100.0 * best / stroke,
+            "unit_rotation": cu.geometry.rotation}

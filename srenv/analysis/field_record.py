@@ -1,0 +1,235 @@
+"""Field records: a measured card with the well it came from, read from the public vendor dynacard JSON layout
+(``docs/realism.md``; e.g. the exports in github.com/vamseeachanta/digitalmodel, MIT) or from srenv's own
+card CSV plus well YAML. Field units are converted once, by ``srenv.field_units``; the record holds SI.
+
+The JSON is read as data (``json``, bounded size); every number used is checked finite and in range, and a
+missing or malformed item is one ConfigError naming its key. The card passes ``card_checks`` (a record
+stored in reverse time needs ``reverse=True``).
+"""
+
+from __future__ import annotations
+
+import json
+import math
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from .. import field_units as fu
+from ..errors import ConfigError
+from ..surface_unit.card_checks import check_card, loop_work
+
+MAX_RECORD_BYTES = 20_000_000
+
+
+@dataclass
+class FieldRecord:
+    source: str
+    t_s: np.ndarray                      # the surface card, forward time, one stroke
+    position_m: np.ndarray               # polished-rod position, upward from the bottom
+    load_n: np.ndarray                   # polished-rod load (load cell: true load), N
+    spm: float
+    tapers: list[dict]                   # top-down: diameter_m, length_m, youngs_modulus_pa, weight_kg_m, grade
+    pump_depth_m: float
+    plunger_diameter_m: float
+    tubing_pressure_pa: float
+    fluid_density_kg_m3: float
+    survey: list[dict] = field(default_factory=list)   # md_m, inclination_deg, azimuth_deg
+    water_cut: float | None = None
+    intake_pressure_pa: float | None = None            # the vendor's analysis, where it has one
+    fillage: float | None = None
+    fluid_load_n: float | None = None
+    pump_position_m: np.ndarray | None = None          # the vendor's pump card (effective loads)
+    pump_load_n: np.ndarray | None = None
+    damping_coefficients: list[float] = field(default_factory=list)
+    unit: dict = field(default_factory=dict)           # API 11E dimensions (m) and names, as given
+    time_reversed: bool = False                        # the stored card ran in reverse time
+    config: dict | None = None                         # srenv's own record: the well YAML (its model)
+
+    @property
+    def period_s(self) -> float:
+        return 60.0 / self.spm
+
+    @property
+    def rod_length_m(self) -> float:
+        return float(sum(t["length_m"] for t in self.tapers))
+
+
+def _get(d: dict, key: str, where: str):
+    if not isinstance(d, dict) or key not in d or d[key] is None:
+        raise ConfigError(f"{where}.{key}", "missing", "a value in the record")
+    return d[key]
+
+
+def _section(d: dict, key: str, where: str, required: bool = True) -> dict:
+    """A JSON object of the record ({} when optional and absent); anything else is one ConfigError."""
+    v = d.get(key) if isinstance(d, dict) else None
+    if v is None and not required:
+        return {}
+    if not isinstance(v, dict):
+        raise ConfigError(f"{where}.{key}", "missing" if v is None else type(v).__name__, "a JSON object")
+    return v
+
+
+def _num(d: dict, key: str, where: str, lo: float, hi: float, unit: str, optional: bool = False):
+    """A number of the record in its field unit, checked in [lo, hi] (in that unit), returned in SI."""
+    if optional and (not isinstance(d, dict) or d.get(key) is None):
+        return None
+    v = _get(d, key, where)
+    if isinstance(v, str):
+        v = v.strip().rstrip("%")
+    if isinstance(v, bool):
+        raise ConfigError(f"{where}.{key}", v, f"a number in {unit}")
+    try:
+        x = float(v)
+    except (TypeError, ValueError):
+        raise ConfigError(f"{where}.{key}", v, f"a number in {unit}") from None
+    if not (math.isfinite(x) and lo <= x <= hi):
+        raise ConfigError(f"{where}.{key}", v, f"a finite number in {unit} within [{lo:g}, {hi:g}]")
+    return fu.to_si(x, unit, f"{where}.{key}")
+
+
+def _series(d: dict, key: str, where: str) -> np.ndarray:
+    v = _get(d, key, where)
+    try:
+        a = np.asarray(v, dtype=float)
+    except (TypeError, ValueError):
+        raise ConfigError(f"{where}.{key}", "a non-numeric list", "a list of numbers") from None
+    if a.ndim != 1:
+        raise ConfigError(f"{where}.{key}", f"shape {a.shape}", "a flat list of numbers")
+    return a
+
+
+def _tapers(rods: list, where: str) -> list[dict]:
+    if not isinstance(rods, list) or not rods:
+        raise ConfigError(where, "missing", "a list of rod tapers (top-down)")
+    out = []
+    for i, r in enumerate(rods):
+        w = f"{where}[{i}]"
+        out.append({
+            "diameter_m": _num(r, "Diameter", w, 0.1, 4.0, "in"),
+            "length_m": _num(r, "TotalLength", w, 1.0, 40000.0, "ft"),
+            "youngs_modulus_pa": _num(r, "ModulusOfElasticity", w, 1e5, 1e8, "psi"),
+            "weight_kg_m": _num(r, "Weight", w, 0.05, 50.0, "lb/ft"),
+            "grade": str(r.get("Grade") or "D"),
+        })
+    return out
+
+
+def _unit(su: dict, where: str) -> dict:
+    if not isinstance(su, dict):
+        return {}
+    out = {k: _num(su, f"Dimensional{k}", where, 1.0, 1000.0, "in", optional=True) for k in "ACIKP"}
+    out["R"] = _num(su, "Radius", where, 1.0, 500.0, "in", optional=True)
+    out["geometry"] = su.get("PumpingUnitGeometry")
+    out["rotation"] = su.get("Rotation")
+    out["structural_unbalance_n"] = _num(su, "StructuralImbalance", where, -1e5, 1e5, "lbf", optional=True)
+    return out
+
+
+def read_dynacard_json(path: str | Path, reverse: bool = False, auto_orient: bool = False) -> FieldRecord:
+    """A vendor dynacard export (``cardData``, ``equipmentData``, ``InputParameters``, ...). The layout stores
+    cards in either time direction: with `auto_orient` a reversed card is turned forward (and the record says
+    so, ``time_reversed``); otherwise it is refused unless `reverse`."""
+    p = Path(path)
+    if not p.is_file():
+        raise ConfigError("RECORD", str(path), "an existing field record file (.json, or .csv with --config)")
+    if p.stat().st_size > MAX_RECORD_BYTES:
+        raise ConfigError("RECORD", str(path), f"a record of at most {MAX_RECORD_BYTES} bytes")
+    try:
+        d = json.loads(p.read_text())
+    except (OSError, UnicodeDecodeError, ValueError) as exc:
+        raise ConfigError("RECORD", str(path), f"a readable JSON file ({type(exc).__name__})") from None
+    if not isinstance(d, dict):
+        raise ConfigError("RECORD", str(path), "a JSON object (the dynacard layout)")
+    eq = _section(d, "equipmentData", "record")
+    ip = _section(d, "InputParameters", "record")
+    cd = _section(d, "cardData", "record")
+    x_in, f_lbf = _series(cd, "Position", "cardData"), _series(cd, "Load", "cardData")
+    if len(x_in) != len(f_lbf):
+        raise ConfigError("cardData", f"{len(x_in)} positions, {len(f_lbf)} loads", "one load per position")
+    x_m, f_n = fu.to_si(x_in, "in"), fu.to_si(f_lbf, "lbf")
+    if auto_orient and len(x_m) == len(f_n) and np.all(np.isfinite(x_m)) and np.all(np.isfinite(f_n)):
+        reverse = reverse or loop_work(x_m, f_n) < 0
+    x, f = check_card(x_m, f_n, "cardData", str(path), reverse)
+    spm = _num(ip, "StrokesPerMinute", "InputParameters", 0.1, 60.0, "-")
+    t = np.arange(len(x)) * (60.0 / spm / len(x))
+    pump = _section(eq, "Pump", "equipmentData")
+    wb = _section(eq, "WellBore", "equipmentData", required=False)
+    wt = _section(d, "WellTestData", "record", required=False)
+    wcut = _num(wt, "WaterCut", "WellTestData", 0.0, 100.0, "%", optional=True)
+    api = _num(wb, "OilApi", "WellBore", 5.0, 80.0, "-", optional=True) or 35.0
+    sgw = _num(wb, "WaterGravity", "WellBore", 0.9, 1.4, "-", optional=True) or 1.0
+    rho = fu.liquid_density_kg_m3(wcut if wcut is not None else 0.0, sgw, api)
+    rho_given = _num(ip, "FluidDensity", "InputParameters", 100.0, 3000.0, "kg/m^3", optional=True)
+    an = _section(d, "downholeCardAnalysis", "record", required=False)
+    rec = FieldRecord(
+        source=str(path), time_reversed=reverse, t_s=t, position_m=x - x.min(), load_n=f, spm=spm,
+        tapers=_tapers(eq.get("Rods"), "equipmentData.Rods"),
+        pump_depth_m=_num(pump, "Depth", "equipmentData.Pump", 10.0, 40000.0, "ft"),
+        plunger_diameter_m=_num(pump, "Diameter", "equipmentData.Pump", 0.5, 8.0, "in"),
+        tubing_pressure_pa=_num(ip, "TubingPressure", "InputParameters", 0.0, 10000.0, "psi", optional=True) or 0.0,
+        fluid_density_kg_m3=rho if rho_given is None else rho_given,
+        survey=_survey(d.get("surveyData")), water_cut=wcut,
+        intake_pressure_pa=_num(an, "Pump Intake Pressure", "downholeCardAnalysis", 0.0, 20000.0, "psi", True),
+        fillage=_num(an, "Pump Fillage", "downholeCardAnalysis", 0.0, 100.0, "%", optional=True),
+        fluid_load_n=_num(an, "Fluid Load", "downholeCardAnalysis", -1e6, 1e6, "lbf", optional=True),
+        damping_coefficients=_coefficients(eq.get("DampingCoefficient") or _section(
+            d, "dynaoutputData", "record", required=False).get("DampingCoefficient")),
+        unit=_unit(eq.get("SurfaceUnit"), "equipmentData.SurfaceUnit"))
+    dh = d.get("downholeCard")
+    if isinstance(dh, dict) and dh.get("Position") and dh.get("Load"):
+        xp, fp = _series(dh, "Position", "downholeCard"), _series(dh, "Load", "downholeCard")
+        if len(xp) == len(fp) and len(xp) >= 16 and np.all(np.isfinite(xp)) and np.all(np.isfinite(fp)):
+            # the vendor's pump card keeps its own time order (not always the surface card's): forward by its loop
+            back = loop_work(xp, fp) < 0
+            rec.pump_position_m = fu.to_si(xp[::-1] if back else xp, "in")
+            rec.pump_load_n = fu.to_si(fp[::-1] if back else fp, "lbf")
+    return rec
+
+
+def _coefficients(v) -> list[float]:
+    """The vendor's damping coefficients as given (reported, not used by the model)."""
+    if not isinstance(v, list):
+        return []
+    return [float(c) for c in v if isinstance(c, (int, float)) and not isinstance(c, bool) and math.isfinite(c)]
+
+
+def _survey(rows) -> list[dict]:
+    if not isinstance(rows, list):
+        return []
+    out = []
+    for i, s in enumerate(rows):
+        w = f"surveyData[{i}]"
+        out.append({"md_m": _num(s, "MD", w, 0.0, 100000.0, "ft"),
+                    "inclination_deg": _num(s, "Inclination", w, 0.0, 180.0, "-", optional=True) or 0.0,
+                    "azimuth_deg": _num(s, "Azimuth", w, -360.0, 360.0, "-", optional=True) or 0.0})
+    out.sort(key=lambda s: s["md_m"])
+    return out if any(s["inclination_deg"] > 0 for s in out) else []
+
+
+def read_record_csv(path: str | Path, config: str, reverse: bool = False) -> FieldRecord:
+    """srenv's own record: a card CSV (``t_s, polished_rod_position_m, polished_rod_load_n``, SI or a unit row;
+    the last stroke is used) with the well YAML it came from (the tapers, fluid, pump and survey of the config;
+    the pump's state from srenv's diagnosis)."""
+    from ..config import config_from_dict, read_raw
+    from ..surface_unit.measured_motion import last_stroke, read_card_csv, stroke_period_s
+
+    raw = read_raw(config)
+    cfg = config_from_dict(raw)
+    cols = read_card_csv(path, "RECORD", ("t_s", "polished_rod_position_m", "polished_rod_load_n"),
+                         reverse=reverse)
+    t, x, f = cols["t_s"], cols["polished_rod_position_m"], cols["polished_rod_load_n"]
+    period = 60.0 / cfg.surface.measured_spm if cfg.surface.measured_spm > 0 else stroke_period_s(t, x)
+    keep = last_stroke(t, period)
+    t, x, f = t[keep] - t[keep][0], x[keep], f[keep]
+    tp = [{"diameter_m": 1e-3 * tp.diameter_mm, "length_m": tp.length_m, "youngs_modulus_pa": tp.youngs_modulus_pa,
+           "weight_kg_m": tp.density_kg_m3 * math.pi / 4 * (1e-3 * tp.diameter_mm) ** 2 + tp.coupling_mass_kg_per_m,
+           "grade": tp.grade} for tp in cfg.rod.tapers]
+    return FieldRecord(
+        source=str(path), t_s=t, position_m=x - x.min(), load_n=f, spm=60.0 / period, tapers=tp,
+        pump_depth_m=cfg.rod_length_m, plunger_diameter_m=1e-3 * cfg.pump.plunger_diameter_mm,
+        tubing_pressure_pa=cfg.fluid.wellhead_pressure_pa, fluid_density_kg_m3=cfg.fluid.density_kg_m3,
+        survey=[{"md_m": s.md_m, "inclination_deg": s.inclination_deg, "azimuth_deg": s.azimuth_deg}
+                for s in cfg.survey.stations], config=raw)

@@ -1,0 +1,195 @@
+"""``srenv validate RECORD [--fit PARAM ...] [--plot P.png] [--reverse] [--load-convention true|effective]``:
+predict a field record's surface card from its description (no fitting unless asked), diagnose its measured
+card, and compare both with what the record holds. One JSON line (docs/realism.md):
+
+- ``pprl_error_pct``, ``mprl_error_pct``: predicted peak / minimum polished-rod load against the measured,
+  in % of the measured;
+- ``card_rms_pct_of_pprl``: RMS load difference of the predicted and measured surface cards on common
+  positions, upstroke and downstroke apart (``analysis.card_compare``), in % of the measured PPRL;
+- ``pump_card_rms_pct_of_range``: srenv's diagnosed pump card against the record's reference (vendor) pump
+  card, in the reference's load convention (effective for the vendor layout), positions from each card's
+  bottom, in % of the reference's load range (null without a reference);
+- ``spectrum``: the share of each card's load-fluctuation energy in harmonics 4-20 and above 20 of the
+  stroke, measured and predicted, and their ratios.
+
+RECORD is the vendor dynacard JSON layout (field units; a card stored in reverse time is oriented forward and
+reported as ``card_time_reversed``), or srenv's card CSV (``t_s, polished_rod_position_m,
+polished_rod_load_n``, or a unit row) with ``--config WELL``. The pump's state (intake pressure, fillage)
+comes from the record's own analysis where it has one, else from srenv's diagnosis of the measured card.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import tempfile
+
+import numpy as np
+import yaml
+
+from ..errors import ConfigError
+from ..outputs import atomic_write, check_output_path
+
+DEFAULT_STROKES = 4
+LOAD_CONVENTIONS = ("true", "effective")
+
+
+def _write_motion_csv(rec, path: str) -> None:
+    np.savetxt(path, np.c_[rec.t_s, rec.position_m], delimiter=",", header="t_s,polished_rod_position_m",
+               comments="", fmt="%.12g")
+
+
+def _diagnose(cfg_dict: dict, rec) -> tuple[object, dict]:
+    from ..analysis.diagnose import diagnose_card, summary
+    from ..config import config_from_dict
+
+    cfg = config_from_dict(cfg_dict)
+    card = diagnose_card(cfg, rec.t_s, rec.position_m, rec.load_n, period_s=rec.period_s)
+    return card, summary(cfg, card)
+
+
+def pump_state(rec, work_dir: str) -> dict:
+    """Intake pressure (Pa), fillage and plunger friction (N): the record's own analysis where it has one,
+    else srenv's diagnosis of the measured card (never a fit to the surface card)."""
+    from ..analysis.field_model import MIN_INTAKE_PA, pump_column_pa, pump_drag_n, well_config
+
+    if rec.intake_pressure_pa is not None:
+        p_in, fill, fluid, source = rec.intake_pressure_pa, rec.fillage or 1.0, rec.fluid_load_n, "record"
+    else:
+        _, s = _diagnose(well_config(rec, os.path.join(work_dir, "motion.csv"), MIN_INTAKE_PA), rec)
+        p_in = max(float(s["intake_pressure_pa"] or 0.0) + pump_column_pa(rec), MIN_INTAKE_PA)
+        fill, fluid, source = float(s["fillage"]), float(s["fluid_load_n"]), "srenv diagnose"
+    return {"intake_pressure_pa": p_in, "fillage": fill, "plunger_friction_n": pump_drag_n(rec, fluid, p_in),
+            "source": source}
+
+
+def _simulate(cfg_dict: dict, strokes: int):
+    from ..config import config_from_dict
+    from ..simulation.simulator import Simulator
+
+    sim = Simulator(config_from_dict(cfg_dict))
+    return sim, sim.run_strokes(strokes)[-1]
+
+
+def _fit(cfg_dict: dict, rec, params: list[str], strokes: int, work_dir: str) -> dict:
+    from ..analysis.fit import CardFit, fit_card
+
+    cfg_path = os.path.join(work_dir, "well.yaml")
+    card_path = os.path.join(work_dir, "card.csv")
+    with open(cfg_path, "w") as fh:
+        yaml.safe_dump(cfg_dict, fh, sort_keys=False)
+    np.savetxt(card_path, np.c_[rec.t_s, rec.position_m, rec.load_n], delimiter=",", comments="", fmt="%.12g",
+               header="t_s,polished_rod_position_m,polished_rod_load_n")
+    result = fit_card(CardFit(card_path, cfg_path, params, strokes=strokes))
+    return result
+
+
+def compare(rec, sim, result, pump_card, convention: str) -> dict:
+    """The JSON figures of one prediction and one diagnosis against the record."""
+    from ..analysis.card_compare import card_rms, harmonic_shares, resample_stroke
+
+    tr = result.trace
+    x, f = tr["polished_rod_position_m"], tr["polished_rod_load_n"]
+    pprl, mprl = float(rec.load_n.max()), float(rec.load_n.min())
+    period = result.duration_s
+    pred = resample_stroke(tr["t_s"], f, period, len(rec.load_n))
+    meas_s, pred_s = harmonic_shares(rec.load_n), harmonic_shares(pred)
+    out = {
+        "pprl_error_pct": 100.0 * (float(f.max()) / pprl - 1.0),
+        "mprl_error_pct": 100.0 * (float(f.min()) / mprl - 1.0),
+        "card_rms_pct_of_pprl": 100.0 * card_rms(rec.position_m, rec.load_n, x - x.min(), f) / pprl,
+        "pump_card_rms_pct_of_range": None,
+        "measured_pprl_n": pprl, "measured_mprl_n": mprl,
+        "predicted_pprl_n": float(f.max()), "predicted_mprl_n": float(f.min()),
+        "spectrum": {"measured_share_h4_20": meas_s[0], "predicted_share_h4_20": pred_s[0],
+                     "ratio_h4_20": pred_s[0] / meas_s[0] if meas_s[0] > 0 else None,
+                     "measured_share_above_h20": meas_s[1], "predicted_share_above_h20": pred_s[1],
+                     "ratio_above_h20": pred_s[1] / meas_s[1] if meas_s[1] > 0 else None},
+    }
+    if rec.pump_load_n is not None:
+        shift = sim.p_pump_pa * sim.area_bottom_m2 if convention == "effective" else 0.0
+        fp = pump_card.pump_load_n + shift
+        rng = float(np.ptp(rec.pump_load_n))
+        out["pump_card_rms_pct_of_range"] = 100.0 * card_rms(rec.pump_position_m, rec.pump_load_n,
+                                                             pump_card.pump_position_m, fp, align_bottom=True) / rng
+        out["pump_card_convention"] = convention
+    return out
+
+
+def validate(rec, params: list[str], strokes: int, convention: str, overrides: dict | None = None
+             ) -> tuple[dict, object]:
+    """Predict, diagnose and compare one record (`overrides`: config fields set on the realistic model,
+    e.g. for the baseline of docs/realism.md)."""
+    from ..analysis.field_model import well_config
+    from ..config import apply_overrides
+
+    with tempfile.TemporaryDirectory(prefix="srenv-validate-") as work:
+        csv = os.path.join(work, "motion.csv")
+        _write_motion_csv(rec, csv)
+        if rec.config is not None:  # srenv's own record: its well YAML is the model, driven by the card
+            pump = rec.config.get("pump") or {}
+            state = {"intake_pressure_pa": pump.get("intake_pressure_pa"), "fillage": pump.get("fillage"),
+                     "plunger_friction_n": pump.get("plunger_friction_n"), "source": "config"}
+            cfg = apply_overrides(rec.config, {"surface.motion": "measured", "surface.measured_card_csv": csv,
+                                               "surface.measured_spm": rec.spm, **dict(overrides or {})})
+        else:
+            state = pump_state(rec, work)
+            cfg = apply_overrides(well_config(rec, csv, state["intake_pressure_pa"], state["fillage"],
+                                              state["plunger_friction_n"]), dict(overrides or {}))
+        fitted = None
+        if params:
+            fitted = _fit(cfg, rec, params, strokes, work)
+            cfg = apply_overrides(cfg, fitted["params"])
+        sim, result = _simulate(cfg, strokes)
+        pump_card, diag = _diagnose(cfg, rec)
+        out = compare(rec, sim, result, pump_card, convention)
+    from ..analysis.field_model import unit_kinematics_check
+
+    out["unit_kinematics"] = unit_kinematics_check(rec)
+    out.update({"record": rec.source, "card_time_reversed": bool(getattr(rec, "time_reversed", False)),
+                "pump_state": state,
+                "diagnosis": {k: diag[k] for k in ("fillage", "card_class", "fluid_load_n", "intake_pressure_pa")},
+                "fit": fitted, "model": {"damping_factor": cfg.get("damping", {}).get("damping_factor"),
+                                         "fillage": cfg.get("pump", {}).get("fillage")}})
+    return out, (rec, result, pump_card)
+
+
+def read_record(path: str, config: str | None, reverse: bool):
+    from ..analysis.field_record import read_dynacard_json, read_record_csv
+
+    if str(path).lower().endswith(".json"):
+        return read_dynacard_json(path, reverse=reverse, auto_orient=not reverse)
+    if config is None:
+        raise ConfigError("--config", "missing", "a well YAML (path or shipped name) for a CSV record")
+    return read_record_csv(path, config, reverse=reverse)
+
+
+def cmd_validate(args) -> int:
+    check_output_path("--plot", args.plot, (".png",))
+    rec = read_record(args.record, args.config, args.reverse)
+    out, parts = validate(rec, list(args.fit or []), args.strokes, args.load_convention)
+    from .cli import check_finite
+
+    check_finite({}, out)  # a figure that is not finite is a failure, not a result
+    if args.plot:
+        from .validate_plot import save_validation_plot
+
+        atomic_write(args.plot, lambda tmp: save_validation_plot(*parts, tmp))
+    print(json.dumps(out, default=float, allow_nan=False))
+    return 0
+
+
+def add_parser(sub) -> None:
+    from ..cli_types import positive_int
+
+    v = sub.add_parser("validate", help="predict and diagnose a field record, compared with its measured card")
+    v.add_argument("record", help="vendor dynacard JSON, or a card CSV with --config")
+    v.add_argument("--config", help="well YAML path or shipped name (CSV records)")
+    v.add_argument("--fit", nargs="+", metavar="KEY.PATH", help="config fields to fit to the surface card first")
+    v.add_argument("--plot", help="PNG with the measured and predicted surface cards and the pump cards")
+    v.add_argument("--reverse", action="store_true", help="the card is stored in reverse time: reverse it")
+    v.add_argument("--load-convention", choices=LOAD_CONVENTIONS, default="effective",
+                   help="pump loads compared as true loads or effective (buoyant) loads (the vendor's)")
+    v.add_argument("--strokes", type=positive_int("--strokes", 50), default=DEFAULT_STROKES,
+                   help=f"strokes simulated from the static state; the last is compared (default {DEFAULT_STROKES})")
+    v.set_defaults(func=cmd_validate)
