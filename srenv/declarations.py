@@ -174,6 +174,7 @@ def _command_flags() -> dict[str, dict[str, Number]]:
                            Number("--harmonics", int, hi=MAX_HARMONICS, why="memory of the march")),
         "fit": _flags(Number("--strokes", int, hi=MAX_FIT_STROKES, why="wall time per evaluation"),
                       Number("--max-evaluations", int, hi=MAX_FIT_EVALUATIONS, why="wall time")),
+        "validate": _flags(Number("--strokes", int, hi=50, why="wall time (strokes from the static state)")),
     }
 
 
@@ -185,6 +186,7 @@ OUTPUTS: dict[str, dict[str, tuple[str, ...]]] = {
     "sweep": {"--out": (".csv",), "--plot": (".png",)},
     "diagnose": {"--out": (".csv",), "--plot": (".png",)},
     "fit": {"--out": (".yaml", ".yml")},
+    "validate": {"--plot": (".png",)},
 }
 
 

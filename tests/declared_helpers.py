@@ -21,6 +21,7 @@ BASE_ARGV = {
     "sweep": ["sweep", FIG7, "--param", "surface.pull_velocity_m_s", "--values", "0.5", "--out", "o.csv"],
     "diagnose": ["diagnose", "card.csv", "--config", FIG3, "--out", "o.csv"],
     "fit": ["fit", "card.csv", "--config", FIG3, "--param", "damping.damping_factor", "--out", "f.yaml"],
+    "validate": ["validate", "card.csv", "--config", FIG3],
 }
 
 

@@ -153,7 +153,7 @@ def test_an_interrupted_run_leaves_none_of_its_outputs(tmp_path: Path) -> None:
 
 
 SRENV_COMMANDS = {"simulate": "srenv.tools.cli.cmd_simulate", "diagnose": "srenv.tools.diagnose_cli.cmd_diagnose",
-                  "fit": "srenv.tools.fit_cli.cmd_fit"}
+                  "fit": "srenv.tools.fit_cli.cmd_fit", "validate": "srenv.tools.validate.cmd_validate"}
 AGENTS_COMMANDS = ["train", "evaluate", "quickstart", "benchmark", "replay", "convert-stats"]
 
 
