@@ -89,6 +89,7 @@ from ..task import well_family as wf
 from ..task.economics import COST_TERMS, REWARD_TERMS, EconomicReward
 from ..task.interval import IntervalResult, IntervalRunner, StrokeFigures
 from .action_check import checked_action
+from .env_kwargs import merged_overrides
 
 CARD_POINTS = 32
 OBS_BOUND = 10.0
@@ -128,10 +129,6 @@ def _spec(split: str, index: int) -> wf.WellSpec:
     return wf.build_spec(split, index)
 
 
-def _overrides_from_kwargs(kwargs: dict) -> dict:
-    return {k.replace("__", "."): v for k, v in kwargs.items()}
-
-
 class SuckerRodV1Env(CardWindow, gym.Env):
     metadata: ClassVar[dict[str, Any]] = {"render_modes": ["rgb_array", "human"], "render_fps": 2}
 
@@ -146,8 +143,7 @@ class SuckerRodV1Env(CardWindow, gym.Env):
         self.fast_stepping = bool(fast_stepping)  # IntervalRunner(reuse_periodic=...): off keeps v1's numbers
         self.observation = observation
         self.render_mode = render_mode
-        self.overrides = dict(overrides or {})
-        self.overrides.update(_overrides_from_kwargs(kwargs))
+        self.overrides = merged_overrides(overrides, kwargs)
         # the registered spec always passes episode_hours and interval_s; an override of the same field
         # (``overrides={"task.interval_s": ...}`` or ``task__interval_s=...``) is the more specific request
         for key, value in (("task.episode_hours", episode_hours), ("task.interval_s", interval_s)):

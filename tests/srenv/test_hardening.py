@@ -97,7 +97,7 @@ SIMULATE_CASES = [
     ("bigint-spm", [FIG3, "--set", f"surface.spm={BIGINT}"], ["surface.spm", "integer of about 401 digits"],
      True),
     ("spm-1e308", [FIG3, "--set", "surface.spm=1e308"], ["surface.spm", "[0.1, 60]"], False),
-    ("spm-90-one-stroke", [FIG3, "--spm", "90"], ["surface.spm", "[0.1, 60]"], False),
+    ("spm-90-one-stroke", [FIG3, "--spm", "90"], ["--spm", "[0.1, 60]"], False),
     ("max-corrections-1e38", [FIG3, "--set", "simulation.max_corrections=1e38"],
      ["simulation.max_corrections", "at most 1000"], False),
     ("youngs-1e308", [FIG3, "--set", "rod.tapers.0.youngs_modulus_pa=1e308"],
