@@ -78,7 +78,7 @@ def _worker_init() -> None:
 
 
 def _one(job: tuple[int, int, tuple[str, ...]]) -> dict:
-    from ..analysis.card_set import make_card
+    from ..task.card_set import make_card
 
     return make_card(*job)
 
@@ -114,7 +114,7 @@ def simulate_set(n: int, seed: int, labels: tuple[str, ...], workers: int, progr
 def dataset_card(cols: dict, seed: int, labels: tuple[str, ...]) -> dict:
     import numpy as np
 
-    from ..analysis.card_set import ARRAYS, N_POINTS, SPLITS, WELL_COLUMNS
+    from ..task.card_set import ARRAYS, N_POINTS, SPLITS, WELL_COLUMNS
 
     names = list(cols["label_names"])
     return {"format": "srenv card set 1", "file": "cards.npz", "seed": seed, "n_cards": len(cols["label"]),
@@ -126,9 +126,9 @@ def dataset_card(cols: dict, seed: int, labels: tuple[str, ...]) -> dict:
 
 
 def main(args: argparse.Namespace) -> int:
-    from ..analysis.card_set import columns, write_npz
     from ..outputs import atomic_write
     from ..physics.conditions import LABELS
+    from ..task.card_set import columns, write_npz
 
     out = check_out_dir(args.out)
     labels = args.conditions or LABELS

@@ -20,9 +20,9 @@ from pathlib import Path
 import numpy as np
 
 from ..analysis.card_augment import augment
-from ..analysis.card_set import load_cards
 from ..analysis.card_shape import BadCard, features
 from ..physics.conditions import LABELS
+from ..task.card_set import load_cards
 
 # name -> (hidden widths, augmented training); chosen on augmented validation accuracy
 CANDIDATES = {"mlp_aug": ((128, 128), True), "mlp_clean": ((128, 128), False), "linear_aug": ((), True),
@@ -107,7 +107,7 @@ def _read_weights(path: str) -> dict:
 
 
 def write_model(path: str, weights: dict) -> None:
-    from ..analysis.card_set import write_npz
+    from ..task.card_set import write_npz
 
     write_npz(path, {k: np.asarray(v) for k, v in weights.items()})
 

@@ -10,10 +10,10 @@ import json
 import numpy as np
 import pytest
 
-from srenv.analysis.card_set import columns, load_cards, make_card, split_of, write_npz
 from srenv.analysis.condition_card import condition_config, simulate_card
 from srenv.config import apply_overrides, config_from_dict, load_config, to_dict
 from srenv.physics.conditions import LABELS, condition_of, condition_overrides
+from srenv.task.card_set import columns, load_cards, make_card, split_of, write_npz
 
 WELL = "paper_fig3_vertical"
 

@@ -80,8 +80,8 @@ def _surface(surface, spm: float, stroke: float, conventional: bool):
 
 def card_config(d: Draw):
     """The family well of the draw at the drawn operating point and damping, in the drawn condition."""
-    from ..task.well_family import draw_params, spec_from_params
-    from .condition_card import condition_config
+    from ..analysis.condition_card import condition_config
+    from .well_family import draw_params, spec_from_params
 
     well = spec_from_params(draw_params(d.well_seed), f"card{d.well_seed}").cfg
     c = well.control
@@ -101,8 +101,8 @@ def resample(t: np.ndarray, y: np.ndarray, n: int = N_POINTS) -> np.ndarray:
 
 def make_card(seed: int, index: int, labels: tuple[str, ...]) -> dict:
     """Card ``index`` of set ``seed``: arrays, label, severity, the well's numbers."""
+    from ..analysis.condition_card import simulate_card
     from ..errors import ConfigError, NumericFailure, SolverFailure
-    from .condition_card import simulate_card
 
     for attempt in range(MAX_ATTEMPTS):
         d = draw(seed, index, attempt, labels)
