@@ -10,13 +10,15 @@ from __future__ import annotations
 import argparse
 import json
 import math
+import numbers
+import signal
 import sys
+import warnings
 from pathlib import Path
 from typing import Any
 
 import yaml
 
-from srenv.cli_types import nonneg_int, positive_int
 from srenv.shipped import shipped_dir
 
 EXIT_BAD_INPUT = 2
@@ -29,12 +31,24 @@ class _Parser(argparse.ArgumentParser):
         sys.exit(EXIT_BAD_INPUT)
 
 
+def _flag(command: str, flag: str) -> Any:
+    """The argparse type of a declared flag (agents/inputs.py: type, unit, range)."""
+    from .inputs import FLAGS
+
+    return FLAGS[command][flag].parse
+
+
 def _key_value(text: str) -> tuple[str, Any]:
     """``key=value`` with the value read as YAML (numbers, booleans, lists); never evaluated as code."""
     key, sep, value = text.partition("=")
     if not sep or not key:
         raise argparse.ArgumentTypeError(f"{text!r}: expected KEY=VALUE")
-    return key, yaml.safe_load(value)
+    from srenv.safe_yaml import _yaml_load
+
+    try:
+        return key, _yaml_load(value)
+    except yaml.YAMLError:
+        return key, value  # a plain string, as --set reads one
 
 
 def _json_default(x: Any) -> Any:
@@ -44,13 +58,15 @@ def _json_default(x: Any) -> Any:
 def _print_json(obj: dict) -> None:
     # NaN/inf are not JSON: report them as null so every reader can parse the line
     def clean(v: Any) -> Any:
-        if isinstance(v, float) and not math.isfinite(v):
-            return None
+        if isinstance(v, numbers.Real) and not isinstance(v, (bool, numbers.Integral)):  # numpy floats too
+            return float(v) if math.isfinite(float(v)) else None
         if isinstance(v, dict):
             return {k: clean(w) for k, w in v.items()}
+        if isinstance(v, (list, tuple)):
+            return [clean(w) for w in v]
         return v
 
-    print(json.dumps(clean(obj), default=_json_default), flush=True)
+    print(json.dumps(clean(obj), default=_json_default, allow_nan=False), flush=True)
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -59,11 +75,11 @@ def build_parser() -> argparse.ArgumentParser:
 
     t = sub.add_parser("train", help="train PPO/SAC from a hyperparameter YAML (SB3, or RLlib with backend: rllib)")
     t.add_argument("config", help="training YAML, e.g. configs/train/ppo_default.yaml")
-    t.add_argument("--total-timesteps", type=positive_int("--total-timesteps"),
+    t.add_argument("--total-timesteps", type=_flag("train", "--total-timesteps"),
                    help="override n_timesteps (total, incl. resumed)")
     t.add_argument("--out", help="output directory (default runs/<config name>)")
     t.add_argument("--resume", action="store_true", help="continue from the newest checkpoint in --out")
-    t.add_argument("--n-envs", type=positive_int("--n-envs"),
+    t.add_argument("--n-envs", type=_flag("train", "--n-envs"),
                    help="override n_envs (default: all cores); num_env_runners for backend: rllib")
     t.add_argument("--address", help="backend: rllib: Ray cluster to join (auto, ray://host:10001); "
                                      "default a local Ray on 127.0.0.1")
@@ -73,8 +89,8 @@ def build_parser() -> argparse.ArgumentParser:
     e = sub.add_parser("evaluate", help="evaluate baselines and/or saved models on held-out seeds")
     e.add_argument("--policy", action="append", required=True,
                    help="rocking, fillage, an SB3 model .zip or an RLlib checkpoint directory; repeat to compare")
-    e.add_argument("--episodes", type=positive_int("--episodes"), default=20)
-    e.add_argument("--seed", type=nonneg_int("--seed"), default=1000,
+    e.add_argument("--episodes", type=_flag("evaluate", "--episodes"), default=20)
+    e.add_argument("--seed", type=_flag("evaluate", "--seed"), default=1000,
                    help="first held-out seed (episodes use S..S+N-1)")
     e.add_argument("--config", default="default", help="well config name or YAML path")
     e.add_argument("--env-kwarg", type=_key_value, action="append", default=[], metavar="KEY=VALUE",
@@ -92,13 +108,14 @@ def build_parser() -> argparse.ArgumentParser:
                        "wells, with a verdict; --train: a short training demo instead")
     q.add_argument("--train", action="store_true", help="the training demo: the v1 benchmark on a small scale "
                    "(tune baselines, train PPO/SAC for a minute)")
-    q.add_argument("--workers", type=positive_int("--workers"), default=2, help="processes (default 2)")
+    q.add_argument("--workers", type=_flag("quickstart", "--workers"), default=2, help="processes (default 2)")
     q.add_argument("--config", default=str(QUICK_BENCHMARK), help="--train: benchmark YAML (default v1_quick.yaml)")
     q.add_argument("--out", default="runs/quickstart")
-    q.add_argument("--total-timesteps", type=positive_int("--total-timesteps"),
+    q.add_argument("--total-timesteps", type=_flag("quickstart", "--total-timesteps"),
                    help="override every agent run's n_timesteps")
-    q.add_argument("--episodes", type=positive_int("--episodes"), help="number of test episodes (default 3; --train: the config's)")
-    q.add_argument("--seed", type=nonneg_int("--seed"), help="first test seed (episodes use S..S+N-1)")
+    q.add_argument("--episodes", type=_flag("quickstart", "--episodes"),
+                   help="number of test episodes (default 3; --train: the config's)")
+    q.add_argument("--seed", type=_flag("quickstart", "--seed"), help="--train: first test seed (S..S+N-1)")
 
     b = sub.add_parser("benchmark", help="tune baselines, train PPO/SAC, test all on unseen wells (v1)")
     b.add_argument("config", help="benchmark YAML, e.g. configs/benchmark/v1.yaml")
@@ -106,15 +123,17 @@ def build_parser() -> argparse.ArgumentParser:
     b.add_argument("--out-dir", help="output directory (default docs, or runs/benchmark_quick with --quick)")
     b.add_argument("--evaluate-only", action="store_true", help="no training or tuning: the shipped models and "
                    "tuned baselines on --episodes fresh family wells drawn from --fresh-seed")
-    b.add_argument("--fresh-seed", type=nonneg_int("--fresh-seed"), help="--evaluate-only: seed of the fresh wells (recorded)")
-    b.add_argument("--episodes", type=positive_int("--episodes"), help="--evaluate-only: number of fresh wells")
-    b.add_argument("--workers", type=positive_int("--workers"), help="--evaluate-only: processes (default the config's)")
+    b.add_argument("--fresh-seed", type=_flag("benchmark", "--fresh-seed"),
+                   help="--evaluate-only: seed of the fresh wells (recorded)")
+    b.add_argument("--episodes", type=_flag("benchmark", "--episodes"), help="--evaluate-only: number of fresh wells")
+    b.add_argument("--workers", type=_flag("benchmark", "--workers"),
+                   help="--evaluate-only: processes (default the config's)")
 
     r = sub.add_parser("replay", help="re-run a benchmark report's test episodes from its own record (v1); "
                        "exit 1 if a return differs")
     r.add_argument("report", help="benchmark JSON, e.g. docs/benchmark.json (models are read next to it)")
     r.add_argument("--policy", action="append", help="a policy of the report; repeat (default: all but the oracle)")
-    r.add_argument("--episodes", type=positive_int("--episodes"), default=3,
+    r.add_argument("--episodes", type=_flag("replay", "--episodes"), default=3,
                    help="the first N test episodes (default 3)")
     return p
 
@@ -216,6 +235,10 @@ def _eval_env_kwargs(train_env_kwargs: dict) -> dict:
 
 def main(argv: list[str] | None = None) -> int:
     args = build_parser().parse_args(argv)
+    # gymnasium enables its DeprecationWarnings and takes v1 for v0's successor ("out of date, upgrade"): v1 is
+    # another task, and the warning would make every refusal of a v0 run two or three lines instead of one
+    warnings.filterwarnings("ignore", message=r".*is out of date\. You should consider upgrading",
+                            category=DeprecationWarning)
     from srenv.errors import ConfigError
 
     from .training.config import TrainConfigError
@@ -223,12 +246,21 @@ def main(argv: list[str] | None = None) -> int:
     commands = {"train": cmd_train, "evaluate": cmd_evaluate, "quickstart": cmd_quickstart,
                 "convert-stats": cmd_convert_stats, "benchmark": cmd_benchmark,
                 "replay": cmd_replay}
+    from srenv.interrupts import EXIT_INTERRUPTED, raise_on_sigterm
+
+    previous = signal.signal(signal.SIGTERM, raise_on_sigterm) if argv is None else None
     try:
         result = commands[args.command](args)
     except (ConfigError, TrainConfigError, ValueError, FileNotFoundError) as exc:
         print(f"agents: error: {exc}", file=sys.stderr)
         return EXIT_BAD_INPUT
-    if not result.pop("_printed", False):
+    except KeyboardInterrupt:  # Ctrl-C or SIGTERM: one line, status 130 (no traceback)
+        print("agents: interrupted", file=sys.stderr)
+        return EXIT_INTERRUPTED
+    finally:
+        if previous is not None:
+            signal.signal(signal.SIGTERM, previous)
+    if not result.pop("_printed", False):  # the quick start printed its table, verdict and file locations
         _print_json(result)
     return 1 if result.get("reproduced") is False else 0  # replay: a return differs from the report's
 

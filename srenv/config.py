@@ -10,6 +10,7 @@ Nothing in a config is ever evaluated as code. ``docs/config.md`` is generated f
 from __future__ import annotations
 
 import dataclasses
+import functools
 import math
 import os
 import types
@@ -58,6 +59,7 @@ from .config_sections import (  # noqa: F401  (re-exported: the sections are the
 )
 from .errors import ConfigError
 from .safe_yaml import (  # noqa: F401
+    _AMBIGUOUS_NUMBER,
     MAX_YAML_BYTES,
     MAX_YAML_DEPTH,
     MAX_YAML_NODES,
@@ -96,6 +98,7 @@ def _parse_scalar(tp: Any, value: Any, path: str, meta: dict) -> Any:
                 f" in {unit}" if unit not in ("", "-") else "")
         lo, hi = meta.get("lo"), meta.get("hi")
         what += _range_phrase(lo, hi)
+        value = _plain_number(value)
         if isinstance(value, bool) or not isinstance(value, (int, float)):
             raise ConfigError(path, value, what)
         if isinstance(value, int):
@@ -111,6 +114,17 @@ def _parse_scalar(tp: Any, value: Any, path: str, meta: dict) -> Any:
     raise TypeError(f"unsupported config type {tp} at {path}")  # programming error, not user input
 
 
+def _plain_number(value: Any) -> Any:
+    """numpy scalars (np.float32(5.0), np.int64(5): what a training loop hands the env) are numbers."""
+    import numbers
+
+    if isinstance(value, numbers.Integral) and not isinstance(value, (bool, int)):
+        return int(value)
+    if isinstance(value, numbers.Real) and not isinstance(value, (bool, int, float)):
+        return float(value)
+    return value
+
+
 # integers beyond this are refused before any conversion to float (every bound is far below it)
 _MAX_INT_MAGNITUDE = 10**15
 
@@ -123,10 +137,16 @@ def _range_phrase(lo: float | None, hi: float | None) -> str:
     return f" at least {lo:g}" if lo is not None else ""
 
 
+@functools.cache
+def _type_hints(cls: type) -> dict:
+    """typing.get_type_hints of a config section, resolved once (it dominated an env reset's time)."""
+    return typing.get_type_hints(cls)
+
+
 def _parse(cls: type, data: Any, path: str) -> Any:
     if not isinstance(data, dict):
         raise ConfigError(path or "<root>", data, f"a mapping of {cls.__name__} fields")
-    hints = typing.get_type_hints(cls)
+    hints = _type_hints(cls)
     fields = {f.name: f for f in dataclasses.fields(cls)}
     unknown = [k for k in data if k not in fields]
     if unknown:
@@ -200,8 +220,15 @@ def apply_overrides(data: dict, overrides: dict[str, Any] | list[str] | None) ->
     import copy
 
     data = copy.deepcopy(data)
-    if not overrides:
+    if overrides is None or (isinstance(overrides, (dict, list)) and not overrides):
         return data
+    if not isinstance(overrides, (dict, list)):
+        raise ConfigError("overrides", overrides, "a mapping {'section.field': value} (or a list of "
+                          "'section.field=value' strings)")
+    for key in overrides:
+        if not isinstance(key, str):
+            raise ConfigError("overrides", key, "'section.field' strings as keys" if isinstance(overrides, dict)
+                              else "'section.field=value' strings")
     items = overrides.items() if isinstance(overrides, dict) else []
     if isinstance(overrides, list):
         pairs = []
@@ -209,6 +236,9 @@ def apply_overrides(data: dict, overrides: dict[str, Any] | list[str] | None) ->
             if "=" not in s:
                 raise ConfigError("--set", s, "key.path=value")
             k, v = s.split("=", 1)
+            if _AMBIGUOUS_NUMBER.match(v.strip()):  # YAML 1.1 would read 010 as 8 and 1:30 as 90
+                raise ConfigError(k.strip(), v.strip(), "a number without a leading zero or colon (ambiguous: "
+                                  "YAML 1.1 reads 010 as octal 8 and 1:30 as 90)")
             pairs.append((k.strip(), _parse_override_value(v.strip())))
         items = pairs
     for key, value in items:

@@ -134,6 +134,8 @@ MAX_NODES = 2000  # FE nodes of the rod string (a 10 km string at 5 m elements)
 MAX_DENSE_NODES = 500  # consistent mass (dense eigenproblem) or always_qp (dense QP every step): n^2 arrays
 MAX_STEPS_PER_STROKE = 200_000  # time steps of one stroke (memory of its recorded trace: 13 MB)
 MAX_RUN_SAMPLES = 1_000_000  # recorded time steps of one CLI run / sweep case (the CSV's rows, ~100 MB)
+MAX_EPISODE_STEPS = 20_000  # env steps of one v1 episode (task.episode_hours / task.interval_s): a year at
+#                             30-min intervals; 8760 h at 10 s would be 3.2 M steps of per-step work and logs
 
 
 def node_count(cfg: WellConfig) -> int:
@@ -165,6 +167,28 @@ def check_stroke_steps(cfg: WellConfig, spm: float, field_name: str) -> None:
                           f"{field_name} = {spm:g} strokes/min (this one: {n})")
 
 
+def run_spm(cfg: WellConfig) -> float:
+    """The stroke rate of a run that names none: ``surface.spm``, or a measured card's own (its period, not
+    ``surface.spm``, sets the steps per stroke: a 20-row card spanning 1e5 s is 1e8 steps a stroke)."""
+    if cfg.surface.motion == "measured":
+        from .surface_unit.measured_motion import load_measured_motion
+
+        return load_measured_motion(cfg.surface.measured_card_csv, cfg.surface.measured_spm).spm
+    return cfg.surface.spm
+
+
+def _check_measured_period(cfg: WellConfig) -> None:
+    spm = run_spm(cfg)
+    n = steps_per_stroke(cfg, spm)
+    if n > MAX_STEPS_PER_STROKE:
+        s = cfg.surface
+        field, value = (("surface.measured_spm", s.measured_spm) if s.measured_spm > 0
+                        else ("surface.measured_card_csv", s.measured_card_csv))
+        raise ConfigError(field, value, f"a card whose stroke ({60.0 / spm:.6g} s) takes at most "
+                          f"{MAX_STEPS_PER_STROKE} time steps of simulation.time_step_s = "
+                          f"{cfg.simulation.time_step_s:g} s (this one: {n})")
+
+
 def check_run_samples(n_samples: int, flag: str, value: Any) -> None:
     """Refuse a run that would record more than MAX_RUN_SAMPLES time steps (memory and output size)."""
     if n_samples > MAX_RUN_SAMPLES:
@@ -179,7 +203,15 @@ def _check_resources(cfg: WellConfig) -> None:
                           f"a length in m giving at most {MAX_NODES} nodes (this mesh of the "
                           f"{cfg.rod_length_m:g} m string has {n})")
     check_dense_size(cfg)
-    if cfg.surface.motion != "pullout":
+    steps = cfg.task.episode_hours * 3600.0 / cfg.task.interval_s
+    if steps > MAX_EPISODE_STEPS:
+        raise ConfigError("task.episode_hours", cfg.task.episode_hours,
+                          f"a horizon in h of at most {MAX_EPISODE_STEPS} env steps of task.interval_s = "
+                          f"{cfg.task.interval_s:g} s (this one: {steps:.0f}; at most "
+                          f"{MAX_EPISODE_STEPS * cfg.task.interval_s / 3600.0:g} h)")
+    if cfg.surface.motion == "measured":
+        _check_measured_period(cfg)
+    elif cfg.surface.motion != "pullout":
         check_stroke_steps(cfg, cfg.surface.spm, "surface.spm")
 
 

@@ -1,24 +1,37 @@
 """Output files: checked before any work, written atomically (a reader or a crash never sees a partial
-file, and nothing is left behind)."""
+file, and nothing is left behind), all of a run's files or none of them; and the strict JSON summary line.
+
+Symbolic links: an output path that is a symbolic link is refused before any work (``srenv`` and ``agents``
+alike, docs/reliability.md §5): writing through it would change the link's target, a file the user did not
+name, and silently replacing the link would lose it. The rename onto the final path never follows a link.
+"""
 
 from __future__ import annotations
 
+import json
+import math
 import os
 import tempfile
-from collections.abc import Callable
+from collections.abc import Callable, Iterable
 from pathlib import Path
+from typing import Any
 
-from .errors import ConfigError
+from .errors import ConfigError, NumericFailure
+
+_NO_LINK = "a path that is not a symbolic link (an output is never written through a link nor replaces one; " \
+           "name the target itself)"
 
 
 def check_output_path(flag: str, path: str | None, suffixes: tuple[str, ...]) -> None:
-    """Refuse an output path before any work: wrong suffix, a directory, a missing or unwritable parent
-    directory, or an existing file that cannot be replaced."""
+    """Refuse an output path before any work: wrong suffix, a symbolic link, a directory, a missing or
+    unwritable parent directory, or an existing file that cannot be replaced."""
     if path is None:
         return
     p = Path(path)
     if p.suffix.lower() not in suffixes:
         raise ConfigError(flag, path, "a file name ending in " + " or ".join(suffixes))
+    if p.is_symlink():
+        raise ConfigError(flag, path, _NO_LINK)
     if p.is_dir():
         raise ConfigError(flag, path, "a file path (this is a directory)")
     parent = p.parent if str(p.parent) else Path(".")
@@ -34,28 +47,82 @@ def check_output_path(flag: str, path: str | None, suffixes: tuple[str, ...]) ->
         raise ConfigError(flag, path, f"a path in a writable directory ({exc.strerror or exc})") from None
 
 
-def atomic_write(path: str | Path, write: Callable[[str], object]) -> None:
-    """Write through a temporary file in the target directory, then rename: never a partial file.
+def check_outputs(outputs: dict[str, tuple[str | None, tuple[str, ...]]]) -> None:
+    """Check every output of a command (flag -> (path, suffixes)) and that no two name the same file
+    (one would overwrite the other)."""
+    seen: dict[str, str] = {}
+    for flag, (path, suffixes) in outputs.items():
+        check_output_path(flag, path, suffixes)
+        if path is None:
+            continue
+        key = os.path.realpath(os.path.abspath(path))
+        if key in seen:
+            raise ConfigError(flag, path, f"a file other than {seen[key]}'s (both would write the same file)")
+        seen[key] = flag
 
-    The temporary file is removed on any exit (an error, Ctrl-C, SIGTERM once :func:`main` installed its
-    handler); the result gets the usual permissions (0666 minus the umask), not mkstemp's 0600.
-    """
-    path = Path(path)
+
+def _temporary(path: Path) -> str:
     try:
         fd, tmp = tempfile.mkstemp(dir=path.parent if str(path.parent) else ".", prefix=f".{path.name}.",
                                    suffix=".tmp" + path.suffix)
     except OSError as exc:
         raise ConfigError("output", str(path), f"a writable path ({exc.strerror or exc})") from None
     os.close(fd)
+    return tmp
+
+
+def atomic_write_all(items: Iterable[tuple[str | Path, Callable[[str], object]]]) -> None:
+    """Write every (path, writer) through a temporary file in its directory, then rename them all: a
+    failure, Ctrl-C or SIGTERM (once :func:`main` installed its handler) during any writer leaves none of
+    the files and no temporary; the results get the usual permissions (0666 minus the umask)."""
+    items = [(Path(p), w) for p, w in items]
+    for path, _ in items:  # the policy holds for every writer, whether or not it checked its paths first
+        if path.is_symlink():
+            raise ConfigError("output", str(path), _NO_LINK)
+    temps: list[str] = []
+    renamed: list[Path] = []
+    at = items[0][0] if items else Path(".")  # the file being written, for the error line
     try:
-        write(tmp)
+        for path, write in items:
+            at = path
+            temps.append(_temporary(path))
+            write(temps[-1])
         umask = os.umask(0)
         os.umask(umask)
-        os.chmod(tmp, 0o666 & ~umask)
-        os.replace(tmp, path)
+        for tmp in temps:
+            os.chmod(tmp, 0o666 & ~umask)
+        for (path, _), tmp in zip(items, temps):
+            at = path
+            os.replace(tmp, path)
+            renamed.append(path)
     except BaseException as exc:
-        if os.path.exists(tmp):
-            os.remove(tmp)
+        for tmp in temps:
+            if os.path.exists(tmp):
+                os.remove(tmp)
+        if len(renamed) < len(items):  # all or nothing: a run that failed leaves none of its outputs
+            for path in renamed:
+                path.unlink(missing_ok=True)
         if isinstance(exc, OSError):  # disk full, the directory vanished, ...: one line, not a traceback
-            raise ConfigError("output", str(path), f"a writable path ({exc.strerror or exc})") from None
+            raise ConfigError("output", str(at), f"a writable path ({exc.strerror or exc})") from None
         raise
+
+
+def atomic_write(path: str | Path, write: Callable[[str], object]) -> None:
+    """Write one file through a temporary file in the target directory, then rename: never a partial file."""
+    atomic_write_all([(path, write)])
+
+
+def json_line(obj: Any) -> str:
+    """The summary as strict JSON (no NaN/Infinity, which are not JSON): a non-finite number is a
+    ``NumericFailure`` naming its key; a quantity that may be undefined must be given as None (null)."""
+    def walk(key: str, v: Any) -> Any:
+        if isinstance(v, dict):
+            return {k: walk(str(k), w) for k, w in v.items()}
+        if isinstance(v, (list, tuple)):
+            return [walk(key, w) for w in v]
+        if hasattr(v, "item") and not isinstance(v, (str, bytes)):  # numpy scalars
+            v = v.item()
+        if isinstance(v, float) and not math.isfinite(v):
+            raise NumericFailure(key, f"{v} is not a finite number; check the input's magnitudes")
+        return v
+    return json.dumps(walk("summary", obj), allow_nan=False, default=str)

@@ -79,6 +79,25 @@ _ConfigLoader.add_implicit_resolver(
 )
 
 
+_AMBIGUOUS_NUMBER = re.compile(r"^[-+]?(?:0[0-9_]+|[0-9][0-9_]*(?::[0-5]?[0-9])+(?:\.[0-9_]*)?)$")
+
+
+def _unambiguous(construct: Any) -> Any:
+    """YAML 1.1 reads ``010`` as octal 8 and ``1:30`` as 90 (base 60); YAML 1.2 and every other tool read
+    10 and a string. Neither reading is safe to pick without a word: such a number is refused."""
+    def build(loader: yaml.SafeLoader, node: yaml.ScalarNode) -> Any:
+        if _AMBIGUOUS_NUMBER.match(node.value):
+            raise yaml.constructor.ConstructorError(
+                None, None, f"the number {node.value} is ambiguous (YAML 1.1 reads a leading 0 as octal and "
+                "a:b as base 60): write it without the leading zero or colon, or quote it", node.start_mark)
+        return construct(loader, node)
+    return build
+
+
+_ConfigLoader.add_constructor("tag:yaml.org,2002:int", _unambiguous(yaml.SafeLoader.construct_yaml_int))
+_ConfigLoader.add_constructor("tag:yaml.org,2002:float", _unambiguous(yaml.SafeLoader.construct_yaml_float))
+
+
 def _yaml_load(stream: Any) -> Any:
     return yaml.load(stream, Loader=_ConfigLoader)  # a SafeLoader subclass: still no Python tags
 
@@ -115,5 +134,3 @@ def load_yaml_file(path: str | Path, field_name: str) -> Any:
         raise ConfigError(field_name, str(path), f"valid YAML ({_yaml_problem(exc)})") from None
     except RecursionError:
         raise ConfigError(field_name, str(path), "valid YAML (nested too deeply)") from None
-
-

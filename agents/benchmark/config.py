@@ -11,11 +11,11 @@ import copy
 from pathlib import Path
 from typing import Any
 
-import yaml
-
+from srenv.safe_yaml import load_yaml_file
 from srenv.shipped import shipped_dir
 
 from ..envs import ENV_ID_V1
+from ..inputs import FIELDS, seeds
 from ..policies.factory import BASELINE_NAMES
 from ..policies.residual import RESIDUAL_BASES, check_scales
 from ..training.tuning import refuse_test_split
@@ -40,16 +40,8 @@ def _deep_merge(base: dict, over: dict) -> dict:
 
 
 def _seeds(value: Any, key: str) -> list[int]:
-    """A seed list: ``[1, 2, 3]`` or ``{start: S, count: N}``."""
-    if isinstance(value, dict) and set(value) == {"start", "count"}:
-        s, n = value["start"], value["count"]
-        if isinstance(s, int) and isinstance(n, int) and s >= 0 and n > 0:
-            return list(range(s, s + n))
-    elif (isinstance(value, list) and value and all(isinstance(v, int) and v >= 0 for v in value)
-          and len(set(value)) == len(value)):
-        return list(value)
-    raise BenchmarkConfigError(f"benchmark config: {key} = {value!r}: expected a list of distinct "
-                               "non-negative integers or {start: S, count: N}")
+    """A seed list: ``[1, 2, 3]`` or ``{start: S, count: N}``, bounded (agents/inputs.py)."""
+    return seeds(value, key)
 
 
 def load_benchmark_config(path: str | Path, quick: bool = False) -> dict[str, Any]:
@@ -57,8 +49,7 @@ def load_benchmark_config(path: str | Path, quick: bool = False) -> dict[str, An
     p = Path(path)
     if not p.is_file():
         raise FileNotFoundError(f"benchmark config {path}: no such file")
-    with open(p, encoding="utf-8") as fh:
-        raw = yaml.safe_load(fh)
+    raw = load_yaml_file(p, "benchmark config")  # bounded: alias bombs, duplicate keys, syntax in one line
     if not isinstance(raw, dict):
         raise BenchmarkConfigError(f"benchmark config {path}: expected a mapping")
     cfg = _deep_merge(raw, raw.get("quick") or {}) if quick else copy.deepcopy(raw)
@@ -73,9 +64,7 @@ def load_benchmark_config(path: str | Path, quick: bool = False) -> dict[str, An
     if not (isinstance(hist, list) and all(isinstance(h, str) for h in hist)):
         raise BenchmarkConfigError(f"benchmark config: history = {str(hist)[:120]!r}: expected a list of strings "
                                    "(one line per earlier test evaluation)")
-    w = cfg.setdefault("workers", 2)
-    if not (isinstance(w, int) and w >= 1):
-        raise BenchmarkConfigError(f"benchmark config: workers = {w!r}: expected a positive integer")
+    cfg["workers"] = FIELDS["benchmark"]["workers"].check(cfg.setdefault("workers", 2))
     sets = _check_splits(cfg)
     bl = cfg.setdefault("baselines", {})
     for name in bl:
@@ -129,7 +118,11 @@ def _check_run(algo: str, run: Any) -> None:
     if not isinstance(run.get("ensemble", False), bool) or (run.get("ensemble") and len(run["seeds"]) < 2):
         raise BenchmarkConfigError(f"benchmark config: agents.runs.{algo}.ensemble = {run.get('ensemble')!r}: "
                                    "expected true or false (true needs >= 2 seeds)")
-    tc = load_train_config(run["config"])  # checks the YAML now, not after the tuning
+    over = run.get("overrides")
+    if over is not None and not (isinstance(over, dict) and all(isinstance(k, str) for k in over)):
+        raise BenchmarkConfigError(f"benchmark config: agents.runs.{algo}.overrides = {str(over)[:80]!r}: "
+                                   "expected a mapping of training-YAML keys")
+    tc = load_train_config(run["config"], over)  # checks the YAML and its overrides now, not after tuning
     refuse_test_split(tc.env_kwargs.get("scenario", "train"), "train")
     res = run.get("residual")
     if res is not None and (not isinstance(res, dict) or res.get("base", "best_tuned") not in

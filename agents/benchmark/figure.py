@@ -3,7 +3,6 @@ beside the best tuned baseline (average SPM, duty, fillage estimate over time; t
 
 from __future__ import annotations
 
-import os
 from pathlib import Path
 from typing import Any
 
@@ -65,7 +64,7 @@ def figure(report: dict[str, Any], traces: dict[str, dict[str, Any]], path: Path
         a2.legend(fontsize=7)
         a2.grid(alpha=0.3)
     fig.tight_layout()
+    from srenv.outputs import atomic_write
+
     path.parent.mkdir(parents=True, exist_ok=True)
-    tmp = path.with_name(f".{path.name}.tmp.png")
-    fig.savefig(tmp)
-    os.replace(tmp, path)
+    atomic_write(path, lambda tmp: fig.savefig(tmp, format="png"))

@@ -11,7 +11,6 @@ import json
 import math
 import os
 import platform
-import tempfile
 from pathlib import Path
 from typing import Any
 
@@ -367,11 +366,10 @@ def _seed_text(seeds: list[int]) -> str:
 
 
 def _atomic_write(path: Path, text: str) -> None:
+    from srenv.outputs import atomic_write  # the one writer: never a partial file, nothing left behind
+
     path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
-    with os.fdopen(fd, "w", encoding="utf-8") as fh:
-        fh.write(text)
-    os.replace(tmp, path)
+    atomic_write(path, lambda tmp: Path(tmp).write_text(text, encoding="utf-8"))
 
 
 def _json_clean(v: Any) -> Any:

@@ -36,6 +36,7 @@ from typing import Any
 from ..envs import make_env
 from ..evaluation.manifest import MODELS_HOME, write_manifest
 from ..evaluation.rollout import Runner
+from ..inputs import check_output_dir
 from ..policies.field import interval_s_of
 from .assemble import figure_traces, policy_records
 from .config import BenchmarkConfigError, load_benchmark_config
@@ -61,6 +62,7 @@ def run_benchmark(cfg: dict[str, Any], out_dir: str | Path, quick: bool = False,
     the report."""
     log = log or (lambda m: print(m, file=sys.stderr, flush=True))
     out = Path(out_dir)
+    check_output_dir(out, ("benchmark.json", "benchmark.md", "figures/benchmark_v1.png"))  # before any work
     models = Path(models_dir) if models_dir is not None else out / "models"
     t_start = time.perf_counter()
     wall: dict[str, float] = {}

@@ -229,6 +229,9 @@ def evaluate(specs: list[str], episodes: int, seed: int, config: str = "default"
              env_kwargs: dict | None = None, plot: str | Path | None = None,
              env_id: str = ENV_ID_V0, trust_model: bool = False) -> dict[str, Any]:
     """Evaluate each policy on seeds seed..seed+episodes-1; returns {label: summary} and writes the plot."""
+    from srenv.outputs import atomic_write, check_output_path
+
+    check_output_path("--plot", None if plot is None else str(plot), (".png",))  # before any work; no symlink
     env = make_env(env_id, config=config, **(env_kwargs or {}))
     control = well_config(env).control
     results: dict[str, dict] = {}
@@ -247,7 +250,8 @@ def evaluate(specs: list[str], episodes: int, seed: int, config: str = "default"
         env.close()
     if plot is not None:
         stroke_range = (control.stroke_min_m * 0.95, control.stroke_max_m * 1.05)
-        episode_figure(samples, stroke_range, title=f"config {config}, seed {seed}").savefig(plot)
+        fig = episode_figure(samples, stroke_range, title=f"config {config}, seed {seed}")
+        atomic_write(plot, lambda tmp: fig.savefig(tmp, format="png"))
     return results
 
 

@@ -116,6 +116,10 @@ def policy_kwargs(data: dict[str, Any], path: str | Path) -> dict[str, Any]:
                 raise _trust_hint(path, f"policy_kwargs.activation_fn = {str(value)[:60]!r} is not a torch.nn "
                                   "activation")
             out[key] = cls
+        elif key == "net_arch":
+            from ..inputs import net_arch  # widths bounded before the network is built
+
+            out[key] = net_arch(_plain(value, path, key), f"{path}: policy_kwargs.net_arch")
         elif key in _PLAIN_KWARGS:
             out[key] = _plain(value, path, key)
         else:
@@ -127,9 +131,11 @@ def space_shape(data: dict[str, Any], key: str, path: str | Path) -> tuple[int, 
     """Shape of a Box space from its readable '_shape' field."""
     entry = data.get(key)
     shape = _plain(entry.get("_shape"), path, key) if isinstance(entry, dict) else None
-    if not (isinstance(shape, list) and all(isinstance(n, int) for n in shape)):
+    if not (isinstance(shape, (list, tuple)) and all(isinstance(n, int) for n in shape)):
         raise _trust_hint(path, f"{key} is not a Box space with a readable shape")
-    return tuple(shape)
+    from ..inputs import shape as bounded_shape  # each dimension bounded before any Box is allocated
+
+    return bounded_shape(list(shape), "model", f"{key}._shape[]", f"{path}: {key}._shape")
 
 
 def policy_class_name(data: dict[str, Any]) -> str | None:
@@ -205,7 +211,7 @@ def read_stats(path: str | Path, obs_shape: tuple[int, ...]) -> ObsNormalizer | 
         clip, eps = float(rec["clip_obs"]), float(rec["epsilon"])
     except ModelFileError:
         raise
-    except (OSError, ValueError, KeyError, TypeError) as exc:
+    except (OSError, ValueError, KeyError, TypeError, AttributeError) as exc:  # AttributeError: not a mapping
         raise ModelFileError(f"{path}: not a readable statistics JSON ({type(exc).__name__}: {exc})") from None
     if mean.shape != tuple(obs_shape) or var.shape != mean.shape:
         raise ModelFileError(f"{path}: normalisation statistics of shape {mean.shape} do not fit the env's "

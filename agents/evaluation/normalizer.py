@@ -64,8 +64,10 @@ class ObsNormalizer:
     @classmethod
     def load(cls, path: str | Path) -> ObsNormalizer:
         """The benchmark's ``<model>_obs_norm.npz`` (plain arrays, no pickle)."""
-        with np.load(path, allow_pickle=False) as z:
-            return cls.from_variance(z["mean"], z["var"], float(z["clip_obs"]), float(z["epsilon"]))
+        from ..inputs import obs_norm_npz  # checked: keys, shapes, finite values (one line on any defect)
+
+        z = obs_norm_npz(path)
+        return cls.from_variance(z["mean"], z["var"], z["clip_obs"], z["epsilon"])
 
     def save(self, path: str | Path) -> None:
         """Write the VecNormalize statistics as ``.npz`` atomically (what :meth:`load` reads)."""

@@ -28,6 +28,7 @@ from typing import Any
 import numpy as np
 
 from ..envs import ENV_ID_V1, make_env
+from ..inputs import baseline_params, report_env_kwargs, report_episodes
 from ..policies.ensemble import ensemble_spec
 from ..policies.residual import RESIDUAL_BASES, check_scales
 from .manifest import MODELS_HOME
@@ -60,6 +61,10 @@ def load_report(path: str | Path) -> dict[str, Any]:
         raise ReplayError(f"report {p}: env_id = {rep.get('env_id')!r}, expected one of {', '.join(REPLAYABLE)}")
     if not isinstance(rep.get("env_kwargs"), dict) or not isinstance(rep.get("policies"), dict):
         raise ReplayError(f"report {p}: expected env_kwargs and policies mappings")
+    report_env_kwargs(rep["env_kwargs"])
+    for name, pol in rep["policies"].items():
+        if not isinstance(pol, dict):
+            raise ReplayError(f"report {p}: policies.{name} = {str(pol)[:60]!r}, expected a mapping")
     seeds = (rep.get("test") or {}).get("seeds")
     if not (isinstance(seeds, list) and seeds and all(isinstance(s, int) and s >= 0 for s in seeds)):
         raise ReplayError(f"report {p}: test.seeds = {str(seeds)[:60]}, expected a list of non-negative integers")
@@ -115,7 +120,8 @@ def policy_specs(rep: dict[str, Any], name: str, root: Path) -> list[dict[str, A
     if not isinstance(pol, dict):
         raise ReplayError(f"--policy {name}: not in the report (it has {', '.join(rep['policies'])})")
     if pol.get("kind") == "baseline":
-        return [{"kind": "baseline", "name": name, "params": pol.get("params") or {}}]
+        return [{"kind": "baseline", "name": name,
+                 "params": baseline_params(name, pol.get("params") or {}, f"policies.{name}.params")}]
     models = pol.get("models")
     if pol.get("kind") != "agent" or not isinstance(models, list) or not models:
         raise ReplayError(f"policies.{name}: expected a baseline, or an agent with a list of models")
@@ -142,13 +148,14 @@ def replay(report: str | Path, names: list[str] | None = None, episodes: int = 3
     root = Path(report).resolve().parent
     names = list(names or [n for n in rep["policies"] if n != "oracle"])
     specs = {n: policy_specs(rep, n, root) for n in names}  # every name and model checked before any episode
+    stored_all = {n: report_episodes(rep["policies"][n], n) for n in names}  # and every stored episode
     seeds = rep["test"]["seeds"][:episodes]
     envs = {sc: make_env(rep["env_id"], **{**rep["env_kwargs"], "scenario": sc})
             for sc in {_scenario(rep, k) for k in range(len(seeds))}}
     out: dict[str, Any] = {"report": str(report), "episodes": len(seeds), "tol": tol, "policies": {}}
     try:
         for n, sp in specs.items():
-            stored = {int(e["seed"]): float(e["reward"]) for e in rep["policies"][n].get("episodes", [])}
+            stored = stored_all[n]
             rows, worst = [], 0.0
             for k, s in enumerate(seeds):
                 env = envs[_scenario(rep, k)]

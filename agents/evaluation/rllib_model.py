@@ -69,7 +69,12 @@ def _module_from_data(p: Path, env: Any) -> tuple[Any, Any]:
     import gymnasium as gym
     import torch
 
-    meta = json.loads((p / POLICY_JSON).read_text())
+    from ..inputs import policy_json
+
+    try:
+        meta = policy_json(json.loads((p / POLICY_JSON).read_text(encoding="utf-8")), p / POLICY_JSON)
+    except (OSError, UnicodeDecodeError, json.JSONDecodeError) as exc:
+        raise ValueError(f"{p / POLICY_JSON}: not a readable JSON file ({type(exc).__name__})") from None
     configs = algorithm_configs()
     if meta.get("algo") not in configs or not isinstance(meta.get("model_config"), dict):
         raise ValueError(f"{p / POLICY_JSON}: expected algo one of {', '.join(configs)} and a model_config mapping")

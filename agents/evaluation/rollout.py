@@ -122,6 +122,9 @@ class Runner:
 
     def __exit__(self, *exc: object) -> None:
         if self._pool is not None:
+            if exc[0] is not None:  # an error or Ctrl-C: stop the running episodes too, not only the queued ones
+                for proc in list(getattr(self._pool, "_processes", {}).values()):
+                    proc.terminate()
             self._pool.shutdown(cancel_futures=True)
             self._pool = None
 
@@ -134,7 +137,10 @@ class Runner:
                 if progress:
                     progress(1)
             return out
-        futures = [self._pool.submit(fn, j) for j in jobs]
+        from srenv.interrupts import workers_ignore_sigint
+
+        with workers_ignore_sigint():  # workers start on submit; Ctrl-C is reported by this driver alone
+            futures = [self._pool.submit(fn, j) for j in jobs]
         out = []
         for f in futures:
             out.append(f.result())

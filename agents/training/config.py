@@ -86,8 +86,24 @@ def _expect(cond: bool, key: str, value: Any, what: str) -> None:
         raise TrainConfigError(f"train config: {key} = {value!r}: expected {what}")
 
 
+def declared(key: str, value: Any) -> int:
+    """A field declared in agents/inputs.py (type and bound), refused as a TrainConfigError."""
+    from srenv.errors import ConfigError, short_repr
+
+    from ..inputs import FIELDS
+
+    try:
+        return FIELDS["train"][key].check(value, key)
+    except ConfigError as exc:  # the training YAML's own message form: "train config: key = value: expected ..."
+        raise TrainConfigError(f"train config: {key} = {short_repr(value)}: expected {exc.expected}") from None
+
+
 def _positive_int(data: dict, key: str, default: int) -> int:
+    from ..inputs import FIELDS
+
     v = data.get(key, default)
+    if key in FIELDS["train"]:  # declared with a bound (agents/inputs.py)
+        return declared(key, v)
     _expect(isinstance(v, int) and not isinstance(v, bool) and v > 0, key, v, "a positive integer")
     return int(v)
 
@@ -114,8 +130,7 @@ def parse_train_config(data: Any, source: str = "<dict>") -> TrainConfig:
             "sb3 here (backend: rllib is read by agents.training.rllib.config)")
     algo = str(data.get("algo", "")).lower()
     _expect(algo in algorithms(), "algo", data.get("algo"), "one of " + ", ".join(algorithms()))
-    n_envs = data.get("n_envs") or 0
-    _expect(isinstance(n_envs, int) and n_envs >= 0, "n_envs", n_envs, "a positive integer or null")
+    n_envs = declared("n_envs", data.get("n_envs") or 0)
     normalize = data.get("normalize", False)
     _expect(isinstance(normalize, (bool, dict)), "normalize", normalize, "true, false or a mapping")
     env_kwargs = data.get("env_kwargs") or {}

@@ -22,14 +22,12 @@ down; the transfer of a high harmonic grows like exp(c L / (2 rho A a)) only, bu
 
 from __future__ import annotations
 
-import json
 import math
 from dataclasses import dataclass
 
 import numpy as np
 
 from ..config import WellConfig
-from ..errors import ConfigError
 from ..physics.fluid import tubing_pressure_pa
 from ..physics.rod import GRAVITY_M_S2, build_mesh, damping_per_length
 from ..physics.survey import Survey
@@ -192,19 +190,9 @@ def diagnose_card(cfg: WellConfig, t_s: np.ndarray, position_m: np.ndarray, load
     return PumpCard(t, pos, load, vel, x, f, period, min(harmonics, m // 2 - 1))
 
 
-# ------------------------------------------------------------------------------------------ the CLI
+# ------------------------------------------------------------------------------------------ card in, summary out
 def read_surface_card(path: str, reverse: bool = False) -> dict[str, np.ndarray]:
     return read_card_csv(path, "CARD.csv", CARD_COLUMNS, reverse=reverse)
-
-
-def write_pump_csv(card: PumpCard, path: str) -> None:
-    from ..outputs import atomic_write
-
-    data = np.column_stack([card.t_s, card.pump_position_m, card.pump_load_n])
-
-    def write(tmp: str) -> None:
-        np.savetxt(tmp, data, delimiter=",", header=",".join(PUMP_COLUMNS), comments="", fmt="%.12g")
-    atomic_write(path, write)
 
 
 def summary(cfg: WellConfig, card: PumpCard) -> dict:
@@ -234,32 +222,6 @@ def summary(cfg: WellConfig, card: PumpCard) -> dict:
     }
 
 
-def cmd_diagnose(args) -> int:
-    from ..config import load_config
-
-    cfg = load_config(args.config, list(args.set or []))
-    from pathlib import Path
-
-    for p, name in ((args.out, "--out"), (args.plot, "--plot")):
-        if p and not Path(p).resolve().parent.is_dir():
-            raise ConfigError(name, p, "a path in an existing directory")
-    cols = read_surface_card(args.card, getattr(args, "reverse", False))
-    t, x, f = cols["t_s"], cols["polished_rod_position_m"], cols["polished_rod_load_n"]
-    period = 60.0 / args.spm if args.spm else None
-    if period is not None and t[-1] - t[0] < period * (1 - 1e-6) - 2 * float(np.median(np.diff(t))):
-        raise ConfigError("--spm", args.spm, f"a stroke rate whose period fits in the card ({t[-1] - t[0]:.4g} s)")
-    card = diagnose_card(cfg, t, x, f, harmonics=args.harmonics, period_s=period,
-                         friction=not args.no_friction)
-    out = summary(cfg, card)
-    write_pump_csv(card, args.out)
-    if args.plot:
-        from ..outputs import atomic_write
-
-        atomic_write(args.plot, lambda tmp: save_plot(card, tmp, cfg.name))
-    print(json.dumps(out, default=float))
-    return 0
-
-
 def save_plot(card: PumpCard, path: str, title: str = "") -> None:
     import matplotlib
 
@@ -278,22 +240,3 @@ def save_plot(card: PumpCard, path: str, title: str = "") -> None:
     ax.legend()
     fig.tight_layout()
     fig.savefig(path)
-
-
-def add_parser(sub) -> None:
-    from ..cli_types import positive as _positive
-    from ..cli_types import positive_int as _positive_int
-
-    d = sub.add_parser("diagnose", help="downhole (pump) card from a measured surface card")
-    d.add_argument("card", help="CSV with t_s, polished_rod_position_m, polished_rod_load_n")
-    d.add_argument("--config", required=True, help="well YAML path or shipped name (rod string, fluid, survey)")
-    d.add_argument("--set", action="append", metavar="KEY.PATH=VALUE", help="override a config field")
-    d.add_argument("--out", required=True, help="pump card CSV: t_s, pump_position_m, pump_load_n")
-    d.add_argument("--plot", help="PNG with the surface and the pump card")
-    d.add_argument("--spm", type=_positive("--spm", "strokes/min"),
-                   help="stroke rate of the card (default: found from the position record)")
-    d.add_argument("--harmonics", type=_positive_int("--harmonics"), default=DEFAULT_HARMONICS,
-                   help=f"Fourier harmonics kept (default {DEFAULT_HARMONICS})")
-    d.add_argument("--no-friction", action="store_true", help="skip the deviated-well friction correction")
-    d.add_argument("--reverse", action="store_true", help="the card is stored in reverse time: reverse it")
-    d.set_defaults(func=cmd_diagnose)

@@ -15,14 +15,11 @@ correlated along the card, so read it as a lower bound (and it says nothing abou
 from __future__ import annotations
 
 import dataclasses
-import json
 import math
-import os
 import typing
 from pathlib import Path
 
 import numpy as np
-import yaml
 
 from ..config import ConfigError, apply_overrides, config_from_dict, read_raw, to_dict
 from ..surface_unit.measured_motion import read_card_csv, stroke_period_s
@@ -74,6 +71,10 @@ class CardFit:
             raise ConfigError("--param", "", "at least one config field to fit")
         if len(set(self.params)) != len(self.params):
             raise ConfigError("--param", " ".join(self.params), "each field once")
+        for k in self.params:  # the card drives the model: its period and motion are data, not parameters
+            if k.startswith("surface.measured_"):
+                raise ConfigError("--param", k, "a model field (the card's own period and motion are measured, "
+                                  "not fitted)")
         self.meta = [_field_meta(k)[1] for k in self.params]
         raw = apply_overrides(read_raw(config), list(overrides or []) + [
             "surface.motion=measured", f"surface.measured_card_csv={self.card_path}"])
@@ -88,6 +89,9 @@ class CardFit:
         self.t_card, self.load_card = t[keep], f[keep]
         self.period = period
         self.pprl = float(self.load_card.max())
+        if not self.pprl > 0:  # the residuals are load differences in units of the PPRL
+            raise ConfigError("CARD.csv", card_path, "a card whose peak polished-rod load is positive (the fit's "
+                              f"residuals are in units of it; this one is {self.pprl:g} N)")
         self.strokes = int(strokes)
         self.evaluations = 0
 
@@ -142,8 +146,13 @@ def fit_card(fit: CardFit, max_evaluations: int = 200) -> dict:
     zl, zh = lo / scale, hi / scale
     z0 = np.clip(z0, zl + 1e-12 * (np.isfinite(zl)), zh)
     r0 = fit.residuals(fit.x0)
-    sol = least_squares(lambda z: fit.residuals(z * scale), z0, bounds=(zl, zh), method="trf",
-                        diff_step=1e-3, x_scale=1.0, max_nfev=max_evaluations, xtol=1e-8, ftol=1e-10)
+    try:
+        sol = least_squares(lambda z: fit.residuals(z * scale), z0, bounds=(zl, zh), method="trf",
+                            diff_step=1e-3, x_scale=1.0, max_nfev=max_evaluations, xtol=1e-8, ftol=1e-10)
+    except ValueError as exc:  # "Residuals are not finite in the initial point" and the like
+        from ..errors import NumericFailure
+
+        raise NumericFailure("card_rms_pct_of_pprl", f"the fit's residuals are not usable ({exc})") from None
     x = sol.x * scale
     m, p = len(sol.fun), len(x)
     ssr = float(sol.fun @ sol.fun)
@@ -157,7 +166,8 @@ def fit_card(fit: CardFit, max_evaluations: int = 200) -> dict:
     return {
         "params": {k: float(v) for k, v in zip(fit.params, x)},
         "initial_params": {k: float(v) for k, v in zip(fit.params, fit.x0)},
-        "uncertainty": {k: float(s) for k, s in zip(fit.params, sigma)},
+        # null where the covariance is singular (a parameter the card does not determine): JSON has no NaN
+        "uncertainty": {k: float(s) if math.isfinite(s) else None for k, s in zip(fit.params, sigma)},
         "card_rms_pct_of_pprl": 100.0 * math.sqrt(ssr / m),
         "initial_card_rms_pct_of_pprl": 100.0 * float(np.sqrt(np.mean(r0 ** 2))),
         "measured_pprl_n": fit.pprl,
@@ -167,46 +177,23 @@ def fit_card(fit: CardFit, max_evaluations: int = 200) -> dict:
     }
 
 
-def write_fitted_yaml(fit: CardFit, values: dict, path: str) -> None:
-    """The fitted config: the input config with the fitted values and the measured motion, validated
-    before it is written atomically."""
-    from ..outputs import atomic_write
+def inert_params(fit: CardFit) -> list[str]:
+    """The fitted fields that do not change the simulated card at all (a 1 % step leaves every load
+    bit-identical): least squares cannot fit them, and their uncertainty would be undefined."""
+    lo, hi = _bounds(fit.meta, fit.x0)
+    base, _ = fit.simulate(fit.x0)
+    out = []
+    for i, key in enumerate(fit.params):
+        x = fit.x0.copy()
+        step = 1e-2 * abs(x[i]) if x[i] != 0 else 1e-2
+        x[i] = x[i] + step if x[i] + step <= hi[i] else x[i] - step
+        x[i] = max(x[i], lo[i])
+        from ..errors import SolverFailure
 
-    data = apply_overrides(fit.raw, values)
-    config_from_dict(data)  # validated before the write
-
-    def write(tmp: str) -> None:
-        with open(tmp, "w") as fh:
-            fh.write("# fitted by `srenv fit` to " + fit.card_path + "\n")
-            yaml.safe_dump(data, fh, sort_keys=False)
-    atomic_write(path, write)
-
-
-def cmd_fit(args) -> int:
-    if not Path(args.out).resolve().parent.is_dir():
-        raise ConfigError("--out", args.out, "a path in an existing directory")
-    if not str(args.out).endswith((".yaml", ".yml")):
-        raise ConfigError("--out", args.out, "a .yaml file name")
-    fit = CardFit(args.card, args.config, list(args.param), list(args.set or []), strokes=args.strokes)
-    result = fit_card(fit, max_evaluations=args.max_evaluations)
-    write_fitted_yaml(fit, result["params"], args.out)
-    result["out"] = os.fspath(args.out)
-    print(json.dumps(result, default=float))
-    return 0
-
-
-def add_parser(sub) -> None:
-    from ..cli_types import positive_int as _positive_int
-
-    f = sub.add_parser("fit", help="fit config fields to a measured surface card (least squares)")
-    f.add_argument("card", help="CSV with t_s, polished_rod_position_m, polished_rod_load_n")
-    f.add_argument("--config", required=True, help="well YAML path or shipped name (the starting model)")
-    f.add_argument("--param", action="extend", nargs="+", required=True, metavar="KEY.PATH",
-                   help="config field(s) to fit: e.g. damping.damping_factor, friction.coefficient, "
-                        "pump.intake_pressure_pa, fluid.wellhead_pressure_pa, pump.plunger_friction_n")
-    f.add_argument("--set", action="append", metavar="KEY.PATH=VALUE", help="override a config field first")
-    f.add_argument("--out", required=True, help="fitted well YAML")
-    f.add_argument("--strokes", type=_positive_int("--strokes"), default=DEFAULT_STROKES,
-                   help=f"strokes simulated per evaluation; the last is compared (default {DEFAULT_STROKES})")
-    f.add_argument("--max-evaluations", type=_positive_int("--max-evaluations"), default=200)
-    f.set_defaults(func=cmd_fit)
+        try:
+            moved, _ = fit.simulate(x)
+        except (ConfigError, SolverFailure):  # a step the model refuses does change something
+            continue
+        if moved.shape == base.shape and np.array_equal(moved, base):
+            out.append(key)
+    return out

@@ -97,6 +97,7 @@ from ..errors import ConfigError, SolverFailure
 from ..simulation.simulator import Simulator
 from ..task.reward import RodFailureMonitor, SuckerRodReward
 from .action_check import checked_action
+from .env_kwargs import CARD_POINTS, merged_overrides
 
 OBS_TAIL = ("spm", "stroke", "fluid_level", "intake_pressure", "fillage", "pprl", "goodman", "stick_slip")
 OBS_BOUND = 10.0
@@ -108,17 +109,12 @@ def obs_index(name: str, card_points: int = 32) -> int:
     return 2 * card_points + OBS_TAIL.index(name)
 
 
-def _overrides_from_kwargs(kwargs: dict) -> dict:
-    return {k.replace("__", "."): v for k, v in kwargs.items()}
-
-
 class SuckerRodEnv(CardWindow, gym.Env):
     metadata: ClassVar[dict[str, Any]] = {"render_modes": ["rgb_array", "human"], "render_fps": 2}
 
     def __init__(self, config: str | WellConfig = "default", overrides: dict | None = None,
                  render_mode: str | None = None, card_points: int = 32, **kwargs: Any) -> None:
-        merged = dict(overrides or {})
-        merged.update(_overrides_from_kwargs(kwargs))
+        merged = merged_overrides(overrides, kwargs)
         self.base_cfg = load_config(config, merged or None)
         if self.base_cfg.surface.motion == "pullout":
             raise ConfigError("surface.motion", "pullout",
@@ -129,7 +125,7 @@ class SuckerRodEnv(CardWindow, gym.Env):
         if render_mode is not None and render_mode not in self.metadata["render_modes"]:
             raise ValueError(f"render_mode = {render_mode!r}: expected one of {self.metadata['render_modes']}")
         self.render_mode = render_mode
-        self.card_points = int(card_points)
+        self.card_points = CARD_POINTS.check(card_points)
         self.action_space = spaces.Box(-1.0, 1.0, (2,), np.float32)
         n_obs = 2 * self.card_points + len(OBS_TAIL)
         self.observation_space = spaces.Box(-OBS_BOUND, OBS_BOUND, (n_obs,), np.float32)

@@ -7,30 +7,28 @@ status 2, and leaves no output file behind (outputs are written to a temporary f
 from __future__ import annotations
 
 import argparse
-import json
 import math
 import signal
 import sys
 
 import numpy as np
 
-from ..cli_types import MAX_DURATION_S
-from ..cli_types import bounded as _bounded
-from ..cli_types import positive as _positive
-from ..cli_types import positive_int as _positive_int
+from ..declarations import MAX_STROKES, OUTPUTS, add_number  # noqa: F401  (MAX_STROKES: re-exported)
 from ..errors import ConfigError, NumericFailure, SolverFailure
-from ..outputs import atomic_write, check_output_path
+from ..interrupts import EXIT_INTERRUPTED, raise_on_sigterm
+from ..outputs import atomic_write_all, check_outputs, json_line
+from .finite import check_finite
 
 EXIT_BAD_INPUT = 2
 EXIT_SOLVER = 3
-EXIT_INTERRUPTED = 130
-MAX_STROKES = 100_000  # --strokes; the recorded size of the run is bounded separately (MAX_RUN_SAMPLES)
-
-
-def _raise_on_sigterm(signum: int, frame: object) -> None:
-    # SIGTERM becomes an exception, so that every `finally` runs: temporary files are removed, Ray and
-    # worker processes shut down (a killed command leaves nothing behind)
-    raise KeyboardInterrupt(f"signal {signum}")
+DEFAULT_STROKES = 3
+# flags that only some surface motions use: with another motion they would be ignored without a word
+MOTION_FLAGS = {
+    "spm": ("harmonic", "conventional"),         # a measured card runs at its own period
+    "stroke_length_m": ("harmonic",),             # a conventional unit's crank hole / the card set the stroke
+    "pull_velocity_m_s": ("pullout",),
+    "strokes": ("harmonic", "conventional", "measured"),  # a pull-out runs for --duration-s
+}
 
 
 class _Parser(argparse.ArgumentParser):
@@ -39,25 +37,7 @@ class _Parser(argparse.ArgumentParser):
         sys.exit(EXIT_BAD_INPUT)
 
 
-def check_finite(trace: dict, summary: dict) -> None:
-    """A run whose numbers are not finite is a failure, not a result (and NaN is not JSON)."""
-    for name, col in trace.items():
-        if not np.all(np.isfinite(col)):
-            raise NumericFailure(name, "the simulation diverged; check the config's magnitudes")
-
-    def walk(key: str, v: object) -> None:
-        if isinstance(v, dict):
-            for k, w in v.items():
-                walk(k, w)
-        elif isinstance(v, (list, tuple)):
-            for w in v:
-                walk(key, w)
-        elif isinstance(v, (float, np.floating)) and not math.isfinite(v):
-            raise NumericFailure(key, "the summary is not finite; check the config's magnitudes")
-    walk("summary", summary)
-
-
-def write_trace_csv(trace: dict, path: str) -> None:
+def trace_csv_writer(trace: dict):
     from ..simulation.simulator import TRACE_COLUMNS
 
     cols = [c for c in TRACE_COLUMNS if c in trace]
@@ -65,12 +45,27 @@ def write_trace_csv(trace: dict, path: str) -> None:
 
     def write(tmp: str) -> None:
         np.savetxt(tmp, data, delimiter=",", header=",".join(cols), comments="", fmt="%.12g")
-    atomic_write(path, write)
+    return write
+
+
+def write_trace_csv(trace: dict, path: str) -> None:
+    atomic_write_all([(path, trace_csv_writer(trace))])
+
+
+def check_motion_flags(args: argparse.Namespace, motion: str) -> None:
+    """Refuse a flag the chosen surface motion does not use (it would be silently ignored)."""
+    for attr, motions in MOTION_FLAGS.items():
+        value = getattr(args, attr, None)
+        if value is not None and motion not in motions:
+            raise ConfigError("--" + attr.replace("_", "-"), value,
+                              f"no such flag with surface.motion = {motion} (it would be ignored; it applies to "
+                              f"{' and '.join(motions)} motion)")
 
 
 def cmd_simulate(args: argparse.Namespace) -> int:
     from ..analysis.stroke_summary import summarize
     from ..config import check_run_samples, load_config, steps_per_stroke
+    from ..config_checks import run_spm
     from ..simulation.simulator import Simulator, concat_traces
 
     overrides = list(args.set or [])
@@ -82,20 +77,22 @@ def cmd_simulate(args: argparse.Namespace) -> int:
         overrides.append(f"surface.pull_velocity_m_s={args.pull_velocity_m_s}")
     if args.qp_solver is not None:
         overrides.append(f"simulation.qp_solver={args.qp_solver}")
-    check_output_path("--out", args.out, (".csv",))
-    check_output_path("--plot", args.plot, (".png",))
+    check_outputs({flag: (getattr(args, flag[2:]), sfx) for flag, sfx in OUTPUTS["simulate"].items()})
     cfg = load_config(args.config, overrides)
-    # the run's size, before any allocation: strokes x steps per stroke, or duration / time step
+    check_motion_flags(args, cfg.surface.motion)
+    # the run's size, before any allocation: strokes x steps per stroke (at a measured card's own
+    # period), or duration / time step
     if cfg.surface.motion == "pullout":
         duration = args.duration_s if args.duration_s is not None else 60.0
         check_run_samples(math.ceil(duration / cfg.simulation.time_step_s), "--duration-s", duration)
     else:
-        n_strokes = args.strokes
+        spm = run_spm(cfg)
+        n_strokes = args.strokes or DEFAULT_STROKES
         if args.duration_s is not None:
-            n_strokes = max(1, round(args.duration_s * cfg.surface.spm / 60.0))
-        check_run_samples(n_strokes * steps_per_stroke(cfg, cfg.surface.spm),
+            n_strokes = max(1, round(args.duration_s * spm / 60.0))
+        check_run_samples(n_strokes * steps_per_stroke(cfg, spm),
                           "--duration-s" if args.duration_s is not None else "--strokes",
-                          args.duration_s if args.duration_s is not None else args.strokes)
+                          args.duration_s if args.duration_s is not None else n_strokes)
     sim = Simulator(cfg, always_qp=True if args.always_qp else None)
     if cfg.surface.motion == "pullout":
         results = [sim.run_duration(duration)]
@@ -109,13 +106,15 @@ def cmd_simulate(args: argparse.Namespace) -> int:
     summary["natural_frequency_hz"] = sim.f1_hz
     summary["energy_residual_j"] = sim.energy_balance()["residual_j"]
     check_finite(trace, summary)
-    write_trace_csv(trace, args.out)
-    if args.plot:
+    line = json_line(summary)
+    writers = [(args.out, trace_csv_writer(trace))]
+    if args.plot:  # both files or neither: an interrupted plot leaves no CSV of a failed run
         from ..analysis.render import save_cards
 
-        period = 60.0 / cfg.surface.spm if cfg.surface.motion != "pullout" else None
-        atomic_write(args.plot, lambda tmp: save_cards(trace, tmp, cfg.name, period))
-    print(json.dumps(summary, default=float, allow_nan=False))
+        period = 60.0 / spm if cfg.surface.motion != "pullout" else None
+        writers.append((args.plot, lambda tmp: save_cards(trace, tmp, cfg.name, period)))
+    atomic_write_all(writers)
+    print(line)
     return 0
 
 
@@ -142,12 +141,11 @@ def build_parser() -> argparse.ArgumentParser:
     s = sub.add_parser("simulate", help="simulate a well and write a per-time-step CSV")
     s.add_argument("config", help="well YAML path or shipped name")
     g = s.add_mutually_exclusive_group()
-    g.add_argument("--strokes", type=_positive_int("--strokes", MAX_STROKES), default=3)
-    g.add_argument("--duration-s", type=_bounded(_positive("--duration-s", "s"), "--duration-s", "s",
-                                                 MAX_DURATION_S))
-    s.add_argument("--spm", type=_positive("--spm", "strokes/min"))
-    s.add_argument("--stroke-length-m", type=_positive("--stroke-length-m", "m"))
-    s.add_argument("--pull-velocity-m-s", type=_positive("--pull-velocity-m-s", "m/s"))
+    add_number(g, "simulate", "--strokes", help=f"strokes to simulate (default {DEFAULT_STROKES})")
+    add_number(g, "simulate", "--duration-s", help="simulated time (s); harmonic runs take round(T*spm/60) strokes")
+    add_number(s, "simulate", "--spm", help="stroke rate (harmonic and conventional motion)")
+    add_number(s, "simulate", "--stroke-length-m", help="stroke length (harmonic motion)")
+    add_number(s, "simulate", "--pull-velocity-m-s", help="pulling speed (pull-out)")
     s.add_argument("--set", action="append", metavar="KEY.PATH=VALUE", help="override a config field")
     s.add_argument("--qp-solver", help="qpsolvers backend for the step QP (default proxqp)")
     s.add_argument("--always-qp", action="store_true", help="solve every step's QP (reference mode)")
@@ -155,8 +153,8 @@ def build_parser() -> argparse.ArgumentParser:
     s.add_argument("--plot", help="PNG with the surface and pump cards")
     s.set_defaults(func=cmd_simulate)
     b = sub.add_parser("bench", help="performance figures as JSON")
-    b.add_argument("--repeats", type=_positive_int("--repeats", 1000), default=5)
-    b.add_argument("--strokes", type=_positive_int("--strokes", 1000), default=10)
+    add_number(b, "bench", "--repeats", default=5)
+    add_number(b, "bench", "--strokes", default=10)
     b.add_argument("--quick", action="store_true", help="fewer repeats and strokes (smoke run)")
     b.set_defaults(func=lambda a: __import__("srenv.tools.bench", fromlist=["main"]).main(a))
     d = sub.add_parser("config-doc", help="print the table of config fields")
@@ -167,15 +165,20 @@ def build_parser() -> argparse.ArgumentParser:
         add_sweep = None
     if add_sweep is not None:
         add_sweep(sub)
-    from ..analysis.diagnose import add_parser as add_diagnose  # field engineering (docs/field.md)
+    from .diagnose_cli import add_parser as add_diagnose  # field engineering (docs/field.md)
+    from .fit_cli import add_parser as add_fit
 
     add_diagnose(sub)
-    from ..analysis.fit import add_parser as add_fit
-
     add_fit(sub)
     from .validate import add_parser as add_validate  # field records (docs/realism.md)
 
     add_validate(sub)
+    from .cards import add_parser as add_cards  # pump conditions (docs/conditions.md)
+
+    add_cards(sub)
+    from .classify import add_parser as add_classify
+
+    add_classify(sub)
     return p
 
 
@@ -183,7 +186,7 @@ def main(argv: list[str] | None = None) -> int:
     args = build_parser().parse_args(argv)
     previous = None
     if argv is None:  # the command itself, not a test calling main() in-process
-        previous = signal.signal(signal.SIGTERM, _raise_on_sigterm)
+        previous = signal.signal(signal.SIGTERM, raise_on_sigterm)
     try:
         rc = args.func(args)
     except ConfigError as exc:

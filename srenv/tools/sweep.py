@@ -46,7 +46,6 @@ from typing import Any
 from ..errors import ConfigError
 from .sweep_cases import (
     MAX_CASES,
-    MAX_WORKERS,
     METRIC_COLUMNS,
     SET_COLUMN,
     Case,
@@ -152,11 +151,10 @@ def plot(rows: list[dict[str, Any]], value_column: str, critical: list[dict[str,
 # ----------------------------------------------------------------------------------------------- CLI
 def cmd_sweep(args: argparse.Namespace) -> int:
     from ..config import MAX_RUN_SAMPLES, config_from_dict
-    from ..outputs import check_output_path
+    from ..outputs import check_outputs
     from ..simulation.simulator import Simulator
 
-    check_output_path("--out", args.out, (".csv",))
-    check_output_path("--plot", args.plot, (".png",))
+    check_outputs({"--out": (args.out, (".csv",)), "--plot": (args.plot, (".png",))})
     if not 0.0 <= args.settle_fraction < 1.0:
         raise ConfigError("--settle-fraction", args.settle_fraction, "a fraction of the run in [0, 1)")
     values = parse_values(args.values)
@@ -213,10 +211,7 @@ def cmd_sweep(args: argparse.Namespace) -> int:
 
 
 def add_parser(subparsers: argparse._SubParsersAction) -> None:
-    from ..cli_types import MAX_DURATION_S
-    from ..cli_types import bounded as _bounded
-    from ..cli_types import positive as _positive
-    from ..cli_types import positive_int as _positive_int
+    from ..declarations import add_number
 
     s = subparsers.add_parser("sweep", help="parameter study in parallel on Ray (e.g. slip amplitude vs "
                               "pulling velocity)", description=__doc__.splitlines()[0])
@@ -224,18 +219,16 @@ def add_parser(subparsers: argparse._SubParsersAction) -> None:
     s.add_argument("--param", required=True, metavar="KEY.PATH", help="swept config field, e.g. "
                    "surface.pull_velocity_m_s")
     s.add_argument("--values", required=True, help="comma-separated values of --param (its unit)")
-    s.add_argument("--duration-s", type=_bounded(_positive("--duration-s", "s"), "--duration-s", "s",
-                                                 MAX_DURATION_S), default=60.0,
-                   help="simulated time per case (s); harmonic runs take round(T*spm/60) strokes")
-    s.add_argument("--settle-fraction", type=float, default=0.3,
-                   help="fraction of each run excluded from the metrics as start transient (default 0.3)")
+    add_number(s, "sweep", "--duration-s", default=60.0,
+               help="simulated time per case (s); harmonic runs take round(T*spm/60) strokes")
+    add_number(s, "sweep", "--settle-fraction", default=0.3,
+               help="fraction of each run excluded from the metrics as start transient (default 0.3)")
     s.add_argument("--set", action="append", metavar="KEY.PATH=VALUE", help="override for every case")
     s.add_argument("--grid", action="append", metavar="KEY.PATH=V1,V2,...",
                    help="parameter-set axis; several --grid form their Cartesian product")
     s.add_argument("--case", action="append", metavar="KEY.PATH=V[,KEY.PATH=V...]",
                    help="one explicit parameter set (repeatable)")
-    s.add_argument("--workers", type=_positive_int("--workers", MAX_WORKERS),
-                   help="local worker processes (default: all cores)")
+    add_number(s, "sweep", "--workers", help="local worker processes (default: all cores)")
     where = s.add_mutually_exclusive_group()
     where.add_argument("--address", help="address of a running Ray cluster (e.g. auto or HOST:PORT); "
                        "without it no Ray is started")

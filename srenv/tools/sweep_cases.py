@@ -8,6 +8,7 @@ import math
 from dataclasses import dataclass
 from typing import Any
 
+from ..declarations import MAX_SWEEP_WORKERS as MAX_WORKERS  # noqa: F401  (declared with the flag)
 from ..errors import ConfigError
 
 METRIC_COLUMNS = ("duration_s", "plunger_stick_episodes", "plunger_extra_stick_episodes", "slip_amplitude_m",
@@ -15,7 +16,6 @@ METRIC_COLUMNS = ("duration_s", "plunger_stick_episodes", "plunger_extra_stick_e
                   "dc_iterations_per_step", "qp_steps")
 SET_COLUMN = "parameter_set"
 MAX_CASES = 10_000  # simulations of one study (rows of its CSV)
-MAX_WORKERS = 256
 
 
 @dataclass(frozen=True)

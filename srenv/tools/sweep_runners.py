@@ -103,7 +103,10 @@ def run_local(cases: list[Case], duration_s: float, settle_fraction: float, work
     from tqdm import tqdm
 
     n = min(workers or os.cpu_count() or 1, len(cases))
-    pool = multiprocessing.get_context("spawn").Pool(n)
+    from ..interrupts import workers_ignore_sigint
+
+    with workers_ignore_sigint():  # Ctrl-C is reported by this driver alone, in one line
+        pool = multiprocessing.get_context("spawn").Pool(n)
     try:
         out: list[dict[str, float] | None] = [None] * len(cases)
         jobs = [(c.index, c.raw, duration_s, settle_fraction) for c in cases]

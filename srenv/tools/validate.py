@@ -168,7 +168,7 @@ def cmd_validate(args) -> int:
     check_output_path("--plot", args.plot, (".png",))
     rec = read_record(args.record, args.config, args.reverse)
     out, parts = validate(rec, list(args.fit or []), args.strokes, args.load_convention)
-    from .cli import check_finite
+    from .finite import check_finite
 
     check_finite({}, out)  # a figure that is not finite is a failure, not a result
     if args.plot:
@@ -180,7 +180,7 @@ def cmd_validate(args) -> int:
 
 
 def add_parser(sub) -> None:
-    from ..cli_types import positive_int
+    from ..declarations import add_number
 
     v = sub.add_parser("validate", help="predict and diagnose a field record, compared with its measured card")
     v.add_argument("record", help="vendor dynacard JSON, or a card CSV with --config")
@@ -190,6 +190,6 @@ def add_parser(sub) -> None:
     v.add_argument("--reverse", action="store_true", help="the card is stored in reverse time: reverse it")
     v.add_argument("--load-convention", choices=LOAD_CONVENTIONS, default="effective",
                    help="pump loads compared as true loads or effective (buoyant) loads (the vendor's)")
-    v.add_argument("--strokes", type=positive_int("--strokes", 50), default=DEFAULT_STROKES,
-                   help=f"strokes simulated from the static state; the last is compared (default {DEFAULT_STROKES})")
+    add_number(v, "validate", "--strokes", default=DEFAULT_STROKES,
+               help=f"strokes simulated from the static state; the last is compared (default {DEFAULT_STROKES})")
     v.set_defaults(func=cmd_validate)

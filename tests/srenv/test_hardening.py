@@ -27,7 +27,8 @@ import pytest
 
 from srenv.config import CONFIG_DIR, MAX_YAML_BYTES
 from srenv.errors import VALUE_REPR_CHARS, NumericFailure, short_repr
-from srenv.tools.cli import check_finite, main
+from srenv.tools.cli import main
+from srenv.tools.finite import check_finite
 
 ROOT = Path(__file__).resolve().parents[2]
 FIG3 = "paper_fig3_vertical"
@@ -97,7 +98,7 @@ SIMULATE_CASES = [
     ("bigint-spm", [FIG3, "--set", f"surface.spm={BIGINT}"], ["surface.spm", "integer of about 401 digits"],
      True),
     ("spm-1e308", [FIG3, "--set", "surface.spm=1e308"], ["surface.spm", "[0.1, 60]"], False),
-    ("spm-90-one-stroke", [FIG3, "--spm", "90"], ["surface.spm", "[0.1, 60]"], False),
+    ("spm-90-one-stroke", [FIG3, "--spm", "90"], ["--spm", "[0.1, 60]"], False),
     ("max-corrections-1e38", [FIG3, "--set", "simulation.max_corrections=1e38"],
      ["simulation.max_corrections", "at most 1000"], False),
     ("youngs-1e308", [FIG3, "--set", "rod.tapers.0.youngs_modulus_pa=1e308"],

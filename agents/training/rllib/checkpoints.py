@@ -71,10 +71,12 @@ def restore_checkpoint(algo: Any, out: Path, log: Callable[[str], None]) -> tupl
     """Restore the newest checkpoint that loads; (timesteps, iterations, path) or None."""
     for _, path in step_checkpoints(out):
         try:
-            progress = json.loads((path / PROGRESS_FILE).read_text())
+            from ...inputs import checkpoint_progress  # declared fields, checked before the restore
+
+            steps, iterations = checkpoint_progress(json.loads((path / PROGRESS_FILE).read_text()), path)
             algo.restore_from_path(str(path.resolve()))
         except Exception as exc:  # noqa: BLE001 - an unreadable checkpoint: fall back to the previous one
             log(f"resume: skipping checkpoint {path.name} ({exc})")
             continue
-        return int(progress["num_timesteps"]), int(progress["iterations"]), path
+        return steps, iterations, path
     return None

@@ -31,7 +31,7 @@ from typing import Any
 
 from ...envs import ENV_ID_V0
 from ...evaluation.rllib_model import algorithm_configs
-from ..config import TrainConfigError, _expect, _positive_int, _yaml12_float, read_train_yaml
+from ..config import TrainConfigError, _expect, _positive_int, _yaml12_float, declared, read_train_yaml
 
 BACKEND = "rllib"
 _HARNESS_KEYS = {"backend", "algo", "env_id", "env_kwargs", "n_timesteps", "num_env_runners",
@@ -91,9 +91,7 @@ def parse_rllib_config(data: Any, source: str = "<dict>") -> RLlibTrainConfig:
     algo = str(data.get("algo", "")).lower()
     configs = algorithm_configs()
     _expect(algo in configs, "algo", data.get("algo"), "one of " + ", ".join(configs))
-    runners = data.get("num_env_runners", 2)
-    _expect(isinstance(runners, int) and not isinstance(runners, bool) and runners >= 0, "num_env_runners",
-            runners, "a non-negative integer")
+    runners = declared("num_env_runners", data.get("num_env_runners", 2))
     num_cpus = data.get("num_cpus")
     _expect(num_cpus is None or (isinstance(num_cpus, int) and num_cpus > 0), "num_cpus", num_cpus,
             "a positive integer or null")

@@ -1,0 +1,64 @@
+"""``srenv diagnose CARD.csv --config WELL --out PUMP.csv [--plot P.png]``: the command line of the
+downhole-card diagnosis (the analysis itself is :mod:`srenv.analysis.diagnose`).
+
+Every flag is declared in :mod:`srenv.declarations`; the outputs are checked before any work and written
+together (both or neither); the JSON summary is strict (a non-finite number is a failure, not a result).
+"""
+
+from __future__ import annotations
+
+import argparse
+
+import numpy as np
+
+from ..analysis.diagnose import DEFAULT_HARMONICS, PUMP_COLUMNS
+from ..declarations import OUTPUTS, add_number
+from ..errors import ConfigError, NumericFailure
+from ..outputs import atomic_write_all, check_outputs, json_line
+
+
+def _pump_csv_writer(card):
+    data = np.column_stack([card.t_s, card.pump_position_m, card.pump_load_n])
+
+    def write(tmp: str) -> None:
+        np.savetxt(tmp, data, delimiter=",", header=",".join(PUMP_COLUMNS), comments="", fmt="%.12g")
+    return write
+
+
+def cmd_diagnose(args: argparse.Namespace) -> int:
+    from ..analysis.diagnose import diagnose_card, read_surface_card, save_plot, summary
+    from ..config import load_config
+
+    check_outputs({flag: (getattr(args, flag[2:]), sfx) for flag, sfx in OUTPUTS["diagnose"].items()})
+    cfg = load_config(args.config, list(args.set or []))
+    cols = read_surface_card(args.card, args.reverse)
+    t, x, f = cols["t_s"], cols["polished_rod_position_m"], cols["polished_rod_load_n"]
+    period = 60.0 / args.spm if args.spm else None
+    if period is not None and t[-1] - t[0] < period * (1 - 1e-6) - 2 * float(np.median(np.diff(t))):
+        raise ConfigError("--spm", args.spm, f"a stroke rate whose period fits in the card ({t[-1] - t[0]:.4g} s)")
+    card = diagnose_card(cfg, t, x, f, harmonics=args.harmonics, period_s=period, friction=not args.no_friction)
+    for name in ("pump_position_m", "pump_load_n"):
+        if not np.all(np.isfinite(getattr(card, name))):
+            raise NumericFailure(name, "the diagnosed pump card is not finite; check the card's magnitudes")
+    line = json_line(summary(cfg, card))  # before any file: a failed summary leaves no output
+    writers = [(args.out, _pump_csv_writer(card))]
+    if args.plot:
+        writers.append((args.plot, lambda tmp: save_plot(card, tmp, cfg.name)))
+    atomic_write_all(writers)
+    print(line)
+    return 0
+
+
+def add_parser(sub) -> None:
+    d = sub.add_parser("diagnose", help="downhole (pump) card from a measured surface card")
+    d.add_argument("card", help="CSV with t_s, polished_rod_position_m, polished_rod_load_n")
+    d.add_argument("--config", required=True, help="well YAML path or shipped name (rod string, fluid, survey)")
+    d.add_argument("--set", action="append", metavar="KEY.PATH=VALUE", help="override a config field")
+    d.add_argument("--out", required=True, help="pump card CSV: t_s, pump_position_m, pump_load_n")
+    d.add_argument("--plot", help="PNG with the surface and the pump card")
+    add_number(d, "diagnose", "--spm", help="stroke rate of the card (default: found from the position record)")
+    add_number(d, "diagnose", "--harmonics", default=DEFAULT_HARMONICS,
+               help=f"Fourier harmonics kept (default {DEFAULT_HARMONICS})")
+    d.add_argument("--no-friction", action="store_true", help="skip the deviated-well friction correction")
+    d.add_argument("--reverse", action="store_true", help="the card is stored in reverse time: reverse it")
+    d.set_defaults(func=cmd_diagnose)

@@ -1,0 +1,328 @@
+"""Hardening, second round (issue 28), part 2: the fields of the files the commands read (benchmark and
+training YAML, reports, checkpoint JSON, obs-norm npz, model metadata, RLlib policy JSON, baseline
+parameters), env kwargs and actions, and the first round's classes that still failed - generated from the
+declarations of agents/inputs.py where a table exists. Every refusal: one line naming the field, the value
+and what is expected; nothing left behind.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import pytest
+from declared_helpers import FIG3, FIG7, one_line, run_agents, run_srenv, write_card
+
+from agents import inputs as ag_inputs
+from srenv.envs.env_kwargs import CARD_POINTS
+from srenv.errors import ConfigError, short_repr
+
+
+# ------------------------------------------------------------------------ report and config fields
+def _field_cases(kinds: tuple[str, ...]) -> list[Any]:
+    return [pytest.param(kind, name, v, id=f"{kind}:{name}={short_repr(v, 12)}")
+            for kind in kinds for name, d in ag_inputs.FIELDS[kind].items() for v in d.bad_values()]
+
+
+@pytest.mark.parametrize(("kind", "name", "value"), _field_cases(tuple(ag_inputs.FIELDS)))
+def test_every_declared_file_field_refuses_bad_values(kind: str, name: str, value: Any) -> None:
+    with pytest.raises(ConfigError) as ex:
+        ag_inputs.field(kind, name, value, "where.")
+    msg = str(ex.value)
+    assert f"where.{name}" in msg and "expected" in msg and len(msg.splitlines()) == 1
+
+
+BENCH_CASES = [("workers", "workers: 1000000\n", "workers"),
+               ("seeds-count", "test:\n  seeds: {start: 100000, count: 1000000000}\n", "test.seeds.count"),
+               ("seeds-start", "test:\n  seeds: {start: -1, count: 3}\n", "test.seeds.start"),
+               ("seeds-list", "test:\n  seeds: [1, abc]\n", "test.seeds[1]"),
+               ("octal", "workers: 010\n", "ambiguous"),
+               ("duplicate", "workers: 2\nworkers: 3\n", "duplicate key 'workers'"),
+               ("syntax", "workers: [2\n", "valid YAML"),
+               ("alias-bomb", "".join(f"{k}: &{k} [{', '.join([f'*{p}'] * 10)}]\n" for p, k in zip("abcdef", "bcdefg"))
+                .replace("*a", "x"), "aliases"),
+               ("run-n-timesteps", ("agents:\n  runs:\n    ppo: {config: configs/train/ppo_v1.yaml, seeds: [0], "
+                                    "overrides: {n_timesteps: 1.0e+30}}\n"), "n_timesteps")]
+
+
+@pytest.mark.parametrize(("text", "needle"), [pytest.param(t, n, id=i) for i, t, n in BENCH_CASES])
+def test_bad_benchmark_yaml_is_one_line_exit_2(text: str, needle: str, tmp_path: Path,
+                                               capsys: pytest.CaptureFixture) -> None:
+    root = Path(__file__).resolve().parents[1]
+    base = (root / "configs" / "benchmark" / "v1_quick.yaml").read_text()
+    key = text.split(":")[0]
+    # the case's block replaces the same top-level block of the quick benchmark
+    kept = [blk for blk in base.split("\n") if blk]
+    out, skip = [], False
+    for line in kept:
+        top = line and not line.startswith((" ", "#"))
+        if top:
+            skip = line.split(":")[0] == key
+        if not skip:
+            out.append(line)
+    (tmp_path / "b.yaml").write_text("\n".join(out) + "\n" + text)
+    rc, err = run_agents(["benchmark", str(tmp_path / "b.yaml"), "--out-dir", str(tmp_path / "o")], capsys)
+    one_line(rc, err, needle)
+    assert not (tmp_path / "o").exists()
+
+
+def _each_episode(rep: dict, key: str, value: Any) -> None:
+    for p in rep["policies"].values():
+        for e in p.get("episodes", []):
+            if value is None:
+                e.pop(key, None)
+            else:
+                e[key] = value
+
+
+REPORT_CASES = [
+    ("episodes-without-reward", lambda r: _each_episode(r, "reward", None), "a seed and a reward"),
+    ("episodes-not-mappings", lambda r: r["policies"]["pump_off"].__setitem__("episodes", [1, 2]), "a seed and a reward"),
+    ("reward-string", lambda r: _each_episode(r, "reward", "x"), "episodes[0].reward"),
+    ("reward-nan", lambda r: _each_episode(r, "reward", float("nan")), "episodes[0].reward"),
+    ("seed-negative", lambda r: _each_episode(r, "seed", -4), "episodes[0].seed"),
+    ("policy-not-mapping", lambda r: r["policies"].__setitem__("pump_off", [1]), "expected a mapping"),
+    ("params-out-of-range", lambda r: r["policies"]["pump_off"].__setitem__("params", {"threshold": 7}),
+     "params.threshold"),
+    ("params-not-mapping", lambda r: r["policies"]["pump_off"].__setitem__("params", "x"), "params"),
+    ("env-kwargs-int-keys", lambda r: r.__setitem__("env_kwargs", {"1": 1, 2: 2}), "env_kwargs"),
+]
+
+
+@pytest.mark.parametrize(("mutate", "needle"), [pytest.param(m, n, id=i) for i, m, n in REPORT_CASES])
+def test_replay_refuses_a_bad_report_before_any_episode(mutate: Any, needle: str, tmp_path: Path,
+                                                        capsys: pytest.CaptureFixture) -> None:
+    root = Path(__file__).resolve().parents[1]
+    rep = json.loads((root / "docs" / "benchmark.json").read_text())
+    mutate(rep)
+    path = tmp_path / "rep.json"
+    path.write_text(json.dumps(rep, allow_nan=True))
+    if "env_kwargs" in needle:  # JSON keys are strings: the check is on the reader's side
+        from agents.inputs import report_env_kwargs
+
+        with pytest.raises(ConfigError, match="env_kwargs"):
+            report_env_kwargs({"1": 1, 2: 2})
+        return
+    rc, err = run_agents(["replay", str(path), "--policy", "pump_off", "--episodes", "1"], capsys)
+    one_line(rc, err, needle, "expected")
+
+
+# ------------------------------------------------------------------------ checkpoint and normaliser files
+def _npz(path: Path, **over: Any) -> None:
+    arrays = {"mean": np.zeros(4), "var": np.ones(4), "clip_obs": 10.0, "epsilon": 1e-8, **over}
+    np.savez(path, **{k: v for k, v in arrays.items() if v is not None})
+
+
+NPZ_CASES = [("missing-var", {"var": None}, "missing var"), ("nan-mean", {"mean": np.array([np.nan, 0, 0, 0])}, "finite"),
+             ("negative-var", {"var": -np.ones(4)}, "var >= 0"), ("shape", {"var": np.ones(3)}, "one shape"),
+             ("huge", {"mean": np.zeros(10**5), "var": np.ones(10**5)}, "values"),
+             ("clip-inf", {"clip_obs": np.inf}, "clip_obs"), ("eps-zero", {"epsilon": 0.0}, "epsilon"),
+             ("eps-array", {"epsilon": np.ones(2)}, "scalar"), ("truncated", "truncated", "readable"),
+             ("not-npz", "garbage", "readable")]
+
+
+@pytest.mark.parametrize(("over", "needle"), [pytest.param(o, n, id=i) for i, o, n in NPZ_CASES])
+def test_bad_obs_norm_npz_isone_line(over: Any, needle: str, tmp_path: Path) -> None:
+    p = tmp_path / "m_obs_norm.npz"
+    if over == "truncated":
+        _npz(p)
+        p.write_bytes(p.read_bytes()[:150])
+    elif over == "garbage":
+        p.write_bytes(os.urandom(300))
+    else:
+        _npz(p, **over)
+    with pytest.raises(ConfigError) as ex:
+        from agents.evaluation.normalizer import ObsNormalizer
+
+        ObsNormalizer.load(str(p))
+    assert needle in str(ex.value) and len(str(ex.value).splitlines()) == 1
+
+
+MODEL_CASES = [("obs-shape-1e9", lambda: ag_inputs.shape([10**9], "model", "observation_space._shape[]", "obs"),
+                "obs[0]"),
+               ("obs-shape-product", lambda: ag_inputs.shape([100, 100], "model", "observation_space._shape[]", "obs"),
+                "at most 4096"),
+               ("obs-shape-negative", lambda: ag_inputs.shape([-3], "model", "observation_space._shape[]", "obs"),
+                "obs[0]"),
+               ("net-arch-huge", lambda: ag_inputs.net_arch([200000, 200000], "net_arch"), "net_arch[0]"),
+               ("net-arch-dict", lambda: ag_inputs.net_arch({"pi": [64, 10**7]}, "net_arch"), "net_arch.pi[1]"),
+               ("net-arch-deep", lambda: ag_inputs.net_arch([8] * 100, "net_arch"), "at most 16"),
+               ("rllib-list", lambda: ag_inputs.policy_json([1, 2], "p.json"), "a JSON mapping"),
+               ("checkpoint-list", lambda: ag_inputs.checkpoint_progress([1], "ckpt"), "num_timesteps"),
+               ("checkpoint-negative", lambda: ag_inputs.checkpoint_progress({"num_timesteps": -1, "iterations": 1},
+                                                                             "ckpt"), "ckpt: num_timesteps"),
+               ("rllib-missing", lambda: ag_inputs.policy_json({"algo": "PPO"}, "p.json"), "missing"),
+               ("rllib-hiddens", lambda: ag_inputs.policy_json(
+                   {"algo": "PPO", "model_config": {"fcnet_hiddens": [10**6]}, "observation_shape": [4],
+                    "action_shape": [2], "action_low": [-1, -1], "action_high": [1, 1]}, "p.json"), "fcnet_hiddens"),
+               ("baseline-type", lambda: ag_inputs.baseline_params("pump_off", [1], "params"), "mapping"),
+               ("baseline-value", lambda: ag_inputs.baseline_params("fillage_pi", {"kp": "x"}, "params"), "params.kp"),
+               ("baseline-unknown", lambda: ag_inputs.baseline_params("pump_off", {"evil": 1}, "params"), "params.evil")]
+
+
+@pytest.mark.parametrize(("call", "needle"), [pytest.param(c, n, id=i) for i, c, n in MODEL_CASES])
+def test_model_metadata_is_bounded_before_any_allocation(call: Any, needle: str) -> None:
+    with pytest.raises(ConfigError) as ex:
+        call()
+    assert needle in str(ex.value) and "expected" in str(ex.value)
+
+
+# ------------------------------------------------------------------------------- env kwargs and actions
+ENV_CASES = [("overrides-string", {"overrides": "task.interval_s=600"}, "overrides"),
+             ("overrides-int-keys", {"overrides": {1: 2}}, "overrides"),
+             ("overrides-list", {"overrides": ["a"]}, "overrides"),
+             ("episode-steps", {"task__episode_hours": 8760, "task__interval_s": 10}, "task.episode_hours")]
+
+
+@pytest.mark.parametrize("env_id", ["srenv/SuckerRod-v0", "srenv/SuckerRod-v1"])
+@pytest.mark.parametrize(("kwargs", "needle"), [pytest.param(k, n, id=i) for i, k, n in ENV_CASES])
+def test_bad_env_kwargs_are_named(env_id: str, kwargs: dict, needle: str) -> None:
+    import gymnasium as gym
+
+    import srenv  # noqa: F401
+
+    with pytest.raises(ConfigError, match=needle):
+        gym.make(env_id, **kwargs)
+
+
+@pytest.mark.parametrize("value", CARD_POINTS.bad_values())
+def test_card_points_is_declared_and_bounded(value: Any) -> None:
+    import gymnasium as gym
+
+    import srenv  # noqa: F401
+
+    with pytest.raises(ConfigError, match="card_points"):
+        gym.make("srenv/SuckerRod-v0", card_points=value)
+
+
+def test_numpy_scalars_are_numbers_and_bad_actions_are_named() -> None:
+    import gymnasium as gym
+
+    import srenv  # noqa: F401
+
+    e = gym.make("srenv/SuckerRod-v0", control__spm_max=np.float32(8.0), card_points=np.int64(16),
+                 control__max_episode_steps=np.int64(2))
+    assert e.unwrapped.base_cfg.control.max_episode_steps == 2
+    assert e.unwrapped.base_cfg.control.spm_max == 8.0 and e.observation_space.shape == (40,)
+    e.reset(seed=0)
+    for bad in ("ab", {"a": 1}, None, [1, 2, 3], [[1], [2, 3]], object(), [np.nan, 0.0]):
+        with pytest.raises(ValueError, match=r"^action = .*expected 2 finite numbers"):
+            e.step(bad)
+
+
+# ---------------------------------------------------------------- first-round classes that still failed
+def test_a_number_with_a_leading_zero_is_refused_not_read_as_octal(tmp_path: Path) -> None:
+    from srenv.config import CONFIG_DIR, load_config
+
+    text = (CONFIG_DIR / f"{FIG3}.yaml").read_text()
+    import re
+
+    (tmp_path / "w.yaml").write_text(re.sub(r"(?m)^(\s+)spm: .*$", r"\1spm: 010", text, count=1))
+    with pytest.raises(ConfigError, match="010 is ambiguous"):
+        load_config(tmp_path / "w.yaml")
+    with pytest.raises(ConfigError, match=r"surface.spm.*'010'"):
+        load_config(FIG3, ["surface.spm=010"])
+    assert load_config(FIG3, ["surface.spm=10"]).surface.spm == 10
+
+
+@pytest.mark.parametrize(("config", "argv", "flag"), [
+    ("conventional_fig4", ["--stroke-length-m", "2.0"], "--stroke-length-m"),
+    (FIG7, ["--spm", "5"], "--spm"),
+    (FIG7, ["--strokes", "2"], "--strokes"),
+    (FIG3, ["--pull-velocity-m-s", "1"], "--pull-velocity-m-s"),
+    ("measured", ["--spm", "5"], "--spm"),
+])
+def test_a_flag_the_surface_motion_ignores_is_refused(config: str, argv: list[str], flag: str, tmp_path: Path,
+                                                      capsys: pytest.CaptureFixture,
+                                                      monkeypatch: pytest.MonkeyPatch) -> None:
+    monkeypatch.chdir(tmp_path)
+    extra = []
+    if config == "measured":
+        write_card(tmp_path / "card.csv")
+        config, extra = FIG3, ["--set", "surface.motion=measured", "--set", "surface.measured_card_csv=card.csv"]
+    rc, err = run_srenv(["simulate", config, *extra, *argv, "--out", "o.csv"], capsys)
+    one_line(rc, err, flag, "surface.motion", "ignored")
+    assert not (tmp_path / "o.csv").exists()
+
+
+@pytest.mark.parametrize(("set_", "field"), [
+    ([], "surface.measured_card_csv"),
+    (["--set", "surface.measured_spm=0.001"], "surface.measured_spm"),
+])
+def test_a_measured_cards_own_period_bounds_the_run(set_: list[str], field: str, tmp_path: Path,
+                                                    capsys: pytest.CaptureFixture,
+                                                    monkeypatch: pytest.MonkeyPatch) -> None:
+    """A 20-row card whose stroke lasts 1e5 s (or a measured_spm of 1e-3) is 1e8 time steps a stroke."""
+    monkeypatch.chdir(tmp_path)
+    write_card(tmp_path / "card.csv", n=20, period_s=1e5 if not set_ else 10.0)
+    rc, err = run_srenv(["simulate", FIG3, "--set", "surface.motion=measured", "--set",
+                      "surface.measured_card_csv=card.csv", *set_, "--strokes", "1", "--out", "o.csv"], capsys)
+    one_line(rc, err, field, "200000 time steps")
+    assert not (tmp_path / "o.csv").exists()
+
+
+def test_fit_refuses_a_param_without_effect_and_its_json_is_strict(tmp_path: Path, capsys: pytest.CaptureFixture,
+                                                                  monkeypatch: pytest.MonkeyPatch) -> None:
+    monkeypatch.chdir(tmp_path)
+    write_card(tmp_path / "card.csv")
+    rc, err = run_srenv(["fit", "card.csv", "--config", FIG3, "--param", "economics.oil_price_usd_m3",
+                      "--strokes", "1", "--out", "f.yaml"], capsys)
+    one_line(rc, err, "--param", "economics.oil_price_usd_m3", "change the simulated card")
+    assert not (tmp_path / "f.yaml").exists()
+
+
+def test_agents_benchmark_refuses_a_symlinked_output_before_any_work(tmp_path: Path,
+                                                                     capsys: pytest.CaptureFixture) -> None:
+    root = Path(__file__).resolve().parents[1]
+    out = tmp_path / "o"
+    out.mkdir()
+    (tmp_path / "target.json").write_text("keep me")
+    os.symlink(tmp_path / "target.json", out / "benchmark.json")
+    rc, err = run_agents(["benchmark", str(root / "configs" / "benchmark" / "v1_quick.yaml"), "--quick", "--out-dir",
+                       str(out)], capsys)
+    one_line(rc, err, "--out-dir", "symbolic link")
+    assert (tmp_path / "target.json").read_text() == "keep me" and sorted(os.listdir(out)) == ["benchmark.json"]
+
+
+def test_agents_summary_line_is_strict_json(capsys: pytest.CaptureFixture) -> None:
+    from agents.cli import _print_json
+
+    _print_json({"a": [float("nan"), np.float32("inf"), 1, np.float64(2.5)], "b": {"c": (np.nan,)}})
+
+    def refuse(token: str) -> None:
+        raise ValueError(token)
+    assert json.loads(capsys.readouterr().out, parse_constant=refuse) == {"a": [None, None, 1, 2.5], "b": {"c": [None]}}
+
+
+
+def test_fit_refuses_the_cards_own_period_as_a_parameter(tmp_path: Path, capsys: pytest.CaptureFixture,
+                                                         monkeypatch: pytest.MonkeyPatch) -> None:
+    monkeypatch.chdir(tmp_path)
+    write_card(tmp_path / "card.csv")
+    rc, err = run_srenv(["fit", "card.csv", "--config", FIG3, "--param", "surface.measured_spm", "--out", "f.yaml"],
+                        capsys)
+    one_line(rc, err, "--param", "surface.measured_spm", "measured, not fitted")
+    assert sorted(os.listdir(tmp_path)) == ["card.csv"]
+
+
+# ------------------------------------------------------------ card contents: the one card reader's checks
+_T = np.arange(200) * 10.0 / 200
+CARD_CASES = [("not-closed", {"pos": _T * 0.2}), ("zero-stroke", {"pos": np.full(200, 1.0)}),
+              ("loads-1e300", {"load": np.full(200, 1e300)}), ("positions-1e300", {"pos": 1e300 * (1 - np.cos(_T))})]
+
+
+@pytest.mark.parametrize("over", [pytest.param(o, id=i) for i, o in CARD_CASES])
+def test_a_degenerate_card_is_refused_by_diagnose(over: dict, tmp_path: Path, capsys: pytest.CaptureFixture,
+                                                  monkeypatch: pytest.MonkeyPatch) -> None:
+    monkeypatch.chdir(tmp_path)
+    t = _T
+    x = over.get("pos", 1.2 * (1 - np.cos(2 * np.pi * t / 10.0)))
+    f = over.get("load", 40e3 + 8e3 * np.sin(2 * np.pi * t / 10.0))
+    np.savetxt(tmp_path / "card.csv", np.c_[t, x, f], delimiter=",",
+               header="t_s,polished_rod_position_m,polished_rod_load_n", comments="")
+    rc, err = run_srenv(["diagnose", "card.csv", "--config", FIG3, "--out", "p.csv"], capsys)
+    one_line(rc, err, "card.csv", "expected")
+    assert sorted(os.listdir(tmp_path)) == ["card.csv"]
