@@ -16,7 +16,7 @@ Constructor
 | ``episode_hours`` | ``12.0`` (spec) | horizon in hours of well time (``task.episode_hours``) |
 | ``interval_s`` | ``300.0`` (spec) | control interval in s of well time (``task.interval_s``) |
 | ``event_rate_scale`` | ``1.0`` | multiplies every condition's rate (0: no conditions, the v1 task on v2's spaces) |
-| ``classifier`` | ``None`` | callable(trace dict of the last stroke) -> 12 label probabilities in :data:`LABELS` order; ``None``: :func:`default_classifier` |
+| ``classifier`` | ``None`` | callable(trace dict of the last stroke) -> 12 label probabilities in :data:`LABELS` order; ``None``: :func:`default_classifier` (``srenv classify``'s model) |
 | ``render_mode`` | ``None`` | ``"rgb_array"`` or ``"human"`` |
 | ``overrides`` / ``**kwargs`` | ``None`` | config overrides, as v1 |
 
@@ -39,8 +39,9 @@ Conditions (rates per hour of well time while the well runs normally; severities
 G is the interval's peak Goodman loading of the rods: how hard a controller runs them moves the parting hazard
 (:class:`srenv.task.events.PartingClock`).
 
-They change the physics at interval boundaries (the conditions branch's overrides; today gas and heavy oil);
-the rest are booked by the env (:data:`srenv.task.events.BOOKED`, see there).
+They change the physics at interval boundaries (``srenv.physics.conditions.condition_overrides``: the card of
+each condition); the lost liquid of leaks, tagging damage and parted rods are booked by the env, since the
+simulator's volume accounting does not see them (:data:`srenv.task.events.BOOKED`, see there).
 
 Action space
 ------------
@@ -50,8 +51,8 @@ Observation space
 -----------------
 Flat float32 ``Box(-10, 10)``; names in ``FIELD_OBS_NAMES`` / ``PRIVILEGED_OBS_NAMES``. Field (89): v1's field
 observation (77: the last stroke's surface card and the controller's figures) + the classifier's probabilities
-of the 12 labels for the last card (``prob_<label>``; uniform 1/12 until the conditions branch's classifier
-is wired into :func:`default_classifier`). Privileged (113): v1's privileged (88) + the 12 probabilities + the
+of the 12 labels for the last card (``prob_<label>``; ``srenv classify``'s model via :func:`default_classifier`,
+uniform 1/12 for a card it cannot read). Privileged (113): v1's privileged (88) + the 12 probabilities + the
 true condition of the last interval one-hot (``true_<label>``; ``full`` / ``fluid_pound`` by the true fillage
 when no event is active) + its severity.
 
@@ -63,7 +64,7 @@ revenue, inventory, energy, fatigue, stick-slip, peak load, fluid pound, ramp, f
 | term | USD/h | meaning |
 |---|---|---|
 | ``reward_lost_production`` | ``-v V_lost / h`` | liquid a leak (valves, tubing) or parted rods lose; it falls back to the annulus |
-| ``reward_tagging`` | ``-workover_usd d_tag / h`` | tagging damage, ``d_tag`` = 2e-5 workovers per stroke at severity 1 |
+| ``reward_tagging`` | ``-workover_usd d_tag / h`` | tagging damage, ``d_tag`` = 1e-6 workovers per stroke x severity |
 | ``reward_workover`` | ``-workover_usd / h`` | the rod job after parted rods (the interval they part in) |
 
 with ``v`` the net value of a m3 of liquid and ``h`` the interval in hours; pounding damage is v1's
@@ -87,6 +88,7 @@ Version history
 
 from __future__ import annotations
 
+import functools
 from collections.abc import Callable
 from typing import Any
 
@@ -111,13 +113,27 @@ V2_COST_TERMS = ("cost_tagging", "cost_parted_rods")
 Classifier = Callable[[dict], np.ndarray]
 
 
+@functools.lru_cache(maxsize=1)
 def default_classifier() -> Classifier | None:
-    """The conditions branch's card classifier, when it is installed; ``None`` gives the uniform vector.
+    """``srenv classify``'s card classifier (:mod:`srenv.analysis.card_classifier`, its shipped model, trained
+    on simulated cards only) as a callable: the last stroke's trace -> 12 probabilities in :data:`LABELS` order;
+    a card it cannot read gives the uniform vector. ``None`` (the uniform vector) when no model is shipped."""
+    from ..analysis.card_classifier import DEFAULT_MODEL, CardClassifier
+    from ..analysis.card_shape import BadCard, features
 
-    The lead wires it here (one place) when ``srenv classify`` lands: a callable taking the last stroke's trace
-    (``polished_rod_position_m``, ``polished_rod_load_n``, ``t_s``) and returning 12 probabilities in
-    :data:`LABELS` order."""
-    return None
+    if not DEFAULT_MODEL.is_file():
+        return None
+    clf = CardClassifier.load(DEFAULT_MODEL)
+    order = [clf.labels.index(k) for k in LABELS]
+
+    def classify(trace: dict) -> np.ndarray:
+        try:
+            f = features(trace["polished_rod_position_m"], trace["polished_rod_load_n"])
+        except BadCard:
+            return _uniform(trace)
+        return np.asarray(clf.proba_features(f[None, :])[0], np.float64)[order]
+
+    return classify
 
 
 def physics_overrides(spec: wf.WellSpec) -> dict[str, Any]:

@@ -13,13 +13,13 @@ are drawn per episode, uniform in ``severity``, in [0, 1] (what 1 means is each 
 :func:`condition_overrides`). One condition at a time: the privileged observation shows it one-hot.
 
 Conditions change the physics at interval boundaries only (:func:`apply_condition`): the config overrides of
-:func:`condition_overrides` are applied to the running simulator, its state (rod, annulus) kept. The
-``conditions`` branch supplies the field-true ``srenv.physics.conditions.condition_overrides`` for all 12
-labels; until it lands the local fallback here covers what the physics has today (gas interference through the
-intake gas fraction; heavy oil through plunger friction and rod damping), and the env books the rest
-(:func:`bookkeeping`): the liquid a leak loses falls back to the annulus (lost production, priced), tagging
-costs a share of a workover per stroke, parted rods lift nothing. When a label's physics lands, its bookkeeping
-must go (one place: :data:`BOOKED`), or the loss would count twice.
+``srenv.physics.conditions.condition_overrides`` (the field-true card of each of the 12 labels; a local fallback
+for gas and heavy oil when that module is absent) are applied to the running simulator, its state (rod,
+annulus) kept. That physics changes the loads - the card the classifier reads - but not the simulator's volume
+accounting, so the env books what the volumes and the damage do (:func:`bookkeeping`): the liquid a leak loses
+falls back to the annulus (lost production, priced), tagging costs a share of a workover per stroke, parted rods
+lift nothing in the interval they part in and end the episode. When the simulator accounts a label's lost
+liquid itself, that label must leave :data:`BOOKED`, or the loss would count twice.
 """
 
 from __future__ import annotations
@@ -84,7 +84,8 @@ class PartingClock:
 # condition_overrides gives it physics).
 LOST_FRACTION_AT_1 = {"travelling_valve_leak": 0.5, "standing_valve_leak": 0.5, "both_valves_leak": 0.7,
                       "tubing_leak": 1.0, "parted_rods": 1.0}
-TAG_WORKOVER_SHARE_PER_STROKE = 2e-5  # of economics.workover_usd per stroke at severity 1 (~0.3 workover a month)
+# of economics.workover_usd per stroke at severity 1: a workover every ~3 months of tagging at 8 SPM
+TAG_WORKOVER_SHARE_PER_STROKE = 1e-6
 BOOKED = frozenset(LOST_FRACTION_AT_1) | {"tagging_down", "tagging_up"}
 
 
@@ -162,21 +163,18 @@ def condition_overrides(label: str, severity: float, cfg: Any) -> dict[str, Any]
 
 
 def booked(label: str | None) -> bool:
-    """Whether the env books this condition itself (no physics for it yet)."""
-    if label is None:
-        return False
-    try:
-        from ..physics import conditions
-    except ImportError:
-        return label in BOOKED
-    return label in BOOKED and not hasattr(conditions, "condition_overrides")
+    """Whether the env books this condition's volumes and damage itself: the conditions' physics changes the
+    card (the loads: what the classifier sees), while the simulator's volume accounting does not see a leak's
+    lost liquid, tagging damage or parted rods (:data:`BOOKED`)."""
+    return label in BOOKED
 
 
 def apply_condition(sim: Any, base_cfg: Any, label: str | None, severity: float) -> None:
     """Put the simulator on the config of a condition (or back on ``base_cfg``), keeping its state."""
     from ..config import load_config
 
-    over = condition_overrides(label, severity, base_cfg) if label is not None else {}
+    # parted rods end the episode in the interval they part in (the env books it): the base physics runs it
+    over = condition_overrides(label, severity, base_cfg) if label not in (None, "parted_rods") else {}
     cfg = load_config(base_cfg, over) if over else base_cfg
     if cfg is sim.cfg or cfg == sim.cfg:
         return
