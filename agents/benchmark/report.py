@@ -153,7 +153,7 @@ def verdict(report: dict[str, Any]) -> str:
     s, pol = report["summary"], report["policies"]
     steps = int(np.mean([e["steps"] for e in pol["installed"]["episodes"]]))
     agents = [n for n in s if s[n]["kind"] == "agent"]
-    bases = [n for n in s if s[n]["kind"] != "agent" and n != "oracle"]
+    bases = [n for n in s if s[n]["kind"] != "agent" and n not in ("oracle", "causal_oracle")]  # references
     best_b = max(bases, key=lambda n: s[n]["mean_reward"])
     scale = (f"reward = USD per hour of well time; an episode's return sums its {steps} intervals, so 1 USD/h "
              f"held all episode = {steps} return units")
@@ -177,7 +177,7 @@ def verdict(report: dict[str, Any]) -> str:
             f"[{d['ci95'][0]:+.1f}, {d['ci95'][1]:+.1f}] per episode = {d['mean_diff_reward'] / steps:+.2f} USD/h"
             f"{by_well}: {call}; "
             f"it beats {len(beaten)}/{len(bases)} baselines significantly; normalised score "
-            f"{_fmt(s[best_a]['normalised_score'], 2)} (0 installed, 1 oracle).")
+            f"{_fmt(s[best_a]['normalised_score'], 2)} (0 installed, 1 {report.get('normalised_to', 'oracle')}).")
 
 
 def markdown_tables(report: dict[str, Any]) -> str:
