@@ -39,7 +39,7 @@ def test_every_declared_srenv_flag_refuses_bad_values(cmd: str, flag: str, text:
 AGENT_FLAG_CASES = [pytest.param(cmd, flag, text, id=f"agents-{cmd}{flag}={text[:12]}")
                     for cmd, decls in ag_inputs.FLAGS.items() for flag, d in decls.items() for text in d.bad_texts()]
 AGENT_BASE = {"train": ["train", "x.yaml"], "evaluate": ["evaluate", "--policy", "rocking"],
-              "quickstart": ["quickstart"], "replay": ["replay", "r.json"]}
+              "quickstart": ["quickstart"], "replay": ["replay", "r.json"], "benchmark": ["benchmark", "b.yaml"]}
 
 
 @pytest.mark.parametrize(("cmd", "flag", "text"), AGENT_FLAG_CASES)
