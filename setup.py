@@ -17,5 +17,6 @@ setup(
               *(p.replace("agents", "srenv_agents", 1) for p in AGENTS)],
     package_dir={"srenv.configs": "configs", "srenv_agents": "agents"},
     package_data={"srenv.configs": ["wells/*.yaml", "units/*.yaml", "train/*.yaml", "train/*.yml",
-                                    "benchmark/*.yaml"]},
+                                    "benchmark/*.yaml"],
+                  "srenv": ["models/*.npz"]},  # the condition classifier's weights (docs/conditions.md)
 )

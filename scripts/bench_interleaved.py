@@ -1,8 +1,16 @@
-"""Interleaved CPU-time bench of two checkouts: strokes/s of `srenv bench`'s cases (unrecorded, after a warm-up
-stroke), each side in its own process, sides alternating, process CPU time (a shared machine's load hits both).
+"""Interleaved CPU-time bench of two checkouts, each side in its own process, sides alternating, process CPU time
+(a shared machine's load hits both).
+
+Strokes/s of `srenv bench`'s cases (unrecorded, after a warm-up stroke):
 
     git worktree add /tmp/before <commit>
     python scripts/bench_interleaved.py /tmp/before . --repeats 9 --strokes 30
+
+Env steps/s of srenv/SuckerRod-v1 with the acceptance's protocol (train scenario, a warm-up step on seed 3, then
+12 steps on each of seeds 11 and 12 at full speed, action [1, 1], and at the VSD minimum, [-0.6, 1]);
+``--fast-stepping`` makes the after side's env with ``fast_stepping=True`` (the before side cannot take it):
+
+    python scripts/bench_interleaved.py /tmp/srenv-acceptance/old-91adcce . --env --fast-stepping --repeats 3
 """
 import argparse
 import json
@@ -15,6 +23,8 @@ ap.add_argument("before")
 ap.add_argument("after")
 ap.add_argument("--repeats", type=int, default=9)
 ap.add_argument("--strokes", type=int, default=30)
+ap.add_argument("--env", action="store_true", help="env steps/s of srenv/SuckerRod-v1 instead of strokes/s")
+ap.add_argument("--fast-stepping", action="store_true", help="the after side's env with fast_stepping=True")
 args = ap.parse_args()
 reps, strokes = args.repeats, args.strokes
 code = r'''
@@ -33,15 +43,35 @@ for n, s in sims.items():
     out[n] = strokes / (time.process_time() - t)
 print(json.dumps(out))
 '''
+env_code = r'''
+import sys, time, json, warnings
+warnings.filterwarnings("ignore")
+import numpy as np, gymnasium as gym, srenv  # noqa
+kw = {"fast_stepping": True} if sys.argv[2] == "fast" else {}
+out = {}
+for label, a0 in (("full_speed", 1.0), ("vsd_minimum", -0.6)):
+    a = np.array([a0, 1.0], np.float32)
+    env = gym.make("srenv/SuckerRod-v1", scenario="train", **kw); env.reset(seed=3); env.step(a)
+    n, t0 = 0, time.process_time()
+    for seed in (11, 12):
+        env.reset(seed=seed)
+        for _ in range(12):
+            env.step(a); n += 1
+    out[label] = n / (time.process_time() - t0)
+print(json.dumps(out))
+'''
 trees = {"before": args.before, "after": args.after}
 res = {k: [] for k in trees}
 for r in range(reps):
     for side in (("before", "after") if r % 2 == 0 else ("after", "before")):
-        p = subprocess.run([sys.executable, "-c", code, str(strokes)], env={"PYTHONPATH": trees[side], "PATH": "/usr/bin"},
-                           capture_output=True, text=True, check=True)
-        res[side].append(json.loads(p.stdout))
+        mode = "fast" if side == "after" and args.fast_stepping else "plain"
+        argv = [sys.executable, "-c", env_code, "0", mode] if args.env else [sys.executable, "-c", code, str(strokes)]
+        p = subprocess.run(argv, env={"PYTHONPATH": trees[side], "PATH": "/usr/bin"}, capture_output=True, text=True,
+                           check=True, cwd=trees[side])
+        res[side].append(json.loads(p.stdout.strip().splitlines()[-1]))
+unit = "env steps/s" if args.env else "strokes/s"
 for case in res["before"][0]:
     ratios = [a[case] / b[case] for a, b in zip(res["after"], res["before"])]
-    print(f"{case}: before {statistics.median(x[case] for x in res['before']):.1f} strokes/s, after "
+    print(f"{case}: before {statistics.median(x[case] for x in res['before']):.1f} {unit}, after "
           f"{statistics.median(x[case] for x in res['after']):.1f}; after/before min {min(ratios):.3f} "
           f"median {statistics.median(ratios):.3f} max {max(ratios):.3f} (n={len(ratios)})")

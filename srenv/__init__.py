@@ -23,6 +23,9 @@ ENVS: dict[str, tuple[str, dict]] = {
                 {"scenario": "train", "observation": "field", "episode_hours": 12.0, "interval_s": 300.0}),
 }
 
+# native vector envs (gymnasium.make_vec(..., vectorization_mode="vector_entry_point"), srenv/envs/vector.py)
+VECTOR_ENTRY_POINTS: dict[str, str] = {ENV_ID_V1: "srenv.envs.vector:make_v1"}
+
 
 def register_envs() -> None:
     """Register :data:`ENVS` with gymnasium (idempotent; run on ``import srenv``)."""
@@ -32,10 +35,19 @@ def register_envs() -> None:
         if env_id not in gymnasium.registry:
             # entry point by string: importing srenv stays light (the kernel compiles only when an env is made)
             gymnasium.register(id=env_id, entry_point=entry_point, kwargs=dict(kwargs),
-                               max_episode_steps=None, reward_threshold=None, nondeterministic=False)
-    # The registry is left as gymnasium makes it: v0 and v1 are versions of one name, so gymnasium's make of
-    # v0 issues its DeprecationWarning "out of date, consider v1" (hidden by Python's default filters outside
-    # __main__). v0 stays, with its numbers, for reproducibility.
+                               max_episode_steps=None, reward_threshold=None, nondeterministic=False,
+                               vector_entry_point=VECTOR_ENTRY_POINTS.get(env_id))
+    # gymnasium takes the highest registered version of a name as every lower version's successor and warns
+    # "v0 is out of date, upgrade to v1" on each make of v0 (and of v1 once v2 exists): wrong advice here, since
+    # each version is its own task kept with its numbers for reproducibility, and a warning that breaks callers
+    # running with warnings as errors (Gymnasium's and SB3's checkers, CI). A warnings filter cannot help (a
+    # strict caller's own filter wins), so the one documented place that touches the registry is here: every
+    # version after v0 reads EnvSpec.version None, which only takes it out of that lookup (id, kwargs, make and
+    # make_vec are unchanged).
+    for env_id in ENVS:
+        spec = gymnasium.registry.get(env_id)
+        if spec is not None and not env_id.endswith("-v0"):
+            spec.version = None
 
 
 register_envs()

@@ -10,6 +10,7 @@ Nothing in a config is ever evaluated as code. ``docs/config.md`` is generated f
 from __future__ import annotations
 
 import dataclasses
+import functools
 import math
 import os
 import types
@@ -136,10 +137,16 @@ def _range_phrase(lo: float | None, hi: float | None) -> str:
     return f" at least {lo:g}" if lo is not None else ""
 
 
+@functools.cache
+def _type_hints(cls: type) -> dict:
+    """typing.get_type_hints of a config section, resolved once (it dominated an env reset's time)."""
+    return typing.get_type_hints(cls)
+
+
 def _parse(cls: type, data: Any, path: str) -> Any:
     if not isinstance(data, dict):
         raise ConfigError(path or "<root>", data, f"a mapping of {cls.__name__} fields")
-    hints = typing.get_type_hints(cls)
+    hints = _type_hints(cls)
     fields = {f.name: f for f in dataclasses.fields(cls)}
     unknown = [k for k in data if k not in fields]
     if unknown:

@@ -149,6 +149,25 @@ class PumpConfig:
                          doc="predictive input: liquid share of the plunger's displacement; < 1 is free gas at the "
                              "intake whose compression takes 1 - fillage of the stroke at pump.intake_pressure_pa "
                              "(physics/pump.py); 1 = full (docs/realism.md)")
+    # pump conditions (srenv.physics.laws.pump_conditions, docs/conditions.md); 0 = off everywhere
+    travelling_valve_leak_fraction: float = num(0.0, unit="-", check="nonneg", hi=100.0,
+                                                doc="leak through the closed travelling valve at the full pressure "
+                                                "difference / the plunger's peak displacement rate (0 = tight)")
+    standing_valve_leak_fraction: float = num(0.0, unit="-", check="nonneg", hi=100.0,
+                                              doc="leak through the closed standing valve, same measure")
+    tubing_leak_fraction: float = num(0.0, unit="-", check="unit_interval", hi=1.0,
+                                      doc="share of the fluid load lost to a tubing leak by the top of the upstroke")
+    flow_through_fraction: float = num(0.0, unit="-", check="nonneg", hi=0.95,
+                                       doc="share of the fluid load carried by the well flowing through the pump")
+    tag_top_overtravel_m: float = num(0.0, unit="m", check="nonneg", hi=20.0,
+                                      doc="tagging up: the pump's top this far inside the plunger's first free "
+                                      "upstroke (0 = no contact)")
+    tag_bottom_overtravel_m: float = num(0.0, unit="m", check="nonneg", hi=20.0,
+                                         doc="tagging down: the pump's bottom this far inside the first free "
+                                         "downstroke (0 = no contact)")
+    tag_stiffness_n_m: float = num(2.0e5, unit="N/m", lo=1.0e3, hi=1.0e8,
+                                   doc="contact stiffness of the pump's ends (explicit: keep k dt^2 below the "
+                                   "plunger node's mass)")
 
 
 @dataclass(frozen=True)

@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..physics.conditions import condition_name
 from ..physics.fluid import tubing_pressure_pa
 from ..physics.inflow import SECONDS_PER_DAY
 from ..simulation.simulator import RunResult, Simulator, concat_traces
@@ -147,6 +148,7 @@ def summarize(sim: Simulator, results: list[RunResult]) -> dict:
         "pump_stroke_m": pump_stroke,
         "fillage": fill,
         "card_class": card_class,
+        "condition": condition_name(sim.cfg, card_class),  # one of physics.conditions.LABELS
         "card_fillage": card_fillage,  # read off the last pump card, as a diagnosis would
         "production_m3_day": production,
         "duration_s": duration_s,

@@ -17,6 +17,7 @@ Constructor
 | ``episode_hours`` | ``12.0`` (spec) | horizon in hours of well time (``task.episode_hours``); ``None`` keeps the config's; an override of ``task.episode_hours`` wins |
 | ``interval_s`` | ``300.0`` (spec) | control interval in s of well time (``task.interval_s``); ``None`` keeps the config's; an override of ``task.interval_s`` wins |
 | ``render_mode`` | ``None`` | ``"rgb_array"`` or ``"human"`` (surface and pump cards of the last stroke) |
+| ``fast_stepping`` | ``False`` | ``True``: an interval at an earlier interval's setpoint reuses its converged stroke (``IntervalRunner(reuse_periodic=True)``, docs/speed.md); off keeps v1's numbers |
 | ``overrides`` | ``None`` | ``{"key.path": value}`` applied to every well's config (e.g. ``economics.oil_price_usd_m3``) |
 | ``**kwargs`` | | further overrides as ``section__field=value`` (e.g. ``task__interval_s=600``) |
 
@@ -61,6 +62,10 @@ Version history
 ---------------
 * v1: well family with splits, in-episode inflow changes, idle/intermittent pumping, USD/h reward with
   constraint cost, field observation. v0 (one well, stroke-per-step, unitless reward) is kept unchanged.
+  Since: the opt-in ``fast_stepping`` kwarg (default off, numbers unchanged) and a native vector env
+  (``gymnasium.make_vec(..., vectorization_mode="vector_entry_point")``, srenv/envs/vector.py).
+  Later: ``info["condition"]`` names the pump condition (srenv.physics.conditions.LABELS); observation,
+  reward and dynamics unchanged.
 """
 
 from __future__ import annotations
@@ -78,6 +83,7 @@ from ..analysis.metrics import resample_prescribed_card
 from ..analysis.render import CardWindow
 from ..config import ControlConfig, WellConfig, load_config
 from ..errors import ConfigError, SolverFailure
+from ..physics.conditions import condition_name
 from ..simulation.simulator import Simulator
 from ..task import well_family as wf
 from ..task.economics import COST_TERMS, REWARD_TERMS, EconomicReward
@@ -128,12 +134,13 @@ class SuckerRodV1Env(CardWindow, gym.Env):
 
     def __init__(self, scenario: str = "train", observation: str = "field", render_mode: str | None = None,
                  overrides: dict | None = None, episode_hours: float | None = None, interval_s: float | None = None,
-                 **kwargs: Any) -> None:
+                 fast_stepping: bool = False, **kwargs: Any) -> None:
         if observation not in OBSERVATIONS:
             raise ConfigError("observation", observation, "one of " + ", ".join(OBSERVATIONS))
         if render_mode is not None and render_mode not in self.metadata["render_modes"]:
             raise ConfigError("render_mode", render_mode, "one of " + ", ".join(self.metadata["render_modes"]))
         self.scenario = str(scenario)
+        self.fast_stepping = bool(fast_stepping)  # IntervalRunner(reuse_periodic=...): off keeps v1's numbers
         self.observation = observation
         self.render_mode = render_mode
         self.overrides = merged_overrides(overrides, kwargs)
@@ -207,7 +214,7 @@ class SuckerRodV1Env(CardWindow, gym.Env):
             level0 = cfg.inflow.initial_fluid_level_m
         self.sim = Simulator(cfg)
         self.sim.reset(fluid_level_m=level0)
-        self.runner = IntervalRunner(self.sim)
+        self.runner = IntervalRunner(self.sim, reuse_periodic=self.fast_stepping)
         self.econ = EconomicReward(cfg.economics)
         s = cfg.surface
         self._spm = float(s.spm)
@@ -330,6 +337,7 @@ class SuckerRodV1Env(CardWindow, gym.Env):
             fast_forward_strokes=float(r.fast_forward_strokes if r is not None else 0.0),
             stick_slip_energy_j=float(r.stick_slip_j if r is not None else f.stick_slip_j),
             impact_speed_m_s=float(f.impact_m_s),
+            condition=condition_name(self.sim.cfg, f.summary.get("card_class", "full")),
         )
         solver = r.solver if r is not None else {k: int(f.summary[k]) for k in
                                                  ("certified_steps", "corrected_steps", "qp_steps", "solver_calls")}

@@ -56,6 +56,31 @@ def run(stepper: Stepper, va_t, t0: float, k_end: int) -> int:
     return advance(*stepper, va_t, t0, k_end)
 
 
+# The Newmark relations of one free node (every path of the kernel takes them from here; kept in this file so
+# that an edit of them invalidates numba's cache of the kernel, which watches this file only). With
+# h = dt (1 - gamma), q = dt^2 (1/2 - beta), c1 = 1 / (gamma dt), c2 = beta dt / gamma: v-tilde = v + h a,
+# u-tilde = u + dt v + q a - c2 v-tilde; at the step's end u = u-tilde + c2 v_new, a = (v_new - v-tilde) c1.
+# The order of the operations is part of the results (tests/test_kernel_regression.py).
+@njit(cache=True, inline="always")
+def coefficients(dt, beta, gamma):
+    """(h, q, c1, c2) of the time step."""
+    return dt * (1.0 - gamma), dt * dt * (0.5 - beta), 1.0 / (gamma * dt), beta * dt / gamma
+
+
+@njit(cache=True, inline="always")
+def predict(u, v, a, dt, h, q, c2):
+    """(v-tilde, u-tilde) of a node from its state at the step's start."""
+    vpr = v + h * a
+    return vpr, u + dt * v + q * a - c2 * vpr
+
+
+@njit(cache=True, inline="always")
+def update(u, v, a, v_new, dt, h, q, c1, c2):
+    """(u, a) at the step's end from the state at its start and the new velocity."""
+    vpr = v + h * a
+    return u + dt * v + q * a - c2 * vpr + c2 * v_new, (v_new - vpr) * c1
+
+
 @njit(cache=True, inline="always")
 def node_axial_force(u, ua, ea_len, nforce):
     """Equivalent axial force at each free node: mean of the adjacent element forces."""
@@ -132,7 +157,7 @@ def events(valve_p, prog, ub, vb):
     return False
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)  # nogil: the vector env steps wells on threads (srenv/envs/vector.py)
 def advance(const, fric_p, valve_p, prog, cnt, model, side, state, work, out, va_t, t0, k_end):
     """Advance from step Progress.step to k_end; va_t[k] is the prescribed top velocity at the end of step
     k. Returns DONE, NEED_QP (work.wb/wlo/whi hold the sub-problem; the caller puts the solution in work.wv,
@@ -147,7 +172,7 @@ def advance(const, fric_p, valve_p, prog, cnt, model, side, state, work, out, va
                  cp, dp, nforce, fric_s, wv, wb, wlo, whi, rec, energy, emax, emin, stick, va_t, t0, k_end)
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def steps(const, fric_p, valve_p, prog, cnt, ksd, kso, kd, ko, md, mo, cd, f, ea_len, axial, weight, turn,
           u, v, a, top, status, prev_lam, prev_v, prev_stuck, lo, hi, ns, lam, b, b0, shift, vk, rhs, stuck,
           cp, dp, nforce, fric_s, wv, wb, wlo, whi, rec, energy, emax, emin, stick, va_t, t0, k_end):
@@ -157,13 +182,12 @@ def steps(const, fric_p, valve_p, prog, cnt, ksd, kso, kd, ko, md, mo, cd, f, ea
     p = prog[0]
     vp = valve_p[0]
     dt, beta, gamma = c.dt_s, c.beta, c.gamma
-    c2 = beta * dt / gamma
+    h, q, c1, c2 = coefficients(dt, beta, gamma)
     nonsmooth, rec_on = c.nonsmooth != 0, c.record != 0
     kc, mc = c.top_coupling_stiffness_n_m, c.top_coupling_mass_kg
     fric_nonmono = fric_p[0].nonmonotone != 0
     maxcorr, tolv, toll, always_qp = c.max_corrections, c.tol_v_m_s, c.tol_lambda, c.always_qp
     dc_tol, dc_max = c.dc_tol_m_s, c.dc_max_iterations
-    c1 = 1.0 / (gamma * dt)
     kv_tau = c.kv_tau_s
     n = u.shape[0]
     while p.step < k_end:
@@ -176,9 +200,9 @@ def steps(const, fric_p, valve_p, prog, cnt, ksd, kso, kd, ko, md, mo, cd, f, ea
         # holds the latest DC iterate or a failed pattern solve, and b0 is rebuilt from scratch when the
         # kernel resumes after a NEED_QP return.
         for i in range(n):
-            vpr = prev_v[i] + dt * (1.0 - gamma) * a[i]
+            vpr, ut = predict(u[i], prev_v[i], a[i], dt, h, q, c2)
             b[i] = vpr
-            rhs[i] = u[i] + dt * prev_v[i] + dt * dt * (0.5 - beta) * a[i] - c2 * vpr
+            rhs[i] = ut
             b0[i] = f[i] + c1 * md[i] * vpr
         for i in range(n):
             ku = kd[i] * rhs[i]
@@ -284,9 +308,7 @@ def steps(const, fric_p, valve_p, prog, cnt, ksd, kso, kd, ko, md, mo, cd, f, ea
             kv_work(energy, kv_tau, ea_len, u, v, prev_v, a, dt, beta, gamma, ua_old, ua_new, va_old, va_new)
         for i in range(n):
             vo = prev_v[i]  # v_n: `v` already holds v_{n+1}
-            vpr = vo + dt * (1.0 - gamma) * a[i]
-            a_new = (v[i] - vpr) * c1
-            u_new = u[i] + dt * vo + dt * dt * (0.5 - beta) * a[i] - c2 * vpr + c2 * v[i]
+            u_new, a_new = update(u[i], vo, a[i], v[i], dt, h, q, c1, c2)
             du = u_new - u[i]
             energy[E_GRAV] += f[i] * du
             energy[E_REACT] -= 0.5 * (lam[i] + prev_lam[i]) * du

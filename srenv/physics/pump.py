@@ -34,7 +34,19 @@ def plunger_area_m2(pump: PumpConfig) -> float:
 
 def valve_law(pump: PumpConfig, p_out_pa: float, rod_area_m2: float, intake_pressure_pa: float | None = None
               ) -> ValveLaw:
-    """Valve law from the two loads or from pressures and diameters (p_out = tubing pressure at the pump)."""
+    """Valve law from the two loads or from pressures and diameters (p_out = tubing pressure at the pump).
+    A well flowing through the pump (``flow_through_fraction`` f) lifts that share of the fluid load itself:
+    P- - P+ shrinks by the factor 1 - f."""
+    law = _valve_law(pump, p_out_pa, rod_area_m2, intake_pressure_pa)
+    f = pump.flow_through_fraction
+    if f <= 0:
+        return law
+    return ValveLaw(law.down_eq_n + (1.0 - f) * (law.up_eq_n - law.down_eq_n), law.down_eq_n,
+                    (1.0 - f) * law.drop_n, law.v0_m_s)
+
+
+def _valve_law(pump: PumpConfig, p_out_pa: float, rod_area_m2: float, intake_pressure_pa: float | None
+               ) -> ValveLaw:
     if pump.load_source == "loads":
         shift = p_out_pa * rod_area_m2  # true -> equivalent force at the rod end
         drop = pump.upstroke_load_n - pump.dynamic_load_n if pump.law == "nonmonotone" else 0.0

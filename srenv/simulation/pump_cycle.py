@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..physics.laws import pump_conditions
 from ..physics.laws import valve as valve_law_record
 from ..physics.pump import plunger_area_m2
 
@@ -74,6 +75,7 @@ class PumpCycle:
                 fillage = liquid_m / upstroke
             self._pumped_m3 += plunger_area_m2(self.cfg.pump) * liquid_m
             self._pump_phase = "down"
+            pump_conditions.on_reversal(valve, True, ub_min)
             progress["ub_max_m"] = ub
             events.append(("top", time_s, ub, fillage))
         elif direction < 0 and self._pump_phase == "down":  # bottom: intake pressure sets the next P-
@@ -90,6 +92,7 @@ class PumpCycle:
                 valve["p_in_pa"] = self._intake_pa()
                 valve["phi"] = self.gas.fraction(float(valve["p_in_pa"][0]))
             self._pump_phase = "up"
+            pump_conditions.on_reversal(valve, False, ub_max)
             self._t_bottom = time_s
             progress["ub_min_m"] = ub
             events.append(("bottom", time_s, ub, fillage))
@@ -99,8 +102,13 @@ class PumpCycle:
         """The valve law's kernel record for a run: the law, the fluid-pound plan and the gas chamber."""
         rec = valve_law_record.make(self.law, self.void, self.void_until)
         rec["fluid_kg"] = self.cfg.pump.fluid_column_mass_kg
+        cfg = self.cfg
+        if not hasattr(self, "_cond_state"):
+            self._cond_reset()
+        pump_conditions.configure(rec, cfg.pump)
+        for name, value in self._cond_state.items():
+            rec[name] = value
         if self.gas is not None:
-            cfg = self.cfg
             rec["gas_mode"] = int(self._gas[0])
             rec["u0_m"], rec["gas_m3"], rec["p0"], rec["liquid_m3"] = self._gas[1:5]
             rec["k"], rec["area_m2"] = self.gas.exponent, self.gas.area_m2
@@ -115,6 +123,15 @@ class PumpCycle:
             rec["u0_m"], rec["p0"] = self._gas[1], self._gas[3]
             rec["k"], rec["area_m2"] = self.tubing_stiffness_n_m, 0.0
         return rec
+
+    def _cond_reset(self) -> None:
+        """The pump conditions' state at the bottom of the stroke after reset (laws.pump_conditions)."""
+        stroke = self.surface.stroke_length_m(self.cfg.surface.stroke_length_m)
+        self._cond_state = pump_conditions.initial_state(float(self.u[-1]), stroke)
+
+    def _cond_keep(self, valve: np.ndarray) -> None:
+        """After a run: the plunger's travel, direction and the contact ends carry over to the next."""
+        self._cond_state = {name: valve[name][0].item() for name in pump_conditions.STATE_FIELDS}
 
     # ------------------------------------------------------------------------------------------ idle time
     # The v1 env stops the unit between strokes (intermittent pumping) and fast-forwards quasi-steady

@@ -192,6 +192,7 @@ class Simulator(PumpCycle):
             self._gas_start()
         elif self.tubing_stiffness_n_m > 0:  # the plunger holds P+ at rest: the tubing carries the fluid load
             self._gas[:] = (1.0, float(self.u[-1]), 0.0, -self.law.down_eq_n, 0.0)
+        self._cond_reset()
         self.fillage = 1.0
         self.energy = np.zeros(L.N_ENERGY)
         self.e0 = self.mechanical_energy_j()
@@ -309,6 +310,7 @@ class Simulator(PumpCycle):
         self.pl_dir, self.void = int(p["plunger_dir"]), int(v["void"])
         self._ub_max, self._ub_min = float(p["ub_max_m"]), float(p["ub_min_m"])
         self.void_until = float(v["void_until_m"])
+        self._cond_keep(valve)
         if self.gas is not None or self.tubing_stiffness_n_m > 0:  # the kernel moved the reference on
             self._gas[1:5] = v["u0_m"], v["gas_m3"], v["p0"], v["liquid_m3"]
         self.time_s = t0 + n_steps * dt

@@ -28,6 +28,11 @@ from ..analysis.stroke_summary import summarize
 from ..physics.pump import plunger_area_m2
 from ..simulation.simulator import RunResult, Simulator
 
+# the fast option (IntervalRunner(reuse_periodic=True)): how far the intake pressure may move the plunger's
+# fluid load, as a fraction of the reused stroke's PPRL, and how many setpoints' strokes are kept
+REUSE_LOAD_FRACTION = 0.002
+REUSE_CACHE_SIZE = 8
+
 
 @dataclass
 class StrokeFigures:
@@ -126,8 +131,12 @@ def stroke_figures(sim: Simulator, r: RunResult, fatigue_life: float, fatigue_ex
 class IntervalRunner:
     """Runs control intervals on one simulator (see the module docstring)."""
 
-    def __init__(self, sim: Simulator) -> None:
+    def __init__(self, sim: Simulator, reuse_periodic: bool = False) -> None:
         self.sim = sim
+        # reuse_periodic (off in v1): an interval at the previous interval's setpoint starts from that
+        # interval's converged stroke instead of simulating it again (docs/speed.md)
+        self.reuse_periodic = reuse_periodic
+        self._periodic: dict[tuple, tuple[StrokeFigures, float]] = {}
         cfg = sim.cfg
         self.task = cfg.task
         self.econ = cfg.economics
@@ -202,6 +211,34 @@ class IntervalRunner:
         res.goodman_max_pct = max(res.goodman_max_pct, m["goodman_max_pct"])
         res.gearbox_loading_pct = max(res.gearbox_loading_pct, m.get("gearbox_loading_pct", 0.0))
 
+    def _intake_pa(self) -> float:
+        return self.sim.annulus.intake_pressure_pa() if self.sim.annulus is not None else 0.0
+
+    def _reusable(self, key: tuple, allowed: bool) -> StrokeFigures | None:
+        """The converged stroke of an earlier interval at this setpoint (``key``: SPM, stroke, from rest), if
+        the pump's state allows it: the string runs on at the same setpoint or restarts from rest, and the
+        intake pressure moved the plunger's fluid load by at most ``REUSE_LOAD_FRACTION`` of that stroke's
+        PPRL (the load is what the stroke depends on; the liquid follows the annulus in the fast-forward)."""
+        got = self._periodic.get(key) if self.reuse_periodic and allowed else None
+        if got is None:
+            return None
+        f, p_in = got
+        area = plunger_area_m2(self.sim.cfg.pump)
+        if abs(self._intake_pa() - p_in) * area > REUSE_LOAD_FRACTION * abs(f.summary["pprl_n"]):
+            return None
+        return f
+
+    def _quasi_steady(self, exact: list[StrokeFigures]) -> bool:
+        """A pumped-off well's strokes differ stroke to stroke (the pound) while the interval is steady: its last
+        two strokes' fillages within the fast-forward's drift tolerance."""
+        return len(exact) >= 2 and abs(exact[-1].fillage - exact[-2].fillage) < self.task.fast_forward_fillage_tol
+
+    def _remember(self, key: tuple, f: StrokeFigures, p_in: float) -> None:
+        self._periodic.pop(key, None)
+        self._periodic[key] = (f, p_in)
+        while len(self._periodic) > REUSE_CACHE_SIZE:
+            self._periodic.pop(next(iter(self._periodic)))
+
     def _pump(self, res: IntervalResult, spm: float, stroke_m: float, period: float, n_total: float,
               exact_max: int) -> None:
         sim, ann = self.sim, self.sim.annulus
@@ -215,11 +252,18 @@ class IntervalRunner:
         setpoint = (spm, stroke_m)
         transient_w = 0.0 if setpoint == self._setpoint and not self._restart else None
         self._setpoint = setpoint
+        key = (spm, stroke_m, self._restart)
+        reused = self._reusable(key, transient_w is not None or self._restart)
+        if reused is not None:
+            exact.append(reused)
+            need_exact, transient_w = False, 0.0
+        p_exact = None  # the intake pressure of the last stroke simulated here
         while done < n_total - 1e-9:
             remaining = n_total - done
             if need_exact and len(exact) < max(exact_max, 1) and (remaining >= 1.0 - 1e-9 or not exact):
                 r = sim.run_stroke(spm, stroke_m, record=True)
                 f = self._figures(r)
+                p_exact = self._intake_pa() if self.reuse_periodic else None
                 w = min(1.0, remaining)
                 lifted = f.lifted_m3
                 if w < 1.0 and ann is not None:  # only part of this stroke belongs to the interval
@@ -266,4 +310,6 @@ class IntervalRunner:
         if transient_w and exact:  # no settled stroke followed: the transient stroke prices itself
             self._add_costs(res, exact[0], transient_w)
         res.last = exact[-1] if exact else None
+        if p_exact is not None and (not need_exact or self._quasi_steady(exact)):
+            self._remember(key, exact[-1], p_exact)
         sim.replan_upstroke(period)

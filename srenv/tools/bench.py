@@ -102,9 +102,13 @@ def env_figures(repeats: int) -> dict | None:
     return env_overhead(repeats=repeats)
 
 
-def run(repeats: int = 5, strokes: int = 10) -> dict:
+def run(repeats: int = 5, strokes: int = 10, quick: bool = False) -> dict:
+    from .bench_kernel import kernel_figures
+
+    t_start = time.perf_counter()
     out: dict = {"repeats": repeats, "strokes_per_run": strokes, "python": sys.version.split()[0],
                  "numpy": np.__version__, "cases": {}}
+    out["kernel"] = kernel_figures(CASES[0], repeats=max(repeats, 5), strokes=strokes)
     for name in CASES:
         out["cases"][name] = case_figures(name, repeats, strokes)
     out["always_qp"] = {CASES[0]: always_qp_figures(CASES[0], repeats)}
@@ -115,10 +119,17 @@ def run(repeats: int = 5, strokes: int = 10) -> dict:
     from ..envs.bench_env import v1_figures
 
     out["env_v1"] = v1_figures(repeats=max(1, repeats // 2))
+    from .bench_cards import cards_figures  # pump conditions: srenv cards / classify
+
+    out["cards"] = cards_figures(n_cards=40 if repeats < 5 else 200)
+    from .bench_speed import speed_figures
+
+    out.update(speed_figures(quick))
+    out["wall_time_s"] = time.perf_counter() - t_start
     return out
 
 
 def main(args: Namespace) -> int:
     repeats, strokes = (3, 3) if args.quick else (args.repeats, args.strokes)
-    print(json.dumps(run(repeats, strokes), indent=2))
+    print(json.dumps(run(repeats, strokes, quick=args.quick), indent=2))
     return 0

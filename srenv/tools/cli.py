@@ -17,6 +17,7 @@ from ..declarations import MAX_STROKES, OUTPUTS, add_number  # noqa: F401  (MAX_
 from ..errors import ConfigError, NumericFailure, SolverFailure
 from ..interrupts import EXIT_INTERRUPTED, raise_on_sigterm
 from ..outputs import atomic_write_all, check_outputs, json_line
+from .finite import check_finite
 
 EXIT_BAD_INPUT = 2
 EXIT_SOLVER = 3
@@ -34,24 +35,6 @@ class _Parser(argparse.ArgumentParser):
     def error(self, message: str) -> None:  # one line, status 2, no usage dump
         print(f"srenv: error: {message}", file=sys.stderr)
         sys.exit(EXIT_BAD_INPUT)
-
-
-def check_finite(trace: dict, summary: dict) -> None:
-    """A run whose numbers are not finite is a failure, not a result (and NaN is not JSON)."""
-    for name, col in trace.items():
-        if not np.all(np.isfinite(col)):
-            raise NumericFailure(name, "the simulation diverged; check the config's magnitudes")
-
-    def walk(key: str, v: object) -> None:
-        if isinstance(v, dict):
-            for k, w in v.items():
-                walk(k, w)
-        elif isinstance(v, (list, tuple)):
-            for w in v:
-                walk(key, w)
-        elif isinstance(v, (float, np.floating)) and not math.isfinite(v):
-            raise NumericFailure(key, "the summary is not finite; check the config's magnitudes")
-    walk("summary", summary)
 
 
 def trace_csv_writer(trace: dict):
@@ -190,6 +173,12 @@ def build_parser() -> argparse.ArgumentParser:
     from .validate import add_parser as add_validate  # field records (docs/realism.md)
 
     add_validate(sub)
+    from .cards import add_parser as add_cards  # pump conditions (docs/conditions.md)
+
+    add_cards(sub)
+    from .classify import add_parser as add_classify
+
+    add_classify(sub)
     return p
 
 

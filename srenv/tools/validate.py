@@ -168,7 +168,7 @@ def cmd_validate(args) -> int:
     check_output_path("--plot", args.plot, (".png",))
     rec = read_record(args.record, args.config, args.reverse)
     out, parts = validate(rec, list(args.fit or []), args.strokes, args.load_convention)
-    from .cli import check_finite
+    from .finite import check_finite
 
     check_finite({}, out)  # a figure that is not finite is a failure, not a result
     if args.plot:

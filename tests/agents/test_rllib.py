@@ -21,7 +21,7 @@ import yaml
 
 pytest.importorskip("ray.rllib")
 
-from agents.envs import make_env
+from agents.envs import ENV_ID_V0, make_env
 from agents.evaluation.evaluate import evaluate, make_policy
 from agents.evaluation.rllib_model import POLICY_JSON, RLlibPolicy
 from agents.training.config import TrainConfigError
@@ -72,7 +72,7 @@ def test_one_iteration_two_runners_plain_id(run: tuple[Path, Path, dict]) -> Non
 
 def test_checkpoint_evaluates_next_to_a_baseline(run: tuple[Path, Path, dict]) -> None:
     _, out, _ = run
-    env = make_env(config="default", **SHORT)
+    env = make_env(ENV_ID_V0, config="default", **SHORT)
     policy = make_policy(str(out / "checkpoint"), env)
     assert isinstance(policy, RLlibPolicy)
     # the data route (JSON + weights_only tensors) acts exactly as RLlib's own pickled module (trusted)
@@ -107,7 +107,7 @@ def test_normaliser_statistics_are_saved_and_applied_by_evaluate(run: tuple[Path
     assert s["num_timesteps"] <= stats["count"] <= 2 * s["num_timesteps"]
     assert stats["clip_std"] == 10.0 and np.all(std >= 0) and np.count_nonzero(std > 1e-6) > len(std) // 2
     assert np.max(np.abs(mean)) > 0.1  # non-trivial: the observation is not already centred
-    env = make_env(config="default", **SHORT)
+    env = make_env(ENV_ID_V0, config="default", **SHORT)
     policy = make_policy(str(out / "checkpoint"), env)
     trusted = make_policy(str(out / "checkpoint"), env, trust=True)
     assert type(trusted.obs_filter).__name__ == "RLlibObsFilter"  # RLlib's MeanStdFilter from the pickles
@@ -244,7 +244,7 @@ def test_pickle_only_checkpoint_needs_trust(run: tuple[Path, Path, dict], tmp_pa
     bare = tmp_path / "bare"
     shutil.copytree(out / "checkpoint", bare)
     (bare / POLICY_JSON).unlink()  # as written by RLlib itself: pickles only
-    env = make_env(config="default", **SHORT)
+    env = make_env(ENV_ID_V0, config="default", **SHORT)
     with pytest.raises(ValueError, match="--trust-model"):
         make_policy(str(bare), env)
     assert isinstance(make_policy(str(bare), env, trust=True), RLlibPolicy)

@@ -27,7 +27,8 @@ import pytest
 
 from srenv.config import CONFIG_DIR, MAX_YAML_BYTES
 from srenv.errors import VALUE_REPR_CHARS, NumericFailure, short_repr
-from srenv.tools.cli import check_finite, main
+from srenv.tools.cli import main
+from srenv.tools.finite import check_finite
 
 ROOT = Path(__file__).resolve().parents[2]
 FIG3 = "paper_fig3_vertical"

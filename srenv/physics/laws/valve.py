@@ -7,7 +7,8 @@ P- while it rises, P+ while it falls, anything between at rest. Two modification
   * velocity weakening (nonmonotone upstroke law P-(v) = P_inf + (P0 - P_inf) exp(-|v|/v0)): j = j1 - j2
     with j2'(v) = -(P0 - P_inf)(1 - exp(v/v0)) for v < 0 (rising), 0 otherwise; sup j2'' = (P0 - P_inf)/v0.
 With enough free gas in the chamber (or unanchored tubing) the gas spring (``gas_spring``) carries the
-load transfer and the interval shrinks to the plunger friction.
+load transfer and the interval shrinks to the plunger friction. Valve leaks, a tubing leak and tagging move
+the interval with the plunger's position (``pump_conditions``).
 """
 
 from __future__ import annotations
@@ -17,6 +18,7 @@ from numba import njit
 
 from ..pump import ValveLaw
 from .gas_spring import GAS_FIELDS, gas_active
+from .pump_conditions import COND_FIELDS, adjust
 
 # void: 0 no fluid-pound plan, 1 planned (liquid level at void_until_m), 2 the plunger is in the void now
 PARAMS = np.dtype([("lo_n", np.float64), ("hi_n", np.float64), ("drop_n", np.float64),
@@ -24,7 +26,7 @@ PARAMS = np.dtype([("lo_n", np.float64), ("hi_n", np.float64), ("drop_n", np.flo
                    ("void_until_m", np.float64), *GAS_FIELDS,
                    # the liquid column that moves with the plunger while it rises (pump.fluid_column_mass_kg)
                    # and its term in K*_BB this step (c1 x the mass, 0 while the plunger does not rise)
-                   ("fluid_kg", np.float64), ("fluid_dk", np.float64)])
+                   ("fluid_kg", np.float64), ("fluid_dk", np.float64), *COND_FIELDS])
 
 
 def make(law: ValveLaw, void: int = 0, void_until_m: float = 0.0) -> np.ndarray:
@@ -63,6 +65,8 @@ def bounds(params, ub, lo, hi, ns):
     if gas_on:
         plo = -p.gas_friction_n if p.gas_mode == 1 else 0.0
         phi = -plo
+    elif p.cond_on != 0 and p.void != 2:  # leaks, tubing leak, tagging (laws.pump_conditions)
+        plo, phi = adjust(params, ub, plo, phi)
     p.gas_on = 1 if gas_on else 0
     lo[n - 1] = plo
     hi[n - 1] = phi

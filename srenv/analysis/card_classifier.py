@@ -1,0 +1,80 @@
+"""The condition classifier at inference: a small MLP whose weights are data (an NPZ read without pickle).
+
+The model file (``srenv/models/classifier.npz``, written by ``python -m srenv.tools.train_classifier``)
+holds ``labels``, the feature scaling ``mean``/``std`` and layers ``w0, b0, w1, b1, ...`` (ReLU between,
+softmax at the end). Trained on simulated cards only (docs/conditions.md).
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+from ..physics.conditions import LABELS
+from .card_shape import N_FEATURES, features
+
+DEFAULT_MODEL = Path(__file__).resolve().parents[1] / "models" / "classifier.npz"
+MAX_LAYERS = 8
+MAX_WIDTH = 4096
+
+
+class BadModel(ValueError):
+    """A model file that is not a classifier of this shape (or not data at all)."""
+
+
+class CardClassifier:
+    def __init__(self, labels: tuple[str, ...], mean: np.ndarray, std: np.ndarray, layers: list):
+        self.labels, self.mean, self.std, self.layers = labels, mean, std, layers
+
+    @classmethod
+    def load(cls, path: str | Path = DEFAULT_MODEL) -> CardClassifier:
+        try:
+            with np.load(path, allow_pickle=False) as z:
+                data = {k: z[k] for k in z.files}
+        except (OSError, ValueError, EOFError) as exc:
+            raise BadModel(f"model file {path}: not a readable NPZ of arrays ({exc})") from None
+        try:
+            labels = tuple(str(x) for x in data["labels"])
+            mean, std = data["mean"].astype(np.float64), data["std"].astype(np.float64)
+            layers = []
+            for i in range(MAX_LAYERS):
+                if f"w{i}" not in data:
+                    break
+                layers.append((data[f"w{i}"].astype(np.float64), data[f"b{i}"].astype(np.float64)))
+        except KeyError as exc:
+            raise BadModel(f"model file {path}: missing array {exc}") from None
+        cls._check(path, labels, mean, std, layers)
+        return cls(labels, mean, std, layers)
+
+    @staticmethod
+    def _check(path, labels, mean, std, layers) -> None:
+        if labels != LABELS:
+            raise BadModel(f"model file {path}: labels {labels} are not srenv's twelve")
+        if mean.shape != (N_FEATURES,) or std.shape != (N_FEATURES,) or not np.all(std > 0):
+            raise BadModel(f"model file {path}: feature scaling of the wrong shape (expected {N_FEATURES})")
+        width = N_FEATURES
+        for i, (w, b) in enumerate(layers):
+            if w.ndim != 2 or w.shape[0] != width or b.shape != (w.shape[1],) or w.shape[1] > MAX_WIDTH:
+                raise BadModel(f"model file {path}: layer {i} has shape {w.shape}, expected ({width}, n)")
+            if not (np.all(np.isfinite(w)) and np.all(np.isfinite(b))):
+                raise BadModel(f"model file {path}: layer {i} holds values that are not finite")
+            width = w.shape[1]
+        if not layers or width != len(LABELS):
+            raise BadModel(f"model file {path}: the last layer must give {len(LABELS)} outputs")
+
+    def proba_features(self, f: np.ndarray) -> np.ndarray:
+        """Class probabilities of feature rows (n, N_FEATURES)."""
+        h = (np.atleast_2d(f) - self.mean) / self.std
+        for i, (w, b) in enumerate(self.layers):
+            h = h @ w + b
+            if i < len(self.layers) - 1:
+                h = np.maximum(h, 0.0)
+        h = h - h.max(axis=1, keepdims=True)
+        e = np.exp(h)
+        return e / e.sum(axis=1, keepdims=True)
+
+    def classify(self, position, load) -> tuple[str, dict[str, float]]:
+        """(label, probabilities of all twelve) of one card; raises card_shape.BadCard."""
+        p = self.proba_features(features(position, load))[0]
+        return self.labels[int(np.argmax(p))], {k: float(v) for k, v in zip(self.labels, p)}

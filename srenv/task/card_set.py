@@ -1,0 +1,158 @@
+"""A labelled synthetic card set: wells of the family, a pump condition and a severity each (docs/cards_dataset.md).
+
+Card ``i`` of a set with seed ``S`` is drawn from ``numpy.random.SeedSequence([S, i, attempt])`` only, so a
+set is the same whatever the number of worker processes. Cards come in groups of ``CARDS_PER_WELL`` on one
+well (one well seed each; the split follows the well seed, so no well is in two splits). A draw whose
+simulation fails (an implausible combination the config loader refuses) is drawn again with the next
+attempt number.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import functools
+import io
+import math
+import zipfile
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..physics.conditions import LABELS
+
+N_POINTS = 256          # samples per card, equally spaced in time over the last stroke
+CARDS_PER_WELL = 4
+WELL_SEED0 = 10_000_000  # card wells: disjoint from the family's train (0...) and test (1 000 000...) seeds
+SPLITS = ("train", "validation", "test")
+MAX_ATTEMPTS = 8
+DAMPING_RANGE = (0.02, 0.8)   # Gibbs factor, log-uniform: from ringing strings to strongly damped ones
+CONVENTIONAL_SHARE = 0.5      # cards driven by a catalogue beam unit (four-bar linkage), the rest harmonic
+MIN_SEVERITY = 0.25           # below it a condition's card is hard to tell from a full pump's
+WELL_COLUMNS = ("depth_m", "plunger_diameter_mm", "spm", "stroke_length_m", "damping_factor",
+                "max_inclination_deg", "friction_coefficient", "fluid_density_kg_m3", "conventional_unit")
+ARRAYS = ("polished_rod_position_m", "polished_rod_load_n", "pump_position_m", "pump_load_n")
+
+
+def split_of(well_seed: int) -> str:
+    """80 / 10 / 10 by well seed."""
+    r = int(np.random.SeedSequence(well_seed).generate_state(1)[0]) % 10  # consecutive seeds scrambled
+    return "train" if r < 8 else ("validation" if r == 8 else "test")
+
+
+@dataclass(frozen=True)
+class Draw:
+    well_seed: int
+    label: str
+    severity: float
+    spm: float
+    stroke_length_m: float
+    damping_factor: float
+    conventional: bool = False
+
+
+def draw(seed: int, index: int, attempt: int, labels: tuple[str, ...]) -> Draw:
+    rng = np.random.default_rng(np.random.SeedSequence([seed, index, attempt]))
+    well_seed = WELL_SEED0 + seed * 1_000_003 + index // CARDS_PER_WELL + attempt * 100_000_007
+    label = labels[int(rng.integers(len(labels)))]
+    severity = 0.0 if label == "full" else float(rng.uniform(MIN_SEVERITY, 1.0))
+    lo, hi = DAMPING_RANGE
+    return Draw(well_seed, label, severity, float(rng.uniform()), float(rng.uniform()),
+                float(math.exp(rng.uniform(math.log(lo), math.log(hi)))), bool(rng.uniform() < CONVENTIONAL_SHARE))
+
+
+@functools.lru_cache(maxsize=1)
+def _unit_strokes() -> tuple[tuple[float, str, int], ...]:
+    """(stroke, designation, crank hole) of every catalogue unit and hole."""
+    from ..surface_unit.unit_catalogue import conventional_unit, get_unit, list_units
+
+    return tuple((conventional_unit(d, h).stroke_m, d, h) for d in list_units()
+                 for h in range(len(get_unit(d).crank_radii_m)))
+
+
+def _surface(surface, spm: float, stroke: float, conventional: bool):
+    """Harmonic at the drawn stroke, or the catalogue unit and hole whose stroke is nearest."""
+    if not conventional:
+        return dataclasses.replace(surface, spm=spm, stroke_length_m=stroke)
+    s, unit, hole = min(_unit_strokes(), key=lambda u: abs(u[0] - stroke))
+    return dataclasses.replace(surface, motion="conventional", unit=unit, crank_hole=hole, spm=spm,
+                               stroke_length_m=round(s, 4))
+
+
+def card_config(d: Draw):
+    """The family well of the draw at the drawn operating point and damping, in the drawn condition."""
+    from ..analysis.condition_card import condition_config
+    from .well_family import draw_params, spec_from_params
+
+    well = spec_from_params(draw_params(d.well_seed), f"card{d.well_seed}").cfg
+    c = well.control
+    spm = round(c.spm_min + d.spm * (c.spm_max - c.spm_min), 3)
+    stroke = round(c.stroke_min_m + d.stroke_length_m * (c.stroke_max_m - c.stroke_min_m), 4)
+    # the operating point and damping on the parsed config (checked again with the condition's overrides)
+    well = dataclasses.replace(well, surface=_surface(well.surface, spm, stroke, d.conventional),
+                               damping=dataclasses.replace(well.damping, model="dimensionless",
+                                                           damping_factor=round(d.damping_factor, 6)))
+    return condition_config(well, d.label, d.severity)
+
+
+def resample(t: np.ndarray, y: np.ndarray, n: int = N_POINTS) -> np.ndarray:
+    tt = np.linspace(t[0], t[-1], n)
+    return np.interp(tt, t, y)
+
+
+def make_card(seed: int, index: int, labels: tuple[str, ...]) -> dict:
+    """Card ``index`` of set ``seed``: arrays, label, severity, the well's numbers."""
+    from ..analysis.condition_card import simulate_card
+    from ..errors import ConfigError, NumericFailure, SolverFailure
+
+    for attempt in range(MAX_ATTEMPTS):
+        d = draw(seed, index, attempt, labels)
+        try:
+            cfg = card_config(d)
+            card = simulate_card(cfg)
+        except (ConfigError, NumericFailure, SolverFailure, ValueError):
+            continue
+        arrays = {k: resample(card.t_s, getattr(card, k)) for k in ARRAYS}
+        if not all(np.all(np.isfinite(a)) for a in arrays.values()):
+            continue
+        well = {"depth_m": cfg.rod_length_m, "plunger_diameter_mm": cfg.pump.plunger_diameter_mm,
+                "spm": cfg.surface.spm, "stroke_length_m": cfg.surface.stroke_length_m,
+                "damping_factor": cfg.damping.damping_factor,
+                "max_inclination_deg": max([s.inclination_deg for s in cfg.survey.stations] or [0.0]),
+                "friction_coefficient": cfg.friction.coefficient, "fluid_density_kg_m3": cfg.fluid.density_kg_m3,
+                "conventional_unit": float(cfg.surface.motion == "conventional")}
+        return {"arrays": arrays, "label": d.label, "severity": d.severity, "well_seed": d.well_seed,
+                "fillage": card.fillage, "period_s": float(card.t_s[-1]), "well": well}
+    raise RuntimeError(f"card {index} of set {seed}: no simulation succeeded in {MAX_ATTEMPTS} draws")
+
+
+def columns(cards: list[dict]) -> dict[str, np.ndarray]:
+    """The set as columns (the NPZ's arrays, docs/cards_dataset.md)."""
+    out = {k: np.stack([c["arrays"][k] for c in cards]).astype(np.float64) for k in ARRAYS}
+    out["label"] = np.array([LABELS.index(c["label"]) for c in cards], dtype=np.int64)
+    out["label_names"] = np.array(LABELS)
+    out["severity"] = np.array([c["severity"] for c in cards], dtype=np.float64)
+    out["well_seed"] = np.array([c["well_seed"] for c in cards], dtype=np.int64)
+    out["split"] = np.array([split_of(c["well_seed"]) for c in cards])
+    out["fillage"] = np.array([c["fillage"] for c in cards], dtype=np.float64)
+    out["period_s"] = np.array([c["period_s"] for c in cards], dtype=np.float64)
+    for k in WELL_COLUMNS:
+        out[k] = np.array([c["well"][k] for c in cards], dtype=np.float64)
+    return out
+
+
+def write_npz(path: str, cols: dict[str, np.ndarray]) -> None:
+    """An NPZ with fixed zip metadata (no time stamps): the same columns give the same bytes."""
+    with zipfile.ZipFile(path, "w", compression=zipfile.ZIP_DEFLATED) as zf:
+        for name in sorted(cols):
+            buf = io.BytesIO()
+            np.lib.format.write_array(buf, np.ascontiguousarray(cols[name]), allow_pickle=False)
+            info = zipfile.ZipInfo(f"{name}.npy", date_time=(1980, 1, 1, 0, 0, 0))
+            info.compress_type = zipfile.ZIP_DEFLATED
+            info.external_attr = 0o644 << 16
+            zf.writestr(info, buf.getvalue())
+
+
+def load_cards(path: str) -> dict[str, np.ndarray]:
+    """Read a card set (data only, no pickled objects)."""
+    with np.load(path, allow_pickle=False) as z:
+        return {k: z[k] for k in z.files}

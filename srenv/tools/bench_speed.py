@@ -1,0 +1,89 @@
+"""``srenv bench``'s task-env figures: env steps/s per core of every task version (and of v1 with the fast
+stepping option) at full speed, at the VSD minimum and idle, and the native vector env's steps/s at N = 1, 8, 32
+on all the cores this process may use (docs/speed.md).
+
+Per-core rates are env steps over this process's CPU time (a shared machine's other jobs do not count); the
+vector env's are over wall time with its CPU time beside it (cpu_per_wall: how many cores it kept busy).
+"""
+
+from __future__ import annotations
+
+import time
+import warnings
+
+import numpy as np
+
+# the acceptance's operating points: a0 = 1 full speed, a0 = -0.6 an average rate at or below the VSD minimum
+MODES = {"full_speed": (1.0, 1.0), "vsd_minimum": (-0.6, 1.0), "idle": (-1.0, -1.0)}
+
+
+def task_env_ids() -> list[str]:
+    import gymnasium as gym
+
+    import srenv  # noqa: F401 - registers the envs
+
+    return sorted(i for i in gym.registry if i.startswith("srenv/SuckerRod-v") and i != "srenv/SuckerRod-v0")
+
+
+def env_rates(env_id: str, steps: int, seeds: tuple = (11, 12), **kwargs) -> dict:
+    """Env steps per CPU second in each mode: a warm-up step on seed 3, then `steps` steps on each seed."""
+    import gymnasium as gym
+
+    out = {}
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        env = gym.make(env_id, scenario="train", **kwargs)
+        for label, action in MODES.items():
+            a = np.array(action, np.float32)
+            env.reset(seed=3)
+            env.step(a)
+            n, exact, t_step, t_reset = 0, 0, 0.0, 0.0
+            for seed in seeds:
+                t0 = time.process_time()
+                env.reset(seed=seed)
+                t_reset += time.process_time() - t0
+                for _ in range(steps):
+                    t0 = time.process_time()
+                    exact += env.step(a)[4]["exact_strokes"]
+                    t_step += time.process_time() - t0
+                    n += 1
+            # the acceptance's rate counts the resets' CPU time too: both are given
+            out[label] = {"env_steps_per_cpu_s": n / t_step, "with_resets_env_steps_per_cpu_s": n / (t_step + t_reset),
+                          "reset_cpu_ms": 1e3 * t_reset / len(seeds), "exact_strokes_per_step": exact / n}
+        env.close()
+    return out
+
+
+def vector_rates(env_id: str, sizes: tuple = (1, 8, 32), steps: int = 2, **kwargs) -> dict:
+    """The native vector env at full speed: env steps/s (wall) over `steps` steps after a reset and one step."""
+    import gymnasium as gym
+
+    from ..envs.vector import default_threads
+
+    out = {"threads": default_threads()}
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        for n in sizes:
+            venv = gym.make_vec(env_id, num_envs=n, vectorization_mode="vector_entry_point", **kwargs)
+            a = np.tile(np.float32(MODES["full_speed"]), (n, 1))
+            venv.reset(seed=0)
+            venv.step(a)
+            t, c = time.perf_counter(), time.process_time()
+            for _ in range(steps):
+                venv.step(a)
+            wall, cpu = time.perf_counter() - t, time.process_time() - c
+            out[f"n{n}"] = {"env_steps_per_s": n * steps / wall, "env_steps_per_cpu_s": n * steps / cpu,
+                            "cpu_per_wall": cpu / wall}
+            venv.close()
+    return out
+
+
+def speed_figures(quick: bool) -> dict:
+    steps = 6 if quick else 12
+    out: dict = {"env_per_core": {}}
+    for env_id in task_env_ids():
+        out["env_per_core"][env_id] = env_rates(env_id, steps)
+    out["env_per_core"]["srenv/SuckerRod-v1 fast_stepping"] = env_rates("srenv/SuckerRod-v1", steps,
+                                                                        fast_stepping=True)
+    out["vector_env"] = {"srenv/SuckerRod-v1": vector_rates("srenv/SuckerRod-v1", steps=1 if quick else 3)}
+    return out

@@ -1,0 +1,133 @@
+"""``srenv classify CARD.csv|DIR [--config WELL] [--json] [--model M.npz]``: name the pump condition of surface cards.
+
+A card is a CSV with the columns ``polished_rod_position_m,polished_rod_load_n`` (one stroke, equally spaced
+in time, any units: the classifier normalises both) or srenv's own simulate CSV (``t_s`` and those columns;
+its last stroke is taken). A headerless two-column file is read as position, load. Given a directory,
+every ``*.csv`` in it is classified (sorted by name). Output: one line per card (``--json``: a JSON object
+with ``file``, ``label`` and ``probabilities`` of all twelve labels). Every card is read and checked before
+any answer: an unreadable or degenerate card, or a model file that is not a classifier's data, prints
+one line and exits 2.
+"""
+
+from __future__ import annotations
+
+import argparse
+import csv
+import json
+from pathlib import Path
+
+import numpy as np
+
+MAX_CARD_BYTES = 64 * 1024 * 1024
+MAX_FILES = 100_000
+POS, LOAD = "polished_rod_position_m", "polished_rod_load_n"
+BOTTOM_BAND = 0.02  # share of the stroke: samples this close to the lowest position are at the bottom
+
+
+def add_parser(sub) -> None:
+    c = sub.add_parser("classify", help="name the pump condition of surface cards (CSV or a directory)")
+    c.add_argument("path", help="a card CSV or a directory of *.csv")
+    c.add_argument("--config", help="the well's config (checked; the shipped model reads the card alone)")
+    c.add_argument("--json", action="store_true", help="one JSON line per card")
+    c.add_argument("--model", help="model file (default: the shipped srenv/models/classifier.npz)")
+    c.set_defaults(func=main)
+
+
+def _bad(path: str | Path, what: str):
+    from ..errors import ConfigError
+
+    return ConfigError("card", str(path), what)
+
+
+def last_stroke(t: np.ndarray, x: np.ndarray) -> slice:
+    """The last full stroke of a multi-stroke record: between the last two visits to the bottom."""
+    lo, rng = float(x.min()), float(x.max() - x.min())
+    at_bottom = x <= lo + BOTTOM_BAND * rng
+    starts = np.flatnonzero(at_bottom & ~np.r_[False, at_bottom[:-1]])
+    if len(starts) < 2:
+        return slice(0, len(x))
+    return slice(int(starts[-2]), int(starts[-1]) + 1)
+
+
+def read_card(path: Path) -> tuple[np.ndarray, np.ndarray]:
+    """(position, load) of one card file (data only)."""
+    if path.is_symlink() or not path.is_file():
+        raise _bad(path, "a regular CSV file")
+    if path.stat().st_size > MAX_CARD_BYTES:
+        raise _bad(path, f"a card file under {MAX_CARD_BYTES // 2**20} MiB")
+    try:
+        with open(path, newline="", encoding="utf-8") as fh:
+            rows = [r for r in csv.reader(fh) if r and any(c.strip() for c in r)]
+    except (OSError, UnicodeDecodeError, csv.Error) as exc:
+        raise _bad(path, f"a readable UTF-8 CSV ({exc.__class__.__name__})") from None
+    if not rows:
+        raise _bad(path, f"a CSV with columns {POS},{LOAD} (the file is empty)")
+    head = [c.strip() for c in rows[0]]
+    try:
+        [float(c) for c in head]
+        names, body = None, rows
+    except ValueError:
+        names, body = head, rows[1:]
+    try:
+        data = np.array([[float(c) for c in r] for r in body], dtype=np.float64)
+    except ValueError:
+        raise _bad(path, "numbers in every row below the header") from None
+    if data.ndim != 2 or len(data) == 0:
+        raise _bad(path, "rows of equal length with numbers")
+    if names is None:
+        if data.shape[1] != 2:
+            raise _bad(path, f"a header {POS},{LOAD} (or exactly two columns)")
+        return data[:, 0], data[:, 1]
+    if POS not in names or LOAD not in names or len(names) != data.shape[1]:
+        raise _bad(path, f"a header with columns {POS} and {LOAD}")
+    x, y = data[:, names.index(POS)], data[:, names.index(LOAD)]
+    if "t_s" in names and len(x) > 2:
+        s = last_stroke(data[:, names.index("t_s")], x)
+        x, y = x[s], y[s]
+    return x, y
+
+
+def card_files(path: str) -> list[Path]:
+    p = Path(path)
+    if p.is_dir():
+        files = sorted(q for q in p.glob("*.csv"))
+        if not files:
+            raise _bad(path, "a directory with *.csv cards (none found)")
+        if len(files) > MAX_FILES:
+            raise _bad(path, f"at most {MAX_FILES} cards in a directory")
+        return files
+    if not p.exists():
+        raise _bad(path, "an existing CSV file or directory")
+    return [p]
+
+
+def main(args: argparse.Namespace) -> int:
+    from ..analysis.card_classifier import DEFAULT_MODEL, BadModel, CardClassifier
+    from ..analysis.card_shape import BadCard, features
+    from ..errors import ConfigError
+
+    if args.config:
+        from ..config import load_config
+
+        load_config(args.config)
+    files = card_files(args.path)
+    try:
+        clf = CardClassifier.load(args.model or DEFAULT_MODEL)
+    except BadModel as exc:
+        raise ConfigError("--model", args.model or str(DEFAULT_MODEL), f"a classifier's data ({exc})") from None
+    rows = []
+    for f in files:
+        x, y = read_card(f)
+        try:
+            rows.append(features(x, y))
+        except BadCard as exc:
+            raise _bad(f, f"a readable card ({exc})") from None
+    proba = clf.proba_features(np.array(rows))
+    for f, p in zip(files, proba):
+        label = clf.labels[int(np.argmax(p))]
+        if args.json:
+            print(json.dumps({"file": str(f), "label": label,
+                              "probabilities": {k: round(float(v), 6) for k, v in zip(clf.labels, p)}}))
+        else:
+            print(f"{f}\t{label}\t{float(p.max()):.3f}")
+    return 0

@@ -1,0 +1,98 @@
+"""The error of a stepping option against simulating every stroke at the configured time step.
+
+Two envs of the same task, seeded alike, take the same actions: the reference simulates every stroke of every
+interval exactly (``IntervalRunner.run(..., fast_forward=False)``), the other steps as configured (v1's default,
+or ``fast_stepping=True``). Per episode: production (the sum of the intervals' liquid), the largest PPRL, the
+return and every reward term summed over the episode, each as a relative error against the reference
+(docs/speed.md). ``scripts/stepping_error.py`` prints the table; tests/test_speed.py checks a sample.
+"""
+
+from __future__ import annotations
+
+import functools
+import math
+
+import numpy as np
+
+POLICIES = ("full_speed", "vsd_minimum", "hold_and_change")
+
+
+def actions(policy: str, steps: int, seed: int) -> np.ndarray:
+    """The action sequence of a test policy: constant at full speed, constant at the VSD minimum (a0 = -0.6,
+    as the acceptance's rate check), or a setpoint held for 6 intervals at a time (a controller's pattern)."""
+    if policy == "full_speed":
+        return np.tile(np.float32([1.0, 1.0]), (steps, 1))
+    if policy == "vsd_minimum":
+        return np.tile(np.float32([-0.6, 1.0]), (steps, 1))
+    if policy == "hold_and_change":
+        rng = np.random.default_rng(seed)
+        held = rng.uniform(-0.7, 1.0, ((steps + 5) // 6, 2)).astype(np.float32)
+        return np.repeat(held, 6, axis=0)[:steps]
+    raise ValueError(f"policy = {policy!r}: expected one of {', '.join(POLICIES)}")
+
+
+def episode(env, seed: int, acts: np.ndarray) -> dict:
+    """Sums over one episode of the figures compared (stops early if the episode ends)."""
+    from ..task.economics import REWARD_TERMS
+
+    env.reset(seed=seed)
+    out = {"production_m3": 0.0, "pprl_max_n": 0.0, "return": 0.0, "exact_strokes": 0, "steps": 0}
+    out.update({k: 0.0 for k in REWARD_TERMS})
+    for a in acts:
+        _, rew, term, trunc, info = env.step(a)
+        out["production_m3"] += info["production_m3_day"] * env.unwrapped._result.duration_s / 86400.0
+        out["pprl_max_n"] = max(out["pprl_max_n"], info["pprl_n"])
+        out["return"] += rew
+        out["exact_strokes"] += info["exact_strokes"]
+        out["steps"] += 1
+        for k in REWARD_TERMS:
+            out[k] += info[k]
+        if term or trunc:
+            break
+    return out
+
+
+def relative_errors(ref: dict, got: dict) -> dict:
+    """|got - ref| / |ref| per figure; a reward term smaller than 0.1 % of the episode's summed |terms| is
+    compared against that sum instead (a term near zero has no meaningful relative error)."""
+    from ..task.economics import REWARD_TERMS
+
+    scale = 1e-3 * sum(abs(ref[k]) for k in REWARD_TERMS)
+    keys = ("production_m3", "pprl_max_n", "return", *REWARD_TERMS)
+    return {k: abs(got[k] - ref[k]) / max(abs(ref[k]), scale, 1e-12) for k in keys}
+
+
+def compare(policy: str, seed: int, hours: float, scenario: str = "test", interval_s: float = 300.0,
+            options: dict | None = None) -> dict:
+    """One episode of `hours` on well `seed` of `scenario`: each of ``options`` (a label -> env kwargs; default
+    v1 as it is and v1 with fast_stepping=True) against every stroke simulated exactly."""
+    from ..envs.sucker_rod_v1 import SuckerRodV1Env
+    from ..task.interval import IntervalRunner
+
+    options = {"v1": {}, "fast_stepping": {"fast_stepping": True}} if options is None else options
+    steps = max(1, math.ceil(hours * 3600.0 / interval_s - 1e-9))
+    acts = actions(policy, steps, seed)
+    ref_env = SuckerRodV1Env(scenario=scenario, episode_hours=hours, interval_s=interval_s)
+    ref = _episode_every_stroke(ref_env, seed, acts, functools.partial(IntervalRunner.run, fast_forward=False))
+    out = {"policy": policy, "seed": seed, "hours": hours, "reference": ref}
+    for label, kw in options.items():
+        got = episode(SuckerRodV1Env(scenario=scenario, episode_hours=hours, interval_s=interval_s, **kw), seed,
+                      acts)
+        out[label] = {"figures": got, "relative_error": relative_errors(ref, got)}
+    return out
+
+
+def _episode_every_stroke(env, seed: int, acts: np.ndarray, run) -> dict:
+    """episode() with the env's interval runner simulating every stroke."""
+    reset = env.reset
+
+    def reset_every_stroke(**kw):
+        obs, info = reset(**kw)
+        env.runner.run = functools.partial(run, env.runner)
+        return obs, info
+
+    env.reset = reset_every_stroke
+    try:
+        return episode(env, seed, acts)
+    finally:
+        env.reset = reset

@@ -1,0 +1,160 @@
+"""Train the condition classifier on simulated cards only (docs/conditions.md).
+
+    python -m srenv.tools.train_classifier --cards DIR [DIR ...] --out srenv/models/classifier.npz \
+        [--report docs/classifier_report.json] [--epochs 30] [--seed 0] [--candidates ...] [--compare M.npz ...]
+
+Reads the card sets written by ``srenv cards`` (their ``train`` split to fit, ``validation`` to choose the
+model; the ``test`` split is scored once at the end, for the docs), fits each candidate of CANDIDATES on
+AUG_COPIES augmented versions of every training card (srenv.analysis.card_augment), picks the one with the best
+accuracy on augmented validation cards, and writes its weights as data (NPZ, no pickle). No real card is
+read here. Needs torch (a training-time dependency; inference is numpy only).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+from pathlib import Path
+
+import numpy as np
+
+from ..analysis.card_augment import augment
+from ..analysis.card_shape import BadCard, features
+from ..physics.conditions import LABELS
+from ..task.card_set import load_cards
+
+# name -> (hidden widths, augmented training); chosen on augmented validation accuracy
+CANDIDATES = {"mlp_aug": ((128, 128), True), "mlp_clean": ((128, 128), False), "linear_aug": ((), True),
+              "mlp_wide_aug": ((256, 256), True)}
+VALIDATION_DRAWS = 3  # augmented copies of each validation card
+AUG_COPIES = 6  # augmented copies of each training card (the training pool)
+BATCH = 512
+
+
+def load_sets(dirs: list[str]) -> dict[str, np.ndarray]:
+    sets = [load_cards(str(Path(d) / "cards.npz")) for d in dirs]
+    keys = ("polished_rod_position_m", "polished_rod_load_n", "label", "split", "well_seed")
+    return {k: np.concatenate([s[k] for s in sets]) for k in keys}
+
+
+def featurise(x: np.ndarray, y: np.ndarray, labels: np.ndarray, rng, aug: bool, draws: int = 1):
+    """Feature rows and labels (cards the representation cannot read are dropped and counted)."""
+    rows, out = [], []
+    for _ in range(draws):
+        for p, q, lab in zip(x, y, labels):
+            if aug:
+                p, q = augment(p, q, rng)
+            try:
+                rows.append(features(p, q))
+            except BadCard:
+                continue
+            out.append(lab)
+    return np.array(rows), np.array(out, dtype=np.int64)
+
+
+def fit(f0: np.ndarray, t0: np.ndarray, widths: tuple, epochs: int, seed: int) -> dict:
+    """An MLP (or linear model without hidden widths) on feature rows f0 with labels t0."""
+    import torch
+
+    torch.set_num_threads(1)  # a shared machine: one thread is faster than several contending
+    torch.manual_seed(seed)
+    mean, std = f0.mean(axis=0), f0.std(axis=0) + 1e-6
+    dims = [f0.shape[1], *widths, len(LABELS)]
+    mods = []
+    for i in range(len(dims) - 1):
+        mods.append(torch.nn.Linear(dims[i], dims[i + 1]))
+        if i < len(dims) - 2:
+            mods += [torch.nn.ReLU(), torch.nn.Dropout(0.1)]
+    net = torch.nn.Sequential(*mods)
+    opt = torch.optim.AdamW(net.parameters(), lr=3e-3, weight_decay=1e-4)
+    sched = torch.optim.lr_scheduler.CosineAnnealingLR(opt, epochs)
+    fx, ty = torch.from_numpy(((f0 - mean) / std).astype(np.float32)), torch.from_numpy(t0)
+    for _ in range(epochs):
+        net.train()
+        perm = torch.randperm(len(ty))
+        for i in range(0, len(ty), BATCH):
+            b = perm[i:i + BATCH]
+            opt.zero_grad()
+            torch.nn.functional.cross_entropy(net(fx[b]), ty[b]).backward()
+            opt.step()
+        sched.step()
+    net.eval()
+    weights = {"mean": mean, "std": std, "labels": np.array(LABELS)}
+    for i, m in enumerate(m for m in net if isinstance(m, torch.nn.Linear)):
+        weights[f"w{i}"] = m.weight.detach().double().numpy().T.copy()
+        weights[f"b{i}"] = m.bias.detach().double().numpy().copy()
+    return weights
+
+
+def evaluate(weights: dict, data: dict, idx: np.ndarray, aug: bool, seed: int) -> tuple[float, np.ndarray]:
+    from ..analysis.card_classifier import CardClassifier
+
+    clf = CardClassifier(tuple(str(s) for s in weights["labels"]), weights["mean"], weights["std"],
+                         [(weights[f"w{i}"], weights[f"b{i}"]) for i in range(8) if f"w{i}" in weights])
+    rng = np.random.default_rng(seed)
+    f, t = featurise(data["polished_rod_position_m"][idx], data["polished_rod_load_n"][idx], data["label"][idx],
+                     rng, aug, VALIDATION_DRAWS if aug else 1)
+    pred = np.argmax(clf.proba_features(f), axis=1)
+    cm = np.zeros((len(LABELS), len(LABELS)), dtype=np.int64)
+    np.add.at(cm, (t, pred), 1)
+    return float(np.mean(pred == t)), cm
+
+
+def _read_weights(path: str) -> dict:
+    with np.load(path, allow_pickle=False) as z:
+        return {k: z[k] for k in z.files}
+
+
+def write_model(path: str, weights: dict) -> None:
+    from ..task.card_set import write_npz
+
+    write_npz(path, {k: np.asarray(v) for k, v in weights.items()})
+
+
+def main(argv: list[str] | None = None) -> int:
+    ap = argparse.ArgumentParser(prog="python -m srenv.tools.train_classifier", description=__doc__.splitlines()[0])
+    ap.add_argument("--cards", nargs="+", required=True, help="directories written by `srenv cards`")
+    ap.add_argument("--out", required=True, help="model file (.npz)")
+    ap.add_argument("--report", help="JSON report: every candidate's validation accuracy, the test confusion")
+    ap.add_argument("--epochs", type=int, default=30)
+    ap.add_argument("--seed", type=int, default=0)
+    ap.add_argument("--candidates", nargs="*", choices=sorted(CANDIDATES), default=list(CANDIDATES))
+    ap.add_argument("--compare", nargs="*", default=[], help="existing model files to score on the same "
+                    "validation cards as candidates (e.g. the shipped model)")
+    a = ap.parse_args(argv)
+    data = load_sets(a.cards)
+    split_idx = {s: np.flatnonzero(data["split"] == s) for s in ("train", "validation", "test")}
+    report: dict = {"n_cards": {s: len(i) for s, i in split_idx.items()}, "candidates": {}}
+    best, best_acc = None, -1.0
+    tr = split_idx["train"]
+    pools = {}  # AUG_COPIES augmented versions of every training card (or the clean cards), drawn once
+    for aug in {CANDIDATES[c][1] for c in a.candidates}:
+        pools[aug] = featurise(data["polished_rod_position_m"][tr], data["polished_rod_load_n"][tr],
+                               data["label"][tr], np.random.default_rng(a.seed), aug, AUG_COPIES if aug else 1)
+    models = {name: (lambda widths=widths, aug=aug: fit(*pools[aug], widths, a.epochs, a.seed))
+              for name, (widths, aug) in CANDIDATES.items() if name in a.candidates}
+    models.update({path: (lambda path=path: _read_weights(path)) for path in a.compare})  # trained before
+    for name, make in models.items():
+        w = make()
+        acc_aug, _ = evaluate(w, data, split_idx["validation"], True, a.seed + 1)
+        acc_clean, _ = evaluate(w, data, split_idx["validation"], False, a.seed + 1)
+        report["candidates"][name] = {"validation_accuracy_augmented": acc_aug,
+                                      "validation_accuracy_clean": acc_clean}
+        print(json.dumps({name: report["candidates"][name]}), file=sys.stderr)
+        if acc_aug > best_acc:
+            best, best_acc, report["chosen"] = w, acc_aug, name
+    for aug in (True, False):
+        acc, cm = evaluate(best, data, split_idx["test"], aug, a.seed + 2)
+        key = "augmented" if aug else "clean"
+        report[f"test_accuracy_{key}"], report[f"test_confusion_{key}"] = acc, cm.tolist()
+    report["labels"] = list(LABELS)
+    write_model(a.out, best)
+    if a.report:
+        Path(a.report).write_text(json.dumps(report, indent=1) + "\n")
+    print(json.dumps({k: report[k] for k in ("chosen", "test_accuracy_augmented", "test_accuracy_clean")}))
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,108 @@
+"""Issue 25 (speed): the floor program is the linear Newmark step; the native vector env equals N single envs and
+trains under SB3; the fast stepping option stays off in v1 and stays close to simulating every stroke."""
+
+from __future__ import annotations
+
+import warnings
+
+import gymnasium as gym
+import numpy as np
+import pytest
+
+import srenv  # noqa: F401 - registers the envs
+from srenv.config import load_config
+from srenv.envs.sucker_rod_v1 import SuckerRodV1Env
+from srenv.envs.vector import KernelVectorEnv, sb3_vec_env
+from srenv.simulation.simulator import Simulator
+from srenv.tools.bench_kernel import FloorRun
+from srenv.tools.stepping_error import compare
+
+SHORT = {"episode_hours": 0.25}  # 3 five-minute intervals: episodes end (and autoreset) inside a short test
+
+
+def test_floor_program_is_the_kernels_linear_step() -> None:
+    """Same mesh, time step and top motion: the floor's linear trajectory equals the kernel's linear path."""
+    cfg = load_config("paper_fig3_vertical")
+    lin = Simulator(cfg)
+    lin.linear_reference = True
+    floor = FloorRun(lin)
+    u0 = lin.u.copy()
+    lin.run_velocity(floor.va, floor.dt, record=False, start_velocity_m_s=0.0, start_acceleration_m_s2=0.0)
+    floor.stroke()
+    u, v = floor.state[0], floor.state[1]
+    assert np.max(np.abs(u - u0)) > 1e-3  # the string moved
+    np.testing.assert_allclose(u, lin.u, rtol=0, atol=1e-12 * np.max(np.abs(u)))
+    np.testing.assert_allclose(v, lin.v, rtol=0, atol=1e-9 * np.max(np.abs(v)))
+
+
+def test_vector_env_is_registered_and_declares_its_autoreset_mode() -> None:
+    venv = gym.make_vec("srenv/SuckerRod-v1", num_envs=2, vectorization_mode="vector_entry_point", **SHORT)
+    try:
+        assert isinstance(venv, KernelVectorEnv)
+        assert venv.metadata["autoreset_mode"] == gym.vector.AutoresetMode.NEXT_STEP
+        assert venv.observation_space.shape == (2, *venv.single_observation_space.shape)
+    finally:
+        venv.close()
+
+
+def test_vector_env_matches_single_envs_through_an_autoreset() -> None:
+    n, steps = 3, 5
+    venv = KernelVectorEnv(SuckerRodV1Env, n, threads=2, **SHORT)
+    singles = [SuckerRodV1Env(**SHORT) for _ in range(n)]
+    rng = np.random.default_rng(0)
+    actions = rng.uniform(-1, 1, (steps, n, 2)).astype(np.float32)
+    try:
+        obs, _ = venv.reset(seed=40)
+        wells = {e.well.well_id for e in venv.envs}
+        assert len(wells) == n  # different wells, different meshes
+        done = np.zeros(n, bool)
+        ref = [e.reset(seed=40 + i)[0] for i, e in enumerate(singles)]
+        np.testing.assert_array_equal(obs, np.stack(ref))
+        for k in range(steps):
+            obs, rew, term, trunc, _ = venv.step(actions[k])
+            for i, e in enumerate(singles):
+                if done[i]:
+                    o, r, t, u = e.reset()[0], 0.0, False, False
+                else:
+                    o, r, t, u, _ = e.step(actions[k, i])
+                np.testing.assert_array_equal(obs[i], o)
+                assert rew[i] == r and term[i] == t and trunc[i] == u
+            done = term | trunc
+        assert done.any() or k == steps - 1
+    finally:
+        venv.close()
+
+
+def test_sb3_adapter_trains_ppo_briefly() -> None:
+    sb3 = pytest.importorskip("stable_baselines3")
+    venv = sb3_vec_env(KernelVectorEnv(SuckerRodV1Env, 2, threads=2, **SHORT))
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        model = sb3.PPO("MlpPolicy", venv, n_steps=4, batch_size=8, n_epochs=1, seed=0)
+        model.learn(total_timesteps=8)
+    assert model.num_timesteps >= 8
+    venv.close()
+
+
+def test_fast_stepping_is_off_in_v1_and_reuses_strokes_when_on() -> None:
+    a = np.array([1.0, 1.0], np.float32)
+    plain, fast = SuckerRodV1Env(episode_hours=1.0), SuckerRodV1Env(episode_hours=1.0, fast_stepping=True)
+    plain.reset(seed=12)
+    fast.reset(seed=12)
+    assert not plain.runner.reuse_periodic
+    ex_plain = ex_fast = 0
+    for _ in range(6):
+        ex_plain += plain.step(a)[4]["exact_strokes"]
+        ex_fast += fast.step(a)[4]["exact_strokes"]
+    assert ex_fast < ex_plain
+
+
+def test_fast_stepping_error_on_a_steady_sample() -> None:
+    """A test well pumping steadily at the VSD minimum for half an hour: production, PPRL and the return within
+    0.5 % of simulating every stroke, with a fraction of the exact strokes. (Pounding wells are not within 0.5 %,
+    for v1's own fast-forward either: docs/speed.md's table.)"""
+    r = compare("vsd_minimum", 3, 0.5, options={"fast": {"fast_stepping": True}})
+    err = r["fast"]["relative_error"]
+    for key in ("production_m3", "pprl_max_n", "return"):
+        assert err[key] < 0.005, (key, err[key])
+    assert 0 < r["fast"]["figures"]["exact_strokes"] < r["reference"]["exact_strokes"] / 4

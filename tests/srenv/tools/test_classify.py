@@ -1,0 +1,132 @@
+"""srenv classify: the shipped classifier (trained on simulated cards only) on a simulated full-pump card in
+any units, on the CC0 reference cards (final test only: never used to train, tune or select), and its
+answers to bad input."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from srenv.analysis.card_classifier import CardClassifier
+from srenv.analysis.condition_card import condition_config, simulate_card
+from srenv.config import load_config
+from srenv.physics.conditions import LABELS
+from srenv.tools.cli import main
+
+DATA = Path(__file__).resolve().parents[2] / "data" / "plate_reference_cards.json"
+# reference card -> srenv label; plunger_out_of_barrel and sand (not in this copy) name conditions outside
+# the twelve labels, so no answer of the classifier can be right for them
+REFERENCE = {"normal": "full", "insufficient_supply_fluid_pound": "fluid_pound",
+             "gas_interference": "gas_interference", "rod_part": "parted_rods", "tagging_up": "tagging_up",
+             "tagging_down": "tagging_down", "travelling_valve_leak": "travelling_valve_leak",
+             "standing_valve_leak": "standing_valve_leak"}
+LEFT_OUT = {"plunger_out_of_barrel": "no such label among the twelve", "sand": "no such label among the twelve"}
+# measured once with the shipped model, after training and selection on simulated wells (docs/conditions.md):
+# the reference cards the classifier gets wrong are kept as strict expected failures, a loss reported as such
+MISSED: dict[str, str] = {
+    "normal": "measured: classified both_valves_leak (0.91)",
+    "gas_interference": "measured: classified fluid_pound (1.00)",
+    "rod_part": "measured: classified both_valves_leak (1.00)",
+}
+
+
+def write_card(path: Path, x, y) -> None:
+    np.savetxt(path, np.c_[x, y], delimiter=",", header="polished_rod_position_m,polished_rod_load_n",
+               comments="")
+
+
+def classify_dir(d: Path, capsys) -> dict[str, dict]:
+    assert main(["classify", str(d), "--json"]) == 0
+    out = {}
+    for line in capsys.readouterr().out.splitlines():
+        row = json.loads(line)
+        out[Path(row["file"]).name] = row
+    return out
+
+
+def test_full_card_in_si_and_field_units(tmp_path, capsys) -> None:
+    card = simulate_card(condition_config(load_config("paper_fig3_vertical"), "full", 0.0))
+    idx = np.linspace(0, len(card.t_s) - 1, 220).astype(int)
+    x, y = card.polished_rod_position_m[idx], card.polished_rod_load_n[idx]
+    write_card(tmp_path / "si.csv", x, y)
+    write_card(tmp_path / "field.csv", x / 0.0254, y / 4.448)
+    got = classify_dir(tmp_path, capsys)
+    assert {k: v["label"] for k, v in got.items()} == {"si.csv": "full", "field.csv": "full"}
+    for row in got.values():
+        assert set(row["probabilities"]) == set(LABELS)
+        assert sum(row["probabilities"].values()) == pytest.approx(1.0, abs=1e-4)
+
+
+@pytest.mark.parametrize("name", sorted(REFERENCE))
+def test_reference_cards(name, tmp_path, capsys, request) -> None:
+    if name in MISSED:
+        request.applymarker(pytest.mark.xfail(strict=True, reason=MISSED[name]))
+    card = json.loads(DATA.read_text())["cards"][name]
+    write_card(tmp_path / f"{name}.csv", card["position"], card["load"])
+    got = classify_dir(tmp_path, capsys)
+    assert got[f"{name}.csv"]["label"] == REFERENCE[name]
+
+
+def test_reference_file_names_its_source_and_licence() -> None:
+    d = json.loads(DATA.read_text())
+    assert d["_provenance"]["doi"] == "10.17632/hnfwm9mjs6.1" and "CC0" in d["_provenance"]["licence"]
+    assert set(d["cards"]) == set(REFERENCE) | {"plunger_out_of_barrel"}
+
+
+@pytest.mark.parametrize("content, what", [
+    ("", "empty"),
+    ("polished_rod_position_m,polished_rod_load_n\n1,2\n3,x\n", "numbers"),
+    ("a,b\n1,2\n", "header"),
+    ("polished_rod_position_m,polished_rod_load_n\n" + "1,2\n" * 20, "does not vary"),
+    ("polished_rod_position_m,polished_rod_load_n\n1,2\n2,3\n", "at least"),
+])
+def test_bad_cards_exit_2_in_one_line(tmp_path, capsys, content, what) -> None:
+    (tmp_path / "c.csv").write_text(content)
+    assert main(["classify", str(tmp_path / "c.csv")]) == 2
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1 and what in err
+
+
+def test_bad_model_exits_2(tmp_path, capsys) -> None:
+    card = tmp_path / "c.csv"
+    write_card(card, np.sin(np.linspace(0, 2 * np.pi, 50)), np.cos(np.linspace(0, 2 * np.pi, 50)) + 3)
+    (tmp_path / "m.npz").write_text("import os; os.system('echo pwned')\n")
+    pickled = tmp_path / "p.npz"
+    np.savez(pickled, labels=np.array([object()], dtype=object))
+    for model in (tmp_path / "m.npz", pickled, tmp_path / "missing.npz"):
+        assert main(["classify", str(card), "--model", str(model)]) == 2
+        err = capsys.readouterr().err.strip()
+        assert len(err.splitlines()) == 1 and "--model" in err
+
+
+def test_shipped_model_is_data() -> None:
+    clf = CardClassifier.load()
+    assert clf.labels == LABELS
+
+
+def test_srenv_simulate_csv_is_a_card(tmp_path, capsys) -> None:
+    """srenv's own simulate CSV (several strokes, more columns): its last stroke is classified."""
+    out = tmp_path / "run.csv"
+    assert main(["simulate", "paper_fig3_vertical", "--strokes", "3", "--out", str(out)]) == 0
+    capsys.readouterr()
+    assert main(["classify", str(out), "--json"]) == 0
+    row = json.loads(capsys.readouterr().out.splitlines()[0])
+    assert row["label"] == "full" and row["file"] == str(out)
+
+
+def test_a_card_stored_backwards_reads_the_same() -> None:
+    """Field exports are sometimes stored with time reversed: the card's positive work tells the order."""
+    from srenv.analysis.card_shape import features
+
+    card = simulate_card(condition_config(load_config("paper_fig3_vertical"), "tagging_down", 0.7))
+    x, y = card.polished_rod_position_m, card.polished_rod_load_n
+    np.testing.assert_allclose(features(x[::-1], y[::-1]), features(x, y), atol=1e-9)
+
+
+def test_the_wheel_ships_the_model(wheel) -> None:
+    import zipfile
+
+    assert "srenv/models/classifier.npz" in zipfile.ZipFile(wheel).namelist()
