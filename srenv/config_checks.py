@@ -40,6 +40,9 @@ def _check_consistency(cfg: WellConfig) -> None:
         if p.gas_polytropic_exponent < 1:
             raise ConfigError("pump.gas_polytropic_exponent", p.gas_polytropic_exponent,
                               "an exponent >= 1 (1 isothermal, 1.3 adiabatic natural gas)")
+    if p.liquid_compressibility_per_pa > 0 and p.law != "constant":
+        raise ConfigError("pump.liquid_compressibility_per_pa", p.liquid_compressibility_per_pa,
+                          "0 with pump.law 'nonmonotone' (the liquid spring carries the constant law only)")
     tb = cfg.tubing
     if not tb.anchored:
         if tb.inner_diameter_mm >= tb.outer_diameter_mm:

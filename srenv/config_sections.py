@@ -149,6 +149,11 @@ class PumpConfig:
                          doc="predictive input: liquid share of the plunger's displacement; < 1 is free gas at the "
                              "intake whose compression takes 1 - fillage of the stroke at pump.intake_pressure_pa "
                              "(physics/pump.py); 1 = full (docs/realism.md)")
+    liquid_compressibility_per_pa: float = num(
+        0.0, unit="1/Pa", check="nonneg", hi=1.0e-6,
+        doc="gradual load transfer: the pumped liquid's compressibility (water 4.5e-10); the chamber's liquid "
+            "(and free gas, and unanchored tubing) is a spring in series with the valve law, so the load "
+            "transfers over a plunger travel instead of at once; 0 = incompressible (docs/realism.md)")
 
 
 @dataclass(frozen=True)

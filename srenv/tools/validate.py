@@ -27,7 +27,7 @@ import tempfile
 import numpy as np
 import yaml
 
-from ..errors import ConfigError
+from ..errors import ConfigError, NumericFailure
 from ..outputs import atomic_write, check_output_path
 
 DEFAULT_STROKES = 4
@@ -168,14 +168,15 @@ def cmd_validate(args) -> int:
     check_output_path("--plot", args.plot, (".png",))
     rec = read_record(args.record, args.config, args.reverse)
     out, parts = validate(rec, list(args.fit or []), args.strokes, args.load_convention)
-    from .cli import check_finite
-
-    check_finite({}, out)  # a figure that is not finite is a failure, not a result
+    try:  # a figure that is not finite is a failure, not a result (and NaN is not JSON)
+        line = json.dumps(out, default=float, allow_nan=False)
+    except ValueError:
+        raise NumericFailure("validate", "a figure is not finite; check the record's magnitudes") from None
     if args.plot:
         from .validate_plot import save_validation_plot
 
         atomic_write(args.plot, lambda tmp: save_validation_plot(*parts, tmp))
-    print(json.dumps(out, default=float, allow_nan=False))
+    print(line)
     return 0
 
 
