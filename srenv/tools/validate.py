@@ -86,7 +86,7 @@ def _fit(cfg_dict: dict, rec, params: list[str], strokes: int, work_dir: str) ->
 
 def compare(rec, sim, result, pump_card, convention: str) -> dict:
     """The JSON figures of one prediction and one diagnosis against the record."""
-    from ..analysis.card_compare import card_rms, harmonic_shares, resample_stroke
+    from ..analysis.card_compare import card_difference, card_rms, harmonic_shares, resample_stroke
 
     tr = result.trace
     x, f = tr["polished_rod_position_m"], tr["polished_rod_load_n"]
@@ -112,6 +112,11 @@ def compare(rec, sim, result, pump_card, convention: str) -> dict:
         rng = float(np.ptp(rec.pump_load_n))
         out["pump_card_rms_pct_of_range"] = 100.0 * card_rms(rec.pump_position_m, rec.pump_load_n,
                                                              pump_card.pump_position_m, fp, align_bottom=True) / rng
+        # where the difference sits: a constant (weight, load convention) moves both strokes alike, a card
+        # height (damping, fluid load) moves them apart (docs/realism.md)
+        d = card_difference(rec.pump_position_m, rec.pump_load_n, pump_card.pump_position_m, fp, align_bottom=True)
+        half = d.size // 2
+        out["pump_card_offset_n"] = {"upstroke": float(d[:half].mean()), "downstroke": float(d[half:].mean())}
         out["pump_card_convention"] = convention
     return out
 
