@@ -23,6 +23,7 @@ WELLS = ("11708328", "7699227")
 BASELINE = {"damping.damping_factor": 0.05, "damping.stiffness_proportional_s": 0.0,
             "pump.liquid_compressibility_per_pa": 0.0}
 RIGID_TRANSFER = {"pump.liquid_compressibility_per_pa": 0.0}  # the realistic model with the instant transfer
+UNANCHORED = {"tubing.anchored": False}  # what-if: the records do not say whether the tubing is anchored
 VERTICAL = {"survey.stations": []}  # the string's weight taken as if vertical (the vendor's diagnosis?)
 FIGURES = ("pprl_error_pct", "mprl_error_pct", "card_rms_pct_of_pprl", "pump_card_rms_pct_of_range",
            "pump_card_offset_n", "spectrum")
@@ -111,6 +112,7 @@ def main() -> None:
             "realistic": {key: real[key] for key in (*FIGURES, "pump_state", "model")},
             "rigid_transfer": {key: validate(rec, [], 4, "effective", RIGID_TRANSFER)[0][key] for key in FIGURES},
             "vertical_weight": {key: validate(rec, [], 4, "effective", VERTICAL)[0][key] for key in FIGURES},
+            "unanchored_tubing": {key: validate(rec, [], 4, "effective", UNANCHORED)[0][key] for key in FIGURES},
             # the baseline's share above h20 seen through a load cell's 2nd-order low-pass at fc, over the
             # measured share (the card's sampling, 187-200 per stroke, is above h90: it removes nothing below)
             "baseline_above_h20_ratio_through_lowpass": {

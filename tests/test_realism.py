@@ -214,7 +214,7 @@ def test_validate_figures_held_today(figures, well):
     if well == "11708328":  # srenv's diagnosis against the vendor's pump card, in its effective convention
         assert d["pump_card_rms_pct_of_range"] <= 3.0
         # the gradual load transfer (the liquid's compressibility, from the water cut) takes 11708328's
-        # harmonics 4-20 from 2.34x to 2.17x the measured share and its card from 7.4 to 7.1 % of PPRL
+        # harmonics 4-20 from 2.34x to 2.20x the measured share and its card from 7.4 to 7.1 % of PPRL
         assert d["spectrum"]["ratio_h4_20"] <= 2.25 and d["card_rms_pct_of_pprl"] <= 7.2
     else:
         assert d["spectrum"]["ratio_h4_20"] <= 1.3
@@ -224,7 +224,7 @@ def test_validate_figures_held_today(figures, well):
         assert off["downstroke"] - off["upstroke"] > 1000.0 and 0.0 < off["upstroke"] < 1500.0
 
 
-@pytest.mark.xfail(strict=True, reason="issue 27's goal, not reached yet: MPRL 11.5 % low on 11708328 and 8.7 % "
+@pytest.mark.xfail(strict=True, reason="issue 27's goal, not reached yet: MPRL 11.6 % low on 11708328 and 7.7 % "
                    "high on 7699227, 11708328's harmonics 4-20 2.2x the measured share, the cards 7-9 % of PPRL "
                    "RMS, 7699227's diagnosed pump card 8.5 % of range (docs/realism.md, 'What is still off')")
 @pytest.mark.parametrize("well", WELLS)

@@ -109,6 +109,8 @@ class PumpCycle:
             rec["p_d_pa"] = self.p_pump_pa + cfg.pump.discharge_overpressure_pa
             rec["p_out_pa"], rec["gas_friction_n"] = self.p_pump_pa, cfg.pump.plunger_friction_n
             rec["liq_c"] = cfg.pump.liquid_compressibility_per_pa
+            if self.tubing_stiffness_n_m > 0:  # unanchored: the barrel's travel in series with the chamber
+                rec["tub_c"] = self.gas.area_m2 ** 2 / self.tubing_stiffness_n_m
             rec["v_min_m3"] = self.gas.area_m2 * GAS_MIN_DELAY_FRACTION * self.surface.stroke_length_m(
                 cfg.surface.stroke_length_m)
         elif self.tubing_stiffness_n_m > 0:  # mode 2: a plunger area of 0 marks the tubing spring

@@ -23,8 +23,9 @@ GAS_FIELDS = [("gas_mode", "i8"), ("gas_on", "i8"), ("u0_m", "f8"), ("gas_m3", "
               ("liquid_m3", "f8"), ("k", "f8"), ("p_in_pa", "f8"), ("p_d_pa", "f8"), ("area_m2", "f8"),
               ("p_out_pa", "f8"), ("gas_friction_n", "f8"), ("phi", "f8"), ("v_min_m3", "f8"),
               ("lin_dk", "f8"), ("lin_shift_n", "f8"), ("u_tilde_m", "f8"),
-              # the liquid's compressibility (1/Pa, pump.liquid_compressibility_per_pa; 0: incompressible)
-              ("liq_c", "f8")]
+              # the liquid's compressibility (1/Pa, pump.liquid_compressibility_per_pa; 0: incompressible) and
+              # unanchored tubing's compliance seen by the chamber, A_pl^2 / k_t (m^3/Pa; 0: anchored)
+              ("liq_c", "f8"), ("tub_c", "f8")]
 
 
 @njit(cache=True, inline="always")
@@ -35,10 +36,10 @@ def gas_active(params):
     p = params[0]
     if p.gas_mode == 2:
         return True
-    if p.gas_mode == 1 and (p.gas_m3 > 0.0 or p.liq_c > 0.0):
+    if p.gas_mode == 1 and (p.gas_m3 > 0.0 or p.liq_c + p.tub_c > 0.0):
         ik = 1.0 / p.k
         v_in = p.gas_m3 * (p.p0 / p.p_in_pa) ** ik
-        squeeze = p.liquid_m3 * p.liq_c * (p.p_d_pa - p.p_in_pa) if p.liq_c > 0.0 else 0.0
+        squeeze = (p.liquid_m3 * p.liq_c + p.tub_c) * (p.p_d_pa - p.p_in_pa) if p.liq_c + p.tub_c > 0.0 else 0.0
         return v_in - p.gas_m3 * (p.p0 / p.p_d_pa) ** ik + squeeze >= p.v_min_m3
     return False
 
@@ -50,7 +51,7 @@ def spring(params, ub):
     p = params[0]
     if p.area_m2 == 0.0:
         return tubing_spring(params, ub)
-    if p.liq_c > 0.0:
+    if p.liq_c + p.tub_c > 0.0:
         return compressible_spring(params, ub)
     a = p.area_m2
     vg = p.gas_m3 - a * (ub - p.u0_m)
@@ -92,7 +93,7 @@ def valves(params, ub):
             p.p0 = min(max(c, p.lo_n), p.hi_n)
             p.u0_m = ub
         return
-    if p.liq_c > 0.0:
+    if p.liq_c + p.tub_c > 0.0:
         compressible_valves(params, ub)
         return
     a = p.area_m2
@@ -121,18 +122,19 @@ def valves(params, ub):
 
 @njit(cache=True)
 def squeeze_m3(params, pc):
-    """Volume the chamber loses from its reference state (p0, gas_m3, liquid_m3) when its pressure goes to
-    pc: the gas's polytropic change plus the liquid's compression V_l c (pc - p0)."""
+    """Plunger travel x A_pl from the chamber's reference state (p0, gas_m3, liquid_m3) to pressure pc: the
+    gas's polytropic change, the liquid's compression V_l c (pc - p0) and, unanchored, the barrel's own
+    travel as the tubing takes the load (pc - p0) A_pl on the standing valve, A_pl^2 (pc - p0) / k_t."""
     p = params[0]
     vg = p.gas_m3 * (p.p0 / pc) ** (1.0 / p.k) if p.gas_m3 > 0.0 else 0.0
-    return p.gas_m3 - vg + p.liquid_m3 * p.liq_c * (pc - p.p0)
+    return p.gas_m3 - vg + (p.liquid_m3 * p.liq_c + p.tub_c) * (pc - p.p0)
 
 
 @njit(cache=True)
 def compressible_spring(params, ub):
-    """The chamber of gas and compressible liquid: its pressure pc solves A (u_B - u0) = squeeze(pc)
-    (monotone in pc; Newton from the secant, bracketed by the valve pressures); the stiffness is the gas
-    and the liquid in series, A^2 / (V_g / (k pc) + V_l c)."""
+    """The chamber of gas and compressible liquid (and unanchored tubing): its pressure pc solves
+    A (u_B - u0) = squeeze(pc) (monotone in pc; Newton from the secant, bracketed by the valve pressures);
+    the stiffness is the three in series, A^2 / (V_g / (k pc) + V_l c + A^2 / k_t)."""
     p = params[0]
     a = p.area_m2
     swept = a * (ub - p.u0_m)
@@ -148,7 +150,7 @@ def compressible_spring(params, ub):
     comp = 1.0
     for _ in range(60):
         vg = p.gas_m3 * (p.p0 / pc) ** (1.0 / p.k) if p.gas_m3 > 0.0 else 0.0
-        comp = vg / (p.k * pc) + p.liquid_m3 * p.liq_c  # -dV/dp of the chamber at pc
+        comp = vg / (p.k * pc) + p.liquid_m3 * p.liq_c + p.tub_c  # d(squeeze)/dp at pc
         r = squeeze_m3(params, pc) - swept
         if abs(r) <= 1e-12 * a or hi - lo <= 1e-9 * p.p_d_pa:
             break
@@ -175,7 +177,8 @@ def compressible_valves(params, ub):
         if (side == 0 and swept < s) or (side == 1 and swept > s and p.gas_m3 + p.liquid_m3 > 0.0):
             vg = p.gas_m3 * (p.p0 / pv) ** (1.0 / p.k) if p.gas_m3 > 0.0 else 0.0
             vl = p.liquid_m3 * (1.0 - p.liq_c * (pv - p.p0))
-            flow = total - vg - vl  # > 0: drawn at the intake, < 0: expelled at the discharge
+            # > 0: drawn at the intake, < 0: expelled at the discharge (the barrel rests at the valve's load)
+            flow = total + p.tub_c * (pv - p.p0) - vg - vl
             if side == 0:
                 p.gas_m3 = vg + p.phi * flow
                 p.liquid_m3 = vl + (1.0 - p.phi) * flow
