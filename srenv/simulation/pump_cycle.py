@@ -58,14 +58,15 @@ class PumpCycle:
                 return fillage
             self._top_ub = ub_min
             self._rising_s = time_s - self._t_bottom
-            liquid_m = upstroke
-            if self.gas is not None:  # the gas takes its share of the displacement
-                liquid_m = upstroke * self.gas.liquid_fraction(
-                    self._intake_pa(), self.p_pump_pa + self.cfg.pump.discharge_overpressure_pa, upstroke)
-                fillage = liquid_m / upstroke
+            stroke_in_barrel = upstroke
             if self.tubing_stiffness_n_m > 0:  # the barrel rose with the plunger while the load transferred
                 stretch = (self.law.up_eq_n - self.law.down_eq_n) / self.tubing_stiffness_n_m
-                liquid_m = min(liquid_m, max(upstroke - stretch, 0.0))
+                stroke_in_barrel = max(upstroke - stretch, 0.0)
+            liquid_m = stroke_in_barrel
+            if self.gas is not None:  # the gas takes its share of the plunger's stroke in the barrel
+                liquid_m = stroke_in_barrel * self.gas.liquid_fraction(
+                    self._intake_pa(), self.p_pump_pa + self.cfg.pump.discharge_overpressure_pa, stroke_in_barrel)
+                fillage = liquid_m / max(stroke_in_barrel, 1e-12)
             if self.annulus is not None:
                 liquid_m = min(self._liquid_stroke_m, liquid_m)
                 # book what the annulus actually gave: the plan at the bottom predicted the inflow of the
