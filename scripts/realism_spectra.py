@@ -20,7 +20,13 @@ from srenv.tools.validate import validate
 
 DATA = Path(__file__).resolve().parent.parent / "tests" / "data" / "field"
 WELLS = ("11708328", "7699227")
-BASELINE = {"damping.damping_factor": 0.05, "damping.stiffness_proportional_s": 0.0}
+BASELINE = {"damping.damping_factor": 0.05, "damping.stiffness_proportional_s": 0.0,
+            "pump.liquid_compressibility_per_pa": 0.0}
+RIGID_TRANSFER = {"pump.liquid_compressibility_per_pa": 0.0}  # the realistic model with the instant transfer
+UNANCHORED = {"tubing.anchored": False}  # what-if: the records do not say whether the tubing is anchored
+VERTICAL = {"survey.stations": []}  # the string's weight taken as if vertical (the vendor's diagnosis?)
+FIGURES = ("pprl_error_pct", "mprl_error_pct", "card_rms_pct_of_pprl", "pump_card_rms_pct_of_range",
+           "pump_card_offset_n", "spectrum")
 
 
 def butter2_gain(f_hz: np.ndarray, fc_hz: float) -> np.ndarray:
@@ -53,8 +59,7 @@ def fluid_inertia(report: dict):
         rec = read_dynacard_json(DATA / f"{w}.json", auto_orient=True)
         m = fluid_column_kg(rec)
         out, (_, r, _) = validate(rec, [], 4, "effective", {"pump.fluid_column_mass_kg": m})
-        report[w]["fluid_inertia"] = {"fluid_column_mass_kg": m, **{k: out[k] for k in (
-            "pprl_error_pct", "mprl_error_pct", "card_rms_pct_of_pprl", "pump_card_rms_pct_of_range", "spectrum")}}
+        report[w]["fluid_inertia"] = {"fluid_column_mass_kg": m, **{k: out[k] for k in FIGURES}}
         if w == "7699227":
             _, (_, r0, _) = validate(rec, [], 4, "effective")
             ax.plot(rec.position_m, rec.load_n / 1e3, "k", lw=1.3, label="measured")
@@ -103,11 +108,11 @@ def main() -> None:
         axc[k].legend(fontsize=8)
         meas_above = harmonic_shares(rec.load_n)[1]
         report[w] = {
-            "baseline": {key: base[key] for key in ("pprl_error_pct", "mprl_error_pct", "card_rms_pct_of_pprl",
-                                                    "pump_card_rms_pct_of_range", "spectrum")},
-            "realistic": {key: real[key] for key in ("pprl_error_pct", "mprl_error_pct", "card_rms_pct_of_pprl",
-                                                     "pump_card_rms_pct_of_range", "spectrum", "pump_state",
-                                                     "model")},
+            "baseline": {key: base[key] for key in FIGURES},
+            "realistic": {key: real[key] for key in (*FIGURES, "pump_state", "model")},
+            "rigid_transfer": {key: validate(rec, [], 4, "effective", RIGID_TRANSFER)[0][key] for key in FIGURES},
+            "vertical_weight": {key: validate(rec, [], 4, "effective", VERTICAL)[0][key] for key in FIGURES},
+            "unanchored_tubing": {key: validate(rec, [], 4, "effective", UNANCHORED)[0][key] for key in FIGURES},
             # the baseline's share above h20 seen through a load cell's 2nd-order low-pass at fc, over the
             # measured share (the card's sampling, 187-200 per stroke, is above h90: it removes nothing below)
             "baseline_above_h20_ratio_through_lowpass": {

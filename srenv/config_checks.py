@@ -58,6 +58,9 @@ def _check_pump(cfg: WellConfig) -> None:
         if p.gas_polytropic_exponent < 1:
             raise ConfigError("pump.gas_polytropic_exponent", p.gas_polytropic_exponent,
                               "an exponent >= 1 (1 isothermal, 1.3 adiabatic natural gas)")
+    if p.liquid_compressibility_per_pa > 0 and p.law != "constant":
+        raise ConfigError("pump.liquid_compressibility_per_pa", p.liquid_compressibility_per_pa,
+                          "0 with pump.law 'nonmonotone' (the liquid spring carries the constant law only)")
 
 
 def _check_tubing(cfg: WellConfig) -> None:
@@ -70,9 +73,10 @@ def _check_tubing(cfg: WellConfig) -> None:
         if tb.anchor_depth_m >= cfg.rod_length_m:
             raise ConfigError("tubing.anchor_depth_m", tb.anchor_depth_m,
                               f"a depth in m above the pump ({cfg.rod_length_m} m)")
-        if p.intake_gas_fraction > 0 or p.intake_glr_m3_m3 > 0 or p.fillage < 1:
-            raise ConfigError("tubing.anchored", tb.anchored, "true when the intake carries free gas (the "
-                              "two chamber models are not combined)")
+        gas = p.intake_gas_fraction > 0 or p.intake_glr_m3_m3 > 0 or p.fillage < 1
+        if gas and not p.liquid_compressibility_per_pa > 0:
+            raise ConfigError("tubing.anchored", tb.anchored, "true when the intake carries free gas, unless "
+                              "pump.liquid_compressibility_per_pa > 0 (the chamber law that combines them)")
         if p.law != "constant":
             raise ConfigError("tubing.anchored", tb.anchored, "true with pump.law 'nonmonotone'")
 

@@ -168,6 +168,11 @@ class PumpConfig:
     tag_stiffness_n_m: float = num(2.0e5, unit="N/m", lo=1.0e3, hi=1.0e8,
                                    doc="contact stiffness of the pump's ends (explicit: keep k dt^2 below the "
                                    "plunger node's mass)")
+    liquid_compressibility_per_pa: float = num(
+        0.0, unit="1/Pa", check="nonneg", hi=1.0e-6,
+        doc="gradual load transfer: the pumped liquid's compressibility (water 4.5e-10); the chamber's liquid "
+            "(and free gas, and unanchored tubing) is a spring in series with the valve law, so the load "
+            "transfers over a plunger travel instead of at once; 0 = incompressible (docs/realism.md)")
 
 
 @dataclass(frozen=True)

@@ -150,6 +150,7 @@ MAX_HARMONICS = 1000       # diagnose: the march holds 2 * harmonics + 4 samples
 MAX_FIT_STROKES = 100      # fit: strokes simulated per evaluation, times up to MAX_FIT_EVALUATIONS
 MAX_FIT_EVALUATIONS = 2000  # fit: evaluations of least_squares (wall time: ~0.1-1 s each)
 MAX_SWEEP_WORKERS = 256
+MAX_CARDS = 200_000  # srenv cards: the set is held in memory: 200 000 cards x 4 arrays x 256 points x 8 B = 1.6 GB
 
 
 def _flags(*decls: Number) -> dict[str, Number]:
@@ -175,6 +176,9 @@ def _command_flags() -> dict[str, dict[str, Number]]:
         "fit": _flags(Number("--strokes", int, hi=MAX_FIT_STROKES, why="wall time per evaluation"),
                       Number("--max-evaluations", int, hi=MAX_FIT_EVALUATIONS, why="wall time")),
         "validate": _flags(Number("--strokes", int, hi=50, why="wall time (strokes from the static state)")),
+        "cards": _flags(Number("--n", int, hi=MAX_CARDS, why="memory of the set"),
+                        Number("--seed", int, lo=0, hi=2**31 - 1, lo_open=False),
+                        Number("--workers", int, hi=MAX_SWEEP_WORKERS, why="processes")),
     }
 
 

@@ -22,6 +22,7 @@ BASE_ARGV = {
     "diagnose": ["diagnose", "card.csv", "--config", FIG3, "--out", "o.csv"],
     "fit": ["fit", "card.csv", "--config", FIG3, "--param", "damping.damping_factor", "--out", "f.yaml"],
     "validate": ["validate", "card.csv", "--config", FIG3],
+    "cards": ["cards", "--n", "1", "--out", "cards_out"],
 }
 
 

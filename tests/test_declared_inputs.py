@@ -63,9 +63,11 @@ def test_every_typed_flag_is_declared() -> None:
     above cover it): srenv and agents alike."""
     from agents.cli import _key_value
     from agents.cli import build_parser as agents_parser
+    from srenv.tools.cards import _label_list  # a list of names, checked against the labels, not a number
     from srenv.tools.cli import build_parser
 
-    for table, parser, free in ((FLAGS, build_parser(), set()), (ag_inputs.FLAGS, agents_parser(), {_key_value})):
+    for table, parser, free in ((FLAGS, build_parser(), {_label_list}), (ag_inputs.FLAGS, agents_parser(),
+                                                                        {_key_value})):
         for cmd, flags in _typed_actions(parser).items():
             for flag, tp in flags.items():
                 if tp in free:

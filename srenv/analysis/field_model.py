@@ -30,6 +30,10 @@ DEFAULT_KV_TAU_S = 0.03              # Kelvin-Voigt retardation time of the stri
 MIN_INTAKE_PA = 101325.0       # a pump intake below atmospheric is read as pumped off at one atmosphere
 CLEARANCE_FRACTION = 0.05
 TUBING_ID_M = 0.062            # 2 7/8-in tubing (srenv's tubing default) where the record names none
+# isothermal compressibilities of produced water and of crude oil (3e-6 and 10e-6 1/psi, the textbook values
+# of reservoir-engineering tables; the records give neither): the chamber's liquid as a spring (docs/realism.md)
+WATER_COMPRESSIBILITY_PER_PA = 3e-6 / 6894.757293168
+OIL_COMPRESSIBILITY_PER_PA = 10e-6 / 6894.757293168
 
 
 def _qp_solver() -> str:
@@ -102,6 +106,12 @@ def pump_drag_n(rec: FieldRecord, fluid_load_n: float | None, intake_pressure_pa
     return max(0.0, 0.5 * (fluid_load_n - (discharge_pressure_pa(rec) - intake_pressure_pa) * a_pl))
 
 
+def liquid_compressibility_per_pa(rec: FieldRecord) -> float:
+    """The produced liquid's compressibility from the well test's water cut (all oil without one)."""
+    wc = (rec.water_cut or 0.0) / 100.0
+    return wc * WATER_COMPRESSIBILITY_PER_PA + (1.0 - wc) * OIL_COMPRESSIBILITY_PER_PA
+
+
 def well_config(rec: FieldRecord, card_csv: str, intake_pressure_pa: float, fillage: float = 1.0,
                 plunger_friction_n: float = 0.0, damping_factor: float = DEFAULT_DAMPING_FACTOR,
                 friction_coefficient: float = 0.0) -> dict:
@@ -116,7 +126,8 @@ def well_config(rec: FieldRecord, card_csv: str, intake_pressure_pa: float, fill
         "fluid": {"density_kg_m3": rec.fluid_density_kg_m3, "wellhead_pressure_pa": rec.tubing_pressure_pa},
         "pump": {"load_source": "pressures", "plunger_diameter_mm": 1e3 * rec.plunger_diameter_m,
                  "intake_pressure_pa": p_in_model, "plunger_friction_n": plunger_friction_n,
-                 "fillage": min(max(fillage, 0.05), 1.0), "clearance_volume_fraction": CLEARANCE_FRACTION},
+                 "fillage": min(max(fillage, 0.05), 1.0), "clearance_volume_fraction": CLEARANCE_FRACTION,
+                 "liquid_compressibility_per_pa": liquid_compressibility_per_pa(rec)},
         "damping": {"model": "dimensionless", "damping_factor": damping_factor,
                     "stiffness_proportional_s": DEFAULT_KV_TAU_S},
         "survey": {"stations": stations},

@@ -68,6 +68,22 @@ def true_loads_n(law: ValveLaw, p_out_pa: float, rod_area_m2: float) -> tuple[fl
 STANDARD_PRESSURE_PA = 101325.0
 
 
+def liquid_stiffness_n_m(pump: PumpConfig, nominal_stroke_m: float) -> float:
+    """The liquid-full chamber at the top of the stroke (clearance + swept volume V) as a spring on the
+    plunger: A_pl^2 / (c V); the load transfers over the travel (fluid load) / k. inf when incompressible."""
+    c = pump.liquid_compressibility_per_pa
+    a = plunger_area_m2(pump)
+    if not c > 0:
+        return math.inf
+    return a / (c * (1.0 + pump.clearance_volume_fraction) * nominal_stroke_m)
+
+
+def series_stiffness_n_m(k1: float, k2: float) -> float:
+    """Two springs in series (0 or inf: absent); 0 = no spring at all (rigid valve law)."""
+    ks = [k for k in (k1, k2) if 0 < k < math.inf]
+    return 1.0 / sum(1.0 / k for k in ks) if ks else 0.0
+
+
 def fluid_column_mass_kg(density_kg_m3: float, length_m: float, plunger_area_m2: float, tubing_area_m2: float,
                          rod_area_m2: float) -> float:
     """The liquid column above a rising plunger as a mass at the plunger: the column in the tubing-rod

@@ -59,14 +59,15 @@ class PumpCycle:
                 return fillage
             self._top_ub = ub_min
             self._rising_s = time_s - self._t_bottom
-            liquid_m = upstroke
-            if self.gas is not None:  # the gas takes its share of the displacement
-                liquid_m = upstroke * self.gas.liquid_fraction(
-                    self._intake_pa(), self.p_pump_pa + self.cfg.pump.discharge_overpressure_pa, upstroke)
-                fillage = liquid_m / upstroke
+            stroke_in_barrel = upstroke
             if self.tubing_stiffness_n_m > 0:  # the barrel rose with the plunger while the load transferred
                 stretch = (self.law.up_eq_n - self.law.down_eq_n) / self.tubing_stiffness_n_m
-                liquid_m = min(liquid_m, max(upstroke - stretch, 0.0))
+                stroke_in_barrel = max(upstroke - stretch, 0.0)
+            liquid_m = stroke_in_barrel
+            if self.gas is not None:  # the gas takes its share of the plunger's stroke in the barrel
+                liquid_m = stroke_in_barrel * self.gas.liquid_fraction(
+                    self._intake_pa(), self.p_pump_pa + self.cfg.pump.discharge_overpressure_pa, stroke_in_barrel)
+                fillage = liquid_m / max(stroke_in_barrel, 1e-12)
             if self.annulus is not None:
                 liquid_m = min(self._liquid_stroke_m, liquid_m)
                 # book what the annulus actually gave: the plan at the bottom predicted the inflow of the
@@ -116,6 +117,9 @@ class PumpCycle:
             rec["phi"] = self.gas.fraction(float(rec["p_in_pa"][0]))
             rec["p_d_pa"] = self.p_pump_pa + cfg.pump.discharge_overpressure_pa
             rec["p_out_pa"], rec["gas_friction_n"] = self.p_pump_pa, cfg.pump.plunger_friction_n
+            rec["liq_c"] = cfg.pump.liquid_compressibility_per_pa
+            if self.tubing_stiffness_n_m > 0:  # unanchored: the barrel's travel in series with the chamber
+                rec["tub_c"] = self.gas.area_m2 ** 2 / self.tubing_stiffness_n_m
             rec["v_min_m3"] = self.gas.area_m2 * GAS_MIN_DELAY_FRACTION * self.surface.stroke_length_m(
                 cfg.surface.stroke_length_m)
         elif self.tubing_stiffness_n_m > 0:  # mode 2: a plunger area of 0 marks the tubing spring

@@ -23,7 +23,7 @@ from ..physics.fluid import tubing_pressure_pa
 from ..physics.inflow import Annulus
 from ..physics.laws import rod_friction
 from ..physics.laws import valve as valve_law_record
-from ..physics.pump import GasChamber, ValveLaw, valve_law
+from ..physics.pump import GasChamber, ValveLaw, liquid_stiffness_n_m, series_stiffness_n_m, valve_law
 from ..physics.rod import (
     GRAVITY_M_S2,
     build_mesh,
@@ -104,6 +104,10 @@ class Simulator(PumpCycle):
         if not tb.anchored:  # the free tubing between the anchor (or the surface) and the pump, as a spring
             area = math.pi / 4 * ((tb.outer_diameter_mm * 1e-3) ** 2 - (tb.inner_diameter_mm * 1e-3) ** 2)
             self.tubing_stiffness_n_m = tb.youngs_modulus_pa * area / (cfg.rod_length_m - tb.anchor_depth_m)
+        if self.gas is None and cfg.pump.liquid_compressibility_per_pa > 0:  # the liquid in series (mode 2)
+            self.tubing_stiffness_n_m = series_stiffness_n_m(
+                self.tubing_stiffness_n_m, liquid_stiffness_n_m(cfg.pump, self.surface.stroke_length_m(
+                    cfg.surface.stroke_length_m)))
         self.f1_hz = first_natural_frequency_hz(mesh, cfg.rod.mass_matrix)
         self._check_convexity()
 

@@ -18,6 +18,9 @@ from ..errors import ConfigError
 MIN_SAMPLES = 16
 MAX_STROKE_M = 20.0           # the config's bound on a stroke (surface.stroke_length_m)
 MAX_ABS_LOAD_N = 1e7          # the config's bound on pump loads
+# A stroke's period: 0.1 to 60 strokes/min covers every beam, long-stroke and hydraulic unit (1-20 SPM in
+# practice); outside it a card's time column is in the wrong unit or broken (1e5 s a stroke, 1e298 s a sample)
+MIN_PERIOD_S, MAX_PERIOD_S = 1.0, 600.0
 CLOSURE_FRACTION = 0.05       # a one-stroke card ends within 5 % of its stroke from where it began
 
 
@@ -67,3 +70,11 @@ def check_card(position_m: np.ndarray, load_n: np.ndarray | None, field: str, so
         raise ConfigError(field, source, "a card in forward time (upstroke load above downstroke load); this one "
                           "runs in reverse time (the loop is anticlockwise): pass --reverse or reverse its rows")
     return x, f
+
+
+def check_period(period_s: float, field: str, source: str) -> float:
+    """A card's own stroke period (s), within [MIN_PERIOD_S, MAX_PERIOD_S]."""
+    if not MIN_PERIOD_S <= period_s <= MAX_PERIOD_S:
+        raise ConfigError(field, source, f"a stroke period of {MIN_PERIOD_S:g} to {MAX_PERIOD_S:g} s (0.1 to 60 "
+                          f"strokes/min; this card's t_s gives {period_s:.4g} s: check the time column's unit)")
+    return period_s

@@ -24,7 +24,7 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import ConfigError
-from .card_checks import check_card
+from .card_checks import check_card, check_period
 
 MIN_SAMPLES = 16
 
@@ -75,6 +75,8 @@ def read_card_csv(path: str | Path, field: str, required: tuple[str, ...],
     if "t_s" in out and not np.all(np.diff(out["t_s"]) > 0):
         i = int(np.argmax(np.diff(out["t_s"]) <= 0)) + 2
         raise ConfigError(field, str(path), f"strictly increasing t_s (data row {i} does not advance)")
+    if "t_s" in out and "polished_rod_position_m" in out:
+        check_period(stroke_period_s(out["t_s"], out["polished_rod_position_m"]), field, str(path))
     if "polished_rod_position_m" in out:
         x, f = check_card(out["polished_rod_position_m"], out.get("polished_rod_load_n"), field, str(path), reverse)
         out["polished_rod_position_m"] = x

@@ -13,8 +13,8 @@ import os
 import sys
 from pathlib import Path
 
-MAX_CARDS = 200_000  # the set is held in memory: 200 000 cards x 4 arrays x 256 points x 8 B = 1.6 GB
-MAX_WORKERS = 256
+from ..declarations import MAX_CARDS  # noqa: F401  (re-exported: the set is held in memory, declared there)
+from ..declarations import MAX_SWEEP_WORKERS as MAX_WORKERS  # noqa: F401
 
 
 def _label_list(text: str) -> tuple[str, ...]:
@@ -29,27 +29,16 @@ def _label_list(text: str) -> tuple[str, ...]:
 
 
 def add_parser(sub) -> None:
-    from ..cli_types import positive_int
+    from ..declarations import add_number
 
     c = sub.add_parser("cards", help="simulate a labelled card set (pump conditions) into DIR/cards.npz")
-    c.add_argument("--n", type=positive_int("--n", MAX_CARDS), required=True, help="number of cards")
+    add_number(c, "cards", "--n", required=True, help="number of cards")
     c.add_argument("--out", required=True, help="output directory (created; its cards.npz is replaced)")
     c.add_argument("--conditions", type=_label_list, help="comma-separated labels (default: all twelve)")
-    c.add_argument("--seed", type=_seed, default=0, help="set seed (same seed, same files)")
-    c.add_argument("--workers", type=positive_int("--workers", MAX_WORKERS), default=None,
-                   help="worker processes (default: the CPUs available)")
+    add_number(c, "cards", "--seed", default=0, help="set seed (same seed, same files)")
+    add_number(c, "cards", "--workers", default=None, help="worker processes (default: the CPUs available)")
     c.add_argument("--no-progress", action="store_true", help="no progress bar")
     c.set_defaults(func=main)
-
-
-def _seed(text: str) -> int:
-    try:
-        v = int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"--seed = {text!r}: expected an integer in [0, 2**31)") from None
-    if not 0 <= v < 2**31:
-        raise argparse.ArgumentTypeError(f"--seed = {text!r}: expected an integer in [0, 2**31)")
-    return v
 
 
 def check_out_dir(path: str) -> Path:

@@ -27,7 +27,7 @@ import tempfile
 import numpy as np
 import yaml
 
-from ..errors import ConfigError
+from ..errors import ConfigError, NumericFailure
 from ..outputs import atomic_write, check_output_path
 
 DEFAULT_STROKES = 4
@@ -86,7 +86,7 @@ def _fit(cfg_dict: dict, rec, params: list[str], strokes: int, work_dir: str) ->
 
 def compare(rec, sim, result, pump_card, convention: str) -> dict:
     """The JSON figures of one prediction and one diagnosis against the record."""
-    from ..analysis.card_compare import card_rms, harmonic_shares, resample_stroke
+    from ..analysis.card_compare import card_difference, card_rms, harmonic_shares, resample_stroke
 
     tr = result.trace
     x, f = tr["polished_rod_position_m"], tr["polished_rod_load_n"]
@@ -112,6 +112,11 @@ def compare(rec, sim, result, pump_card, convention: str) -> dict:
         rng = float(np.ptp(rec.pump_load_n))
         out["pump_card_rms_pct_of_range"] = 100.0 * card_rms(rec.pump_position_m, rec.pump_load_n,
                                                              pump_card.pump_position_m, fp, align_bottom=True) / rng
+        # where the difference sits: a constant (weight, load convention) moves both strokes alike, a card
+        # height (damping, fluid load) moves them apart (docs/realism.md)
+        d = card_difference(rec.pump_position_m, rec.pump_load_n, pump_card.pump_position_m, fp, align_bottom=True)
+        half = d.size // 2
+        out["pump_card_offset_n"] = {"upstroke": float(d[:half].mean()), "downstroke": float(d[half:].mean())}
         out["pump_card_convention"] = convention
     return out
 
@@ -168,14 +173,15 @@ def cmd_validate(args) -> int:
     check_output_path("--plot", args.plot, (".png",))
     rec = read_record(args.record, args.config, args.reverse)
     out, parts = validate(rec, list(args.fit or []), args.strokes, args.load_convention)
-    from .finite import check_finite
-
-    check_finite({}, out)  # a figure that is not finite is a failure, not a result
+    try:  # a figure that is not finite is a failure, not a result (and NaN is not JSON)
+        line = json.dumps(out, default=float, allow_nan=False)
+    except ValueError:
+        raise NumericFailure("validate", "a figure is not finite; check the record's magnitudes") from None
     if args.plot:
         from .validate_plot import save_validation_plot
 
         atomic_write(args.plot, lambda tmp: save_validation_plot(*parts, tmp))
-    print(json.dumps(out, default=float, allow_nan=False))
+    print(line)
     return 0
 
 

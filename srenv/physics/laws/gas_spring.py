@@ -22,7 +22,10 @@ from numba import njit
 GAS_FIELDS = [("gas_mode", "i8"), ("gas_on", "i8"), ("u0_m", "f8"), ("gas_m3", "f8"), ("p0", "f8"),
               ("liquid_m3", "f8"), ("k", "f8"), ("p_in_pa", "f8"), ("p_d_pa", "f8"), ("area_m2", "f8"),
               ("p_out_pa", "f8"), ("gas_friction_n", "f8"), ("phi", "f8"), ("v_min_m3", "f8"),
-              ("lin_dk", "f8"), ("lin_shift_n", "f8"), ("u_tilde_m", "f8")]
+              ("lin_dk", "f8"), ("lin_shift_n", "f8"), ("u_tilde_m", "f8"),
+              # the liquid's compressibility (1/Pa, pump.liquid_compressibility_per_pa; 0: incompressible) and
+              # unanchored tubing's compliance seen by the chamber, A_pl^2 / k_t (m^3/Pa; 0: anchored)
+              ("liq_c", "f8"), ("tub_c", "f8")]
 
 
 @njit(cache=True, inline="always")
@@ -33,10 +36,11 @@ def gas_active(params):
     p = params[0]
     if p.gas_mode == 2:
         return True
-    if p.gas_mode == 1 and p.gas_m3 > 0.0:
+    if p.gas_mode == 1 and (p.gas_m3 > 0.0 or p.liq_c + p.tub_c > 0.0):
         ik = 1.0 / p.k
         v_in = p.gas_m3 * (p.p0 / p.p_in_pa) ** ik
-        return v_in - p.gas_m3 * (p.p0 / p.p_d_pa) ** ik >= p.v_min_m3
+        squeeze = (p.liquid_m3 * p.liq_c + p.tub_c) * (p.p_d_pa - p.p_in_pa) if p.liq_c + p.tub_c > 0.0 else 0.0
+        return v_in - p.gas_m3 * (p.p0 / p.p_d_pa) ** ik + squeeze >= p.v_min_m3
     return False
 
 
@@ -47,6 +51,8 @@ def spring(params, ub):
     p = params[0]
     if p.area_m2 == 0.0:
         return tubing_spring(params, ub)
+    if p.liq_c + p.tub_c > 0.0:
+        return compressible_spring(params, ub)
     a = p.area_m2
     vg = p.gas_m3 - a * (ub - p.u0_m)
     pc = p.p_d_pa
@@ -87,6 +93,9 @@ def valves(params, ub):
             p.p0 = min(max(c, p.lo_n), p.hi_n)
             p.u0_m = ub
         return
+    if p.liq_c + p.tub_c > 0.0:
+        compressible_valves(params, ub)
+        return
     a = p.area_m2
     k = p.k
     v0 = p.gas_m3
@@ -109,6 +118,77 @@ def valves(params, ub):
         p.u0_m = ub
     elif v0 <= 0.0 and vg <= 0.0:
         p.u0_m = ub  # liquid-full chamber moving down: the travelling valve is open
+
+
+@njit(cache=True)
+def squeeze_m3(params, pc):
+    """Plunger travel x A_pl from the chamber's reference state (p0, gas_m3, liquid_m3) to pressure pc: the
+    gas's polytropic change, the liquid's compression V_l c (pc - p0) and, unanchored, the barrel's own
+    travel as the tubing takes the load (pc - p0) A_pl on the standing valve, A_pl^2 (pc - p0) / k_t."""
+    p = params[0]
+    vg = p.gas_m3 * (p.p0 / pc) ** (1.0 / p.k) if p.gas_m3 > 0.0 else 0.0
+    return p.gas_m3 - vg + (p.liquid_m3 * p.liq_c + p.tub_c) * (pc - p.p0)
+
+
+@njit(cache=True)
+def compressible_spring(params, ub):
+    """The chamber of gas and compressible liquid (and unanchored tubing): its pressure pc solves
+    A (u_B - u0) = squeeze(pc) (monotone in pc; Newton from the secant, bracketed by the valve pressures);
+    the stiffness is the three in series, A^2 / (V_g / (k pc) + V_l c + A^2 / k_t)."""
+    p = params[0]
+    a = p.area_m2
+    swept = a * (ub - p.u0_m)
+    lo = p.p_in_pa
+    hi = p.p_d_pa
+    s_lo = squeeze_m3(params, lo)
+    s_hi = squeeze_m3(params, hi)
+    if swept <= s_lo:
+        return (lo - p.p_out_pa) * a, 0.0
+    if swept >= s_hi:
+        return (hi - p.p_out_pa) * a, 0.0
+    pc = lo + (hi - lo) * (swept - s_lo) / (s_hi - s_lo)
+    comp = 1.0
+    for _ in range(60):
+        vg = p.gas_m3 * (p.p0 / pc) ** (1.0 / p.k) if p.gas_m3 > 0.0 else 0.0
+        comp = vg / (p.k * pc) + p.liquid_m3 * p.liq_c + p.tub_c  # d(squeeze)/dp at pc
+        r = squeeze_m3(params, pc) - swept
+        if abs(r) <= 1e-12 * a or hi - lo <= 1e-9 * p.p_d_pa:
+            break
+        if r > 0.0:
+            hi = pc
+        else:
+            lo = pc
+        step = pc - r / comp
+        pc = step if lo < step < hi else 0.5 * (lo + hi)
+    return (pc - p.p_out_pa) * a, a * a / comp
+
+
+@njit(cache=True)
+def compressible_valves(params, ub):
+    """``valves`` with a compressible liquid: the chamber's liquid changes volume with its pressure, so a
+    valve that opens meets gas and liquid at that valve's pressure (incompressible: the same as ``valves``)."""
+    p = params[0]
+    a = p.area_m2
+    swept = a * (ub - p.u0_m)
+    total = p.gas_m3 + p.liquid_m3 - swept  # the chamber's volume now
+    for side in range(2):
+        pv = p.p_in_pa if side == 0 else p.p_d_pa
+        s = squeeze_m3(params, pv)
+        if (side == 0 and swept < s) or (side == 1 and swept > s and p.gas_m3 + p.liquid_m3 > 0.0):
+            vg = p.gas_m3 * (p.p0 / pv) ** (1.0 / p.k) if p.gas_m3 > 0.0 else 0.0
+            vl = p.liquid_m3 * (1.0 - p.liq_c * (pv - p.p0))
+            # > 0: drawn at the intake, < 0: expelled at the discharge (the barrel rests at the valve's load)
+            flow = total + p.tub_c * (pv - p.p0) - vg - vl
+            if side == 0:
+                p.gas_m3 = vg + p.phi * flow
+                p.liquid_m3 = vl + (1.0 - p.phi) * flow
+            else:
+                f = vg / (vg + vl) if vg + vl > 0.0 else 0.0
+                p.gas_m3 = max(vg + f * flow, 0.0)
+                p.liquid_m3 = max(vl + (1.0 - f) * flow, 0.0)
+            p.p0 = pv
+            p.u0_m = ub
+            return
 
 
 @njit(cache=True)
