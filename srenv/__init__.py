@@ -28,7 +28,7 @@ ENVS: dict[str, tuple[str, dict]] = {
 # native vector envs (gymnasium.make_vec(..., vectorization_mode="vector_entry_point"), srenv/envs/vector.py);
 # v2's is a SyncVectorEnv of single envs until it gets a native one
 VECTOR_ENTRY_POINTS: dict[str, str] = {ENV_ID_V1: "srenv.envs.vector:make_v1",
-                                       ENV_ID_V2: "srenv.envs.sucker_rod_v2:make_vector_env"}
+                                       ENV_ID_V2: "srenv.envs.vector:make_v2"}
 
 
 def register_envs() -> None:

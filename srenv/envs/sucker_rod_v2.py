@@ -79,8 +79,8 @@ terminated: parted rods, a rod failure or an unrecoverable step-QP failure (as v
 Version history
 ---------------
 * v2: conditions as events with their costs, classifier probabilities and the true condition in the
-  observations, the validation split and ``family:`` wells; a SyncVectorEnv vector entry point (to be replaced
-  by the speed branch's native vector env, same results). Planned before release: the realism branch's
+  observations, the validation split and ``family:`` wells; the native vector env (srenv/envs/vector.py: N wells in threads,
+  equal to N single envs). Planned before release: the realism branch's
   physics (damping, unit geometry per well), the conditions branch's physics of every condition and its
   classifier, the speed branch's stepping.
 * v1 / v0: unchanged (see their modules).
@@ -92,7 +92,6 @@ import functools
 from collections.abc import Callable
 from typing import Any
 
-import gymnasium as gym
 import numpy as np
 from gymnasium import spaces
 
@@ -241,12 +240,3 @@ class SuckerRodV2Env(SuckerRodV1Env):
         info["cost"] += sum(info[k] for k in V2_COST_TERMS)
         info["condition"], info["condition_severity"] = self._true[0], float(self._true[1])
         return info
-
-
-def make_vector_env(num_envs: int = 1, **kwargs: Any) -> gym.vector.VectorEnv:
-    """The vector entry point: ``num_envs`` v2 envs stepped in turn (gymnasium's SyncVectorEnv), each equal to
-    a single env with the same seed. The speed branch's native vector env replaces it (same results)."""
-    kwargs.pop("max_episode_steps", None)
-    if not (isinstance(num_envs, int) and num_envs >= 1):
-        raise ValueError(f"num_envs = {num_envs!r}: expected a positive integer")
-    return gym.vector.SyncVectorEnv([lambda: SuckerRodV2Env(**kwargs) for _ in range(num_envs)])

@@ -109,6 +109,13 @@ def make_v1(num_envs: int = 1, threads: int | None = None, **env_kwargs: Any) ->
     return KernelVectorEnv(SuckerRodV1Env, num_envs, threads=threads, **env_kwargs)
 
 
+def make_v2(num_envs: int = 1, threads: int | None = None, **env_kwargs: Any) -> KernelVectorEnv:
+    """srenv/SuckerRod-v2's vector entry point (its events and classifier run per well, in the same threads)."""
+    from .sucker_rod_v2 import SuckerRodV2Env
+
+    return KernelVectorEnv(SuckerRodV2Env, num_envs, threads=threads, **env_kwargs)
+
+
 def sb3_vec_env(venv: KernelVectorEnv):
     """The vector env as a stable-baselines3 ``VecEnv`` (imports SB3 only when called)."""
     from stable_baselines3.common.vec_env.base_vec_env import VecEnv

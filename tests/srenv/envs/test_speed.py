@@ -12,6 +12,7 @@ import pytest
 import srenv  # noqa: F401 - registers the envs
 from srenv.config import load_config
 from srenv.envs.sucker_rod_v1 import SuckerRodV1Env
+from srenv.envs.sucker_rod_v2 import SuckerRodV2Env
 from srenv.envs.vector import KernelVectorEnv, sb3_vec_env
 from srenv.simulation.simulator import Simulator
 from srenv.tools.bench_kernel import FloorRun
@@ -35,8 +36,9 @@ def test_floor_program_is_the_kernels_linear_step() -> None:
     np.testing.assert_allclose(v, lin.v, rtol=0, atol=1e-9 * np.max(np.abs(v)))
 
 
-def test_vector_env_is_registered_and_declares_its_autoreset_mode() -> None:
-    venv = gym.make_vec("srenv/SuckerRod-v1", num_envs=2, vectorization_mode="vector_entry_point", **SHORT)
+@pytest.mark.parametrize("env_id", ["srenv/SuckerRod-v1", "srenv/SuckerRod-v2"])
+def test_vector_env_is_registered_and_declares_its_autoreset_mode(env_id) -> None:
+    venv = gym.make_vec(env_id, num_envs=2, vectorization_mode="vector_entry_point", **SHORT)
     try:
         assert isinstance(venv, KernelVectorEnv)
         assert venv.metadata["autoreset_mode"] == gym.vector.AutoresetMode.NEXT_STEP
@@ -45,10 +47,11 @@ def test_vector_env_is_registered_and_declares_its_autoreset_mode() -> None:
         venv.close()
 
 
-def test_vector_env_matches_single_envs_through_an_autoreset() -> None:
+@pytest.mark.parametrize("env_cls", [SuckerRodV1Env, SuckerRodV2Env])
+def test_vector_env_matches_single_envs_through_an_autoreset(env_cls) -> None:
     n, steps = 3, 5
-    venv = KernelVectorEnv(SuckerRodV1Env, n, threads=2, **SHORT)
-    singles = [SuckerRodV1Env(**SHORT) for _ in range(n)]
+    venv = KernelVectorEnv(env_cls, n, threads=2, **SHORT)
+    singles = [env_cls(**SHORT) for _ in range(n)]
     rng = np.random.default_rng(0)
     actions = rng.uniform(-1, 1, (steps, n, 2)).astype(np.float32)
     try:
