@@ -248,11 +248,11 @@ def test_a_flag_the_surface_motion_ignores_is_refused(config: str, argv: list[st
     assert not (tmp_path / "o.csv").exists()
 
 
-@pytest.mark.parametrize(("set_", "field"), [
-    ([], "surface.measured_card_csv"),
-    (["--set", "surface.measured_spm=0.001"], "surface.measured_spm"),
+@pytest.mark.parametrize(("set_", "field", "expected"), [
+    ([], "surface.measured_card_csv", "stroke period of 1 to 600 s"),  # the card reader: no such stroke exists
+    (["--set", "surface.measured_spm=0.001"], "surface.measured_spm", "200000 time steps"),  # the run's size
 ])
-def test_a_measured_cards_own_period_bounds_the_run(set_: list[str], field: str, tmp_path: Path,
+def test_a_measured_cards_own_period_bounds_the_run(set_: list[str], field: str, expected: str, tmp_path: Path,
                                                     capsys: pytest.CaptureFixture,
                                                     monkeypatch: pytest.MonkeyPatch) -> None:
     """A 20-row card whose stroke lasts 1e5 s (or a measured_spm of 1e-3) is 1e8 time steps a stroke."""
@@ -260,7 +260,7 @@ def test_a_measured_cards_own_period_bounds_the_run(set_: list[str], field: str,
     write_card(tmp_path / "card.csv", n=20, period_s=1e5 if not set_ else 10.0)
     rc, err = run_srenv(["simulate", FIG3, "--set", "surface.motion=measured", "--set",
                       "surface.measured_card_csv=card.csv", *set_, "--strokes", "1", "--out", "o.csv"], capsys)
-    one_line(rc, err, field, "200000 time steps")
+    one_line(rc, err, field, expected)
     assert not (tmp_path / "o.csv").exists()
 
 
