@@ -30,3 +30,14 @@ def bounded(parse: Callable[[str], float], name: str, unit: str, hi: float) -> C
                                              f"at most {hi:g}")
         return x
     return check
+
+
+CARD_HELP = "CSV with t_s, polished_rod_position_m, polished_rod_load_n"
+
+
+def card_command(sub, name: str, help: str, config_help: str):
+    """A subcommand that reads one measured surface card against a well config (diagnose, fit)."""
+    p = sub.add_parser(name, help=help)
+    p.add_argument("card", help=CARD_HELP)
+    p.add_argument("--config", required=True, help=config_help)
+    return p

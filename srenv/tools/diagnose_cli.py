@@ -12,6 +12,7 @@ import argparse
 import numpy as np
 
 from ..analysis.diagnose import DEFAULT_HARMONICS, PUMP_COLUMNS
+from ..cli_types import card_command
 from ..declarations import OUTPUTS, add_number
 from ..errors import ConfigError, NumericFailure
 from ..outputs import atomic_write_all, check_outputs, json_line
@@ -50,9 +51,8 @@ def cmd_diagnose(args: argparse.Namespace) -> int:
 
 
 def add_parser(sub) -> None:
-    d = sub.add_parser("diagnose", help="downhole (pump) card from a measured surface card")
-    d.add_argument("card", help="CSV with t_s, polished_rod_position_m, polished_rod_load_n")
-    d.add_argument("--config", required=True, help="well YAML path or shipped name (rod string, fluid, survey)")
+    d = card_command(sub, "diagnose", "downhole (pump) card from a measured surface card",
+                     "well YAML path or shipped name (rod string, fluid, survey)")
     d.add_argument("--set", action="append", metavar="KEY.PATH=VALUE", help="override a config field")
     d.add_argument("--out", required=True, help="pump card CSV: t_s, pump_position_m, pump_load_n")
     d.add_argument("--plot", help="PNG with the surface and the pump card")

@@ -14,6 +14,7 @@ import os
 import yaml
 
 from ..analysis.fit import DEFAULT_STROKES, CardFit, fit_card, inert_params
+from ..cli_types import card_command
 from ..config import apply_overrides, check_run_samples, config_from_dict, steps_per_stroke
 from ..declarations import OUTPUTS, add_number
 from ..errors import ConfigError
@@ -51,9 +52,8 @@ def cmd_fit(args: argparse.Namespace) -> int:
 
 
 def add_parser(sub) -> None:
-    f = sub.add_parser("fit", help="fit config fields to a measured surface card (least squares)")
-    f.add_argument("card", help="CSV with t_s, polished_rod_position_m, polished_rod_load_n")
-    f.add_argument("--config", required=True, help="well YAML path or shipped name (the starting model)")
+    f = card_command(sub, "fit", "fit config fields to a measured surface card (least squares)",
+                     "well YAML path or shipped name (the starting model)")
     f.add_argument("--param", action="extend", nargs="+", required=True, metavar="KEY.PATH",
                    help="config field(s) to fit: e.g. damping.damping_factor, friction.coefficient, "
                         "pump.intake_pressure_pa, fluid.wellhead_pressure_pa, pump.plunger_friction_n")
