@@ -128,11 +128,10 @@ def concave_shift(fric_p, valve_p, v, fric_s, shift):
 def kv_work(energy, kv, ea_len, u, v, prev_v, a, dt, beta, gamma, ua_old, ua_new, va_old, va_new):
     """Work of the Kelvin-Voigt element forces tau EA/L dv over the step (trapezoidal in the element's
     velocity difference, over its strain increment), added to the viscous energy."""
-    c2 = beta * dt / gamma
+    h, q, c1, c2 = coefficients(dt, beta, gamma)
     uj_old, uj_new, vj_old, vj_new = ua_old, ua_new, va_old, va_new
     for e in range(u.shape[0]):
-        vpr = prev_v[e] + dt * (1.0 - gamma) * a[e]
-        ui_new = u[e] + dt * prev_v[e] + dt * dt * (0.5 - beta) * a[e] - c2 * vpr + c2 * v[e]
+        ui_new = update(u[e], prev_v[e], a[e], v[e], dt, h, q, c1, c2)[0]  # the step's own Newmark update
         d_strain = (ui_new - uj_new) - (u[e] - uj_old)
         energy[E_VISC] += 0.5 * kv * ea_len[e] * ((v[e] - vj_new) + (prev_v[e] - vj_old)) * d_strain
         uj_old, uj_new, vj_old, vj_new = u[e], ui_new, prev_v[e], v[e]
@@ -290,7 +289,7 @@ def steps(const, fric_p, valve_p, prog, cnt, ksd, kso, kd, ko, md, mo, cd, f, ea
                 kv += kso[i] * v[i + 1]
             lam[i] = b[i] - kv - shift[i] if nonmono else b[i] - kv
         if vp.fluid_dk != 0.0:  # the column's inertia m a is part of the pump's force on the rod
-            lam[n - 1] += vp.fluid_dk * (v[n - 1] - (prev_v[n - 1] + dt * (1.0 - gamma) * a[n - 1]))
+            lam[n - 1] += vp.fluid_dk * (v[n - 1] - (prev_v[n - 1] + h * a[n - 1]))  # v_new - v-tilde
             ksd[n - 1] -= vp.fluid_dk
             vp.fluid_dk = 0.0
         if vp.lin_dk != 0.0 or vp.lin_shift_n != 0.0:
