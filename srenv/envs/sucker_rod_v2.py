@@ -80,7 +80,11 @@ Version history
 ---------------
 * v2: conditions as events with their costs, classifier probabilities and the true condition in the
   observations, the validation split and ``family:`` wells; the native vector env (srenv/envs/vector.py: N wells in threads,
-  equal to N single envs). Planned before release: the realism branch's
+  equal to N single envs). Fixed before release: a condition switched on mid-episode now acts in the exact
+  strokes (``Simulator.switch_config`` starts the chamber's spring state: a gas slug's transfer had stayed rigid
+  while only the bookkeeping counted the gas), the fast-forward draws what the gas leaves of the displacement,
+  and a condition no longer touches the well's annulus (the card set's full column stays out of episodes).
+  Planned before release: the realism branch's
   physics (damping, unit geometry per well), the conditions branch's physics of every condition and its
   classifier, the speed branch's stepping.
 * v1 / v0: unchanged (see their modules).

@@ -25,6 +25,14 @@ class PumpCycle:
     def _intake_pa(self) -> float:
         return self.annulus.intake_pressure_pa() if self.annulus is not None else self.cfg.pump.intake_pressure_pa
 
+    def gas_liquid_fraction(self, stroke_in_barrel_m: float) -> float:
+        """The share of the plunger's stroke in the barrel that liquid fills at today's intake pressure (the free
+        gas takes the rest; 1 without gas): one formula for the exact strokes and the interval's fast-forward."""
+        if self.gas is None:
+            return 1.0
+        return self.gas.liquid_fraction(self._intake_pa(), self.p_pump_pa + self.cfg.pump.discharge_overpressure_pa,
+                                        stroke_in_barrel_m)
+
     def _gas_start(self) -> None:
         """The chamber at the bottom of the stroke after reset: the clearance holds the compressed mixture
         (gas at p_d); from here the kernel follows it (laws.gas_spring.valves)."""
@@ -65,8 +73,7 @@ class PumpCycle:
                 stroke_in_barrel = max(upstroke - stretch, 0.0)
             liquid_m = stroke_in_barrel
             if self.gas is not None:  # the gas takes its share of the plunger's stroke in the barrel
-                liquid_m = stroke_in_barrel * self.gas.liquid_fraction(
-                    self._intake_pa(), self.p_pump_pa + self.cfg.pump.discharge_overpressure_pa, stroke_in_barrel)
+                liquid_m = stroke_in_barrel * self.gas_liquid_fraction(stroke_in_barrel)
                 fillage = liquid_m / max(stroke_in_barrel, 1e-12)
             if self.annulus is not None:
                 liquid_m = min(self._liquid_stroke_m, liquid_m)

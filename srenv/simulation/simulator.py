@@ -191,16 +191,38 @@ class Simulator(PumpCycle):
         # gas in the chamber: the first upstroke re-expands what the clearance holds at the bottom
         # (on, reference plunger position, gas volume and pressure there, liquid volume) of the chamber; the
         # kernel re-references it when a valve opens (kernel.gas_valves)
-        self._gas = np.zeros(5)
-        if self.gas is not None:
-            self._gas_start()
-        elif self.tubing_stiffness_n_m > 0:  # the plunger holds P+ at rest: the tubing carries the fluid load
-            self._gas[:] = (1.0, float(self.u[-1]), 0.0, -self.law.down_eq_n, 0.0)
+        self._gas_init()
         self._cond_reset()
         self.fillage = 1.0
         self.energy = np.zeros(L.N_ENERGY)
         self.e0 = self.mechanical_energy_j()
         self._work = L.work(n)
+
+    def _gas_init(self) -> None:
+        """The chamber's spring state at the bottom of the stroke with the plunger holding P+."""
+        self._gas = np.zeros(5)
+        if self.gas is not None:
+            self._gas_start()
+        elif self.tubing_stiffness_n_m > 0:  # the plunger holds P+ at rest: the tubing carries the fluid load
+            self._gas[:] = (1.0, float(self.u[-1]), 0.0, -self.law.down_eq_n, 0.0)
+
+    def switch_config(self, cfg: WellConfig, keep_annulus: bool = True) -> None:
+        """Run on with another config of the same string (a condition comes or goes, at a stroke boundary: the
+        plunger at the bottom): matrices, loads, valve law and chamber from ``cfg``; the rod's state, the clock
+        and (``keep_annulus``) the annulus's liquid carry on. The chamber's spring state is started afresh when
+        free gas (or the tubing spring) appears or goes: the kernel reads its law from that state, so a chamber
+        switched on without it would leave the transfer rigid while the bookkeeping counts the gas."""
+        if cfg.rod != self.cfg.rod:
+            raise ValueError("switch_config: the rod string cannot change on a running well (build a new Simulator)")
+        had = (self.gas is not None, self.tubing_stiffness_n_m > 0)
+        ann = self.annulus
+        self.cfg = cfg
+        self._assemble()
+        if keep_annulus and ann is not None and self.annulus is not None:
+            self.annulus = ann
+        self.law = self._valve()
+        if (self.gas is not None, self.tubing_stiffness_n_m > 0) != had:
+            self._gas_init()
 
     def _start_top(self, v_m_s: float, a_m_s2: float) -> None:
         """Set the prescribed top's velocity and acceleration (start of a stroke, see

@@ -170,19 +170,19 @@ def booked(label: str | None) -> bool:
 
 
 def apply_condition(sim: Any, base_cfg: Any, label: str | None, severity: float) -> None:
-    """Put the simulator on the config of a condition (or back on ``base_cfg``), keeping its state."""
+    """Put the simulator on the config of a condition (or back on ``base_cfg``), keeping its state.
+
+    The condition's card-set settings for the reservoir (``inflow.*``: a full column so an isolated card cannot
+    pump off) are left out: in an episode the well's own annulus and inflow carry on through a condition."""
     from ..config import load_config
 
     # parted rods end the episode in the interval they part in (the env books it): the base physics runs it
     over = condition_overrides(label, severity, base_cfg) if label not in (None, "parted_rods") else {}
+    over = {k: v for k, v in over.items() if not k.startswith("inflow.")}
     cfg = load_config(base_cfg, over) if over else base_cfg
     if cfg is sim.cfg or cfg == sim.cfg:
         return
-    ann = sim.annulus
-    sim.cfg = cfg
-    sim._assemble()  # rebuilds the matrices, loads and valve law from cfg; the rod state is not touched
-    if ann is not None and sim.annulus is not None and cfg.inflow == base_cfg.inflow:
-        sim.annulus = ann  # the same reservoir: the liquid in the annulus and its bookkeeping carry on
+    sim.switch_config(cfg, keep_annulus=True)
 
 
 @dataclass

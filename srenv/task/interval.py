@@ -295,7 +295,9 @@ class IntervalRunner:
             t_next = min(sim.time_s + w * period, t_end) if w < 1.0 else sim.time_s + period
             if ann is not None:
                 ann.accumulate(t_next)
-                take = min(w * f.displacement_m3, ann.volume_m3)
+                # what the pump can draw: its displacement less the free gas's share (1 without gas)
+                cap = w * f.displacement_m3 * sim.gas_liquid_fraction(max(f.summary["pump_stroke_m"], 0.0))
+                take = min(cap, ann.volume_m3)
                 ann.volume_m3 -= take
                 fill = take / (w * f.displacement_m3) if f.displacement_m3 > 0 else 1.0
             else:

@@ -216,3 +216,25 @@ def test_halving_time_step_changes_pprl_below_one_percent(name: str) -> None:
 
     dt = load_config(name).simulation.time_step_s
     assert abs(pprl(dt / 2) - pprl(dt)) / pprl(dt / 2) < 0.01
+
+
+def test_switch_config_to_gas_acts_like_a_well_built_with_gas():
+    """A chamber switched on at a stroke boundary (a gas slug in v2) runs the gas law in the kernel, as a well built
+    with it does; its rod must stay the same (a new string is a new Simulator)."""
+    base = load_config("default")
+    gas = load_config(base, {"pump.intake_gas_fraction": 0.5})
+    built = Simulator(gas)
+    for _ in range(4):
+        ref = built.run_stroke(record=True)
+    switched = Simulator(base)
+    switched.run_strokes(2)
+    full = switched.run_stroke(record=True)
+    switched.switch_config(gas)
+    for _ in range(4):
+        got = switched.run_stroke(record=True)
+    assert got.fillage == pytest.approx(ref.fillage, abs=0.01) and got.fillage < full.fillage - 0.1
+    n = min(len(got.trace["pump_load_n"]), len(ref.trace["pump_load_n"]))
+    span = np.ptp(ref.trace["pump_load_n"])
+    assert np.abs(got.trace["pump_load_n"][:n] - ref.trace["pump_load_n"][:n]).max() < 0.05 * span
+    with pytest.raises(ValueError, match="rod string"):
+        switched.switch_config(load_config(base, {"rod.tapers.0.diameter_mm": base.rod.tapers[0].diameter_mm + 1.0}))
