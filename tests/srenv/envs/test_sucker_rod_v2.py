@@ -151,14 +151,18 @@ def test_validation_split_is_for_selection_only():
             wf.check_split(split, purpose)
 
 
-@pytest.mark.parametrize("label", ["travelling_valve_leak", "tubing_leak", "tagging_down", "heavy_oil"])
+@pytest.mark.parametrize("label", ["travelling_valve_leak", "standing_valve_leak", "tubing_leak", "tagging_down",
+                                   "heavy_oil", "flowing", "gas_interference"])
 def test_a_condition_leaves_its_signature_and_the_classifier_sees_it(label):
     env = _forced(label, 0.8)
     i = FIELD_OBS_NAMES.index("prob_full")
     for _ in range(2):
         o, *_ = env.step(np.array([0.5, 1.0], np.float32))
     probs = o[i:i + 12]
-    assert ev.LABELS[int(np.argmax(probs))] == label and probs.sum() == pytest.approx(1.0, abs=1e-5)
+    # free gas at this well's intake (1 MPa against 22 MPa) compresses so steeply that the card is a "gas pound":
+    # an incomplete-fillage card either label may name
+    seen = {"gas_interference", "fluid_pound"} if label == "gas_interference" else {label}
+    assert ev.LABELS[int(np.argmax(probs))] in seen and probs.sum() == pytest.approx(1.0, abs=1e-5)
     clean = gym.make(ID, scenario="train", episode_hours=0.5, event_rate_scale=0.0).unwrapped
     clean.reset(seed=3)
     oc, *_ = clean.step(np.array([0.5, 1.0], np.float32))
