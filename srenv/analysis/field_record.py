@@ -46,6 +46,7 @@ class FieldRecord:
     unit: dict = field(default_factory=dict)           # API 11E dimensions (m) and names, as given
     time_reversed: bool = False                        # the stored card ran in reverse time
     config: dict | None = None                         # srenv's own record: the well YAML (its model)
+    notes: list[str] = field(default_factory=list)     # what the reader filled in or found doubtful
 
     @property
     def period_s(self) -> float:
@@ -101,20 +102,51 @@ def _series(d: dict, key: str, where: str) -> np.ndarray:
     return a
 
 
-def _tapers(rods: list, where: str) -> list[dict]:
+# API RP 11L (5th ed., 1988), Table 4.1 "Rod and pump data", column w_r: steel sucker rods with their couplings,
+# lb/ft by rod size in inches; used when a record gives a taper no weight
+API_ROD_WEIGHT_LB_FT = {0.5: 0.726, 0.625: 1.135, 0.75: 1.634, 0.875: 2.224, 1.0: 2.904, 1.125: 3.676}
+STEEL_LB_FT_PER_IN2 = 3.40  # 490 lb/ft^3 steel: a bar's body weight per square inch of section (sinker bars)
+
+
+def rod_weight_lb_ft(diameter_in: float) -> tuple[float, str]:
+    """A taper's weight per length when the record has none: the API table for API rod sizes, else a plain steel
+    bar (sinker bars, whose couplings add a few percent); and where the figure came from."""
+    for size, w in API_ROD_WEIGHT_LB_FT.items():
+        if abs(diameter_in - size) < 0.01:
+            return w, "API RP 11L Table 4.1 (rod with couplings)"
+    return STEEL_LB_FT_PER_IN2 * math.pi / 4 * diameter_in ** 2, "steel bar body (3.40 lb/ft per in^2)"
+
+
+def _tapers(rods: list, where: str, notes: list[str]) -> list[dict]:
     if not isinstance(rods, list) or not rods:
         raise ConfigError(where, "missing", "a list of rod tapers (top-down)")
     out = []
     for i, r in enumerate(rods):
         w = f"{where}[{i}]"
+        d_m = _num(r, "Diameter", w, 0.1, 4.0, "in")
+        weight = _num(r, "Weight", w, 0.05, 50.0, "lb/ft", optional=True)
+        if weight is None:
+            lb_ft, how = rod_weight_lb_ft(d_m / fu.factor("in"))
+            weight = fu.to_si(lb_ft, "lb/ft")
+            notes.append(f"{w}.Weight missing: {lb_ft:.3f} lb/ft from {how}")
         out.append({
-            "diameter_m": _num(r, "Diameter", w, 0.1, 4.0, "in"),
+            "diameter_m": d_m,
             "length_m": _num(r, "TotalLength", w, 1.0, 40000.0, "ft"),
             "youngs_modulus_pa": _num(r, "ModulusOfElasticity", w, 1e5, 1e8, "psi"),
-            "weight_kg_m": _num(r, "Weight", w, 0.05, 50.0, "lb/ft"),
+            "weight_kg_m": weight,
             "grade": str(r.get("Grade") or "D"),
         })
     return out
+
+
+def _depth_notes(rec: "FieldRecord") -> list[str]:
+    """A pump far below (or above) the listed rods usually means a taper missing from the record: said, not
+    refused (the model then hangs the listed rods and takes the liquid column between them and the pump)."""
+    gap = rec.pump_depth_m - rec.rod_length_m
+    if gap < -0.01 * rec.pump_depth_m or gap > 0.1 * rec.pump_depth_m:
+        return [f"the rod tapers sum to {rec.rod_length_m / 0.3048:.0f} ft against a pump depth of "
+                f"{rec.pump_depth_m / 0.3048:.0f} ft: check the record's rod string (a taper missing?)"]
+    return []
 
 
 def _unit(su: dict, where: str) -> dict:
@@ -164,9 +196,10 @@ def read_dynacard_json(path: str | Path, reverse: bool = False, auto_orient: boo
     rho = fu.liquid_density_kg_m3(wcut if wcut is not None else 0.0, sgw, api)
     rho_given = _num(ip, "FluidDensity", "InputParameters", 100.0, 3000.0, "kg/m^3", optional=True)
     an = _section(d, "downholeCardAnalysis", "record", required=False)
-    rec = FieldRecord(
+    notes: list[str] = []
+    rec = FieldRecord(notes=notes, 
         source=str(path), time_reversed=reverse, t_s=t, position_m=x - x.min(), load_n=f, spm=spm,
-        tapers=_tapers(eq.get("Rods"), "equipmentData.Rods"),
+        tapers=_tapers(eq.get("Rods"), "equipmentData.Rods", notes),
         pump_depth_m=_num(pump, "Depth", "equipmentData.Pump", 10.0, 40000.0, "ft"),
         plunger_diameter_m=_num(pump, "Diameter", "equipmentData.Pump", 0.5, 8.0, "in"),
         tubing_pressure_pa=_num(ip, "TubingPressure", "InputParameters", 0.0, 10000.0, "psi", optional=True) or 0.0,
@@ -178,6 +211,7 @@ def read_dynacard_json(path: str | Path, reverse: bool = False, auto_orient: boo
         damping_coefficients=_coefficients(eq.get("DampingCoefficient") or _section(
             d, "dynaoutputData", "record", required=False).get("DampingCoefficient")),
         unit=_unit(eq.get("SurfaceUnit"), "equipmentData.SurfaceUnit"))
+    rec.notes += _depth_notes(rec)
     dh = d.get("downholeCard")
     if isinstance(dh, dict) and dh.get("Position") and dh.get("Load"):
         xp, fp = _series(dh, "Position", "downholeCard"), _series(dh, "Load", "downholeCard")

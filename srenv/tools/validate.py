@@ -151,7 +151,8 @@ def validate(rec, params: list[str], strokes: int, convention: str, overrides: d
     from ..analysis.field_model import unit_kinematics_check
 
     out["unit_kinematics"] = unit_kinematics_check(rec)
-    out.update({"record": rec.source, "card_time_reversed": bool(getattr(rec, "time_reversed", False)),
+    out.update({"record": rec.source, "record_notes": list(getattr(rec, "notes", [])),
+                "card_time_reversed": bool(getattr(rec, "time_reversed", False)),
                 "pump_state": state,
                 "diagnosis": {k: diag[k] for k in ("fillage", "card_class", "fluid_load_n", "intake_pressure_pa")},
                 "fit": fitted, "model": {"damping_factor": cfg.get("damping", {}).get("damping_factor"),

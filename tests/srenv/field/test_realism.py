@@ -379,3 +379,23 @@ def test_fluid_column_inertia_closes_the_energy_balance_and_loads_the_upstroke()
     assert p1 > p0 * 1.01
     assert abs(e1) <= 1e-7 * w1
     assert d1 == pytest.approx(d0, rel=0.1)
+
+
+def test_record_without_rod_weights_takes_the_api_table_and_says_so(tmp_path):
+    """A taper with no weight gets API RP 11L's figure for its size (the records' own 7/8-in and 3/4-in weights
+    are exactly the table's) or a steel bar's; a rod string far from the pump depth is named in the notes."""
+    from srenv.analysis.field_record import rod_weight_lb_ft
+
+    d = json.loads((DATA / "11708328.json").read_text())
+    given = read_dynacard_json(DATA / "11708328.json")
+    for r in d["equipmentData"]["Rods"]:
+        r["Weight"] = None
+    d["equipmentData"]["Rods"] = d["equipmentData"]["Rods"][:1]
+    path = tmp_path / "r.json"
+    path.write_text(json.dumps(d))
+    rec = read_dynacard_json(path)
+    assert rec.tapers[0]["weight_kg_m"] == pytest.approx(given.tapers[0]["weight_kg_m"], rel=1e-12)
+    assert any("API RP 11L" in n for n in rec.notes) and any("pump depth" in n for n in rec.notes)
+    assert not given.notes
+    w, how = rod_weight_lb_ft(1.5)  # a sinker bar: the steel body, 3.40 lb/ft per square inch
+    assert w == pytest.approx(3.40 * math.pi / 4 * 1.5 ** 2) and "steel" in how
