@@ -139,13 +139,13 @@ def _tapers(rods: list, where: str, notes: list[str]) -> list[dict]:
     return out
 
 
-def _depth_notes(rec: "FieldRecord") -> list[str]:
+def _depth_notes(rec: FieldRecord) -> list[str]:
     """A pump far below (or above) the listed rods usually means a taper missing from the record: said, not
     refused (the model then hangs the listed rods and takes the liquid column between them and the pump)."""
     gap = rec.pump_depth_m - rec.rod_length_m
     if gap < -0.01 * rec.pump_depth_m or gap > 0.1 * rec.pump_depth_m:
-        return [f"the rod tapers sum to {rec.rod_length_m / 0.3048:.0f} ft against a pump depth of "
-                f"{rec.pump_depth_m / 0.3048:.0f} ft: check the record's rod string (a taper missing?)"]
+        return [(f"the rod tapers sum to {rec.rod_length_m / 0.3048:.0f} ft against a pump depth of "
+                 f"{rec.pump_depth_m / 0.3048:.0f} ft: check the record's rod string (a taper missing?)")]
     return []
 
 
