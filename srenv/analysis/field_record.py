@@ -144,8 +144,8 @@ def _depth_notes(rec: FieldRecord) -> list[str]:
     refused (the model then hangs the listed rods and takes the liquid column between them and the pump)."""
     gap = rec.pump_depth_m - rec.rod_length_m
     if gap < -0.01 * rec.pump_depth_m or gap > 0.1 * rec.pump_depth_m:
-        return [(f"the rod tapers sum to {fu.from_si(rec.rod_length_m, "ft"):.0f} ft against a pump depth of "
-                 f"{fu.from_si(rec.pump_depth_m, "ft"):.0f} ft: check the record's rod string (a taper missing?)")]
+        return [(f"the rod tapers sum to {fu.from_si(rec.rod_length_m, 'ft'):.0f} ft against a pump depth of "
+                 f"{fu.from_si(rec.pump_depth_m, 'ft'):.0f} ft: check the record's rod string (a taper missing?)")]
     return []
 
 
