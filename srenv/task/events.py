@@ -178,11 +178,8 @@ def apply_condition(sim: Any, base_cfg: Any, label: str | None, severity: float)
     cfg = load_config(base_cfg, over) if over else base_cfg
     if cfg is sim.cfg or cfg == sim.cfg:
         return
-    ann = sim.annulus
-    sim.cfg = cfg
-    sim._assemble()  # rebuilds the matrices, loads and valve law from cfg; the rod state is not touched
-    if ann is not None and sim.annulus is not None and cfg.inflow == base_cfg.inflow:
-        sim.annulus = ann  # the same reservoir: the liquid in the annulus and its bookkeeping carry on
+    # the same reservoir: the liquid in the annulus and its bookkeeping carry on
+    sim.reconfigure(cfg, keep_annulus=cfg.inflow == base_cfg.inflow)
 
 
 @dataclass
