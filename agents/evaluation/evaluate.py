@@ -44,6 +44,7 @@ from .model_io import (
     stats_path,
     vecnormalize_path,
 )
+from .rollout import play
 
 BASELINES = ("rocking", "fillage")
 # info keys averaged per episode (all in the env's SI units)
@@ -181,27 +182,18 @@ class Episode:
         return m
 
 
-def run_episode(env: Any, policy: Policy, seed: int, record_cards: bool = False) -> Episode:
+def evaluate_episode(env: Any, policy: Policy, seed: int, record_cards: bool = False) -> Episode:
+    """One deterministic episode (:func:`agents.evaluation.rollout.play`) as the per-step metrics of this module."""
     ep = Episode(seed)
-    obs, info = env.reset(seed=seed)
-    state, start = None, True
-    # the info-fed route of FillagePolicy, for an env whose observation layout gives no fillage index
-    feed_info = isinstance(policy, FillagePolicy) and policy.fillage_index is None
-    while True:
-        action, state = policy.predict(obs, state=state, episode_start=np.array([start]), deterministic=True)
-        start = False
-        obs, reward, terminated, truncated, info = env.step(action)
-        if feed_info:
-            policy.observe(info)
+    for obs, reward, terminated, _, info in play(env, policy, seed)[1]:
         ep.rewards.append(float(reward))
         for k in _STEP_KEYS:
             if k in info:
                 ep.steps[k].append(float(info[k]))
         if record_cards:
             ep.cards.append(card_from_observation(env, obs, info["stroke_length_m"]))
-        if terminated or truncated:
-            ep.failure = info.get("failure") if terminated else None
-            return ep
+        ep.failure = info.get("failure") if terminated else None
+    return ep
 
 
 def card_from_observation(env: Any, obs: np.ndarray, stroke_length_m: float) -> dict:
@@ -239,7 +231,7 @@ def evaluate(specs: list[str], episodes: int, seed: int, config: str = "default"
     try:
         for spec in specs:
             policy = make_policy(spec, env, trust=trust_model)
-            eps = [run_episode(env, policy, seed + k, record_cards=plot is not None and k == 0)
+            eps = [evaluate_episode(env, policy, seed + k, record_cards=plot is not None and k == 0)
                    for k in range(episodes)]
             label = policy_label(spec)
             if label in results:  # e.g. two runs' best_model from directories of the same name

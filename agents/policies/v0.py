@@ -83,6 +83,11 @@ class FillagePolicy:
         state[:, 0], state[:, 1] = self.initial_spm, 0.0
         return state
 
+    @property
+    def needs_info(self) -> bool:
+        """True when the observation has no fillage to read: the episode loop feeds each step's info."""
+        return self.fillage_index is None
+
     def observe(self, info: dict | list[dict]) -> None:
         """Feed the fillage from the env's ``info`` (one dict, or a VecEnv's list) for the next ``predict``."""
         infos = [info] if isinstance(info, dict) else list(info)
