@@ -13,7 +13,6 @@ import math
 import numbers
 import signal
 import sys
-import warnings
 from pathlib import Path
 from typing import Any
 
@@ -228,10 +227,6 @@ def _eval_env_kwargs(train_env_kwargs: dict) -> dict:
 
 def main(argv: list[str] | None = None) -> int:
     args = build_parser().parse_args(argv)
-    # gymnasium enables its DeprecationWarnings and takes v1 for v0's successor ("out of date, upgrade"): v1 is
-    # another task, and the warning would make every refusal of a v0 run two or three lines instead of one
-    warnings.filterwarnings("ignore", message=r".*is out of date\. You should consider upgrading",
-                            category=DeprecationWarning)
     from srenv.errors import ConfigError
 
     from .training.config import TrainConfigError

@@ -32,6 +32,7 @@ import numpy as np
 from ..envs import ENV_ID_V0, make_env
 from ..policies.protocol import Policy
 from ..policies.v0 import FillagePolicy, RockingMachinePolicy
+from .agent import SB3Policy
 from .model_io import (
     ModelFileError,
     algorithms,
@@ -59,26 +60,6 @@ _TABLE = (("reward", "reward", "{:.2f}"), ("production_m3_day", "production (m3/
 
 
 # --------------------------------------------------------------------------------------------- loading
-class SB3Policy:
-    """A saved SB3 model plus the VecNormalize statistics it was trained with (observations only: the
-    reward normalisation is a training device, the evaluation reports raw env rewards)."""
-
-    def __init__(self, model: Any, obs_normalizer: Any = None, path: str = "") -> None:
-        self.model = model
-        self.obs_normalizer = obs_normalizer
-        self.path = path
-
-    def predict(self, observation: np.ndarray, state: Any = None, episode_start: np.ndarray | None = None,
-                deterministic: bool = True) -> tuple[np.ndarray, Any]:
-        if self.obs_normalizer is not None:
-            observation = self.obs_normalizer.normalize_obs(observation)
-        return self.model.predict(observation, state=state, episode_start=episode_start,
-                                  deterministic=deterministic)
-
-    def __repr__(self) -> str:
-        return f"SB3Policy({type(self.model).__name__}, {self.path})"
-
-
 def load_model(path: str | Path, env: Any, trust: bool = False) -> SB3Policy:
     """Load an SB3 zip (PPO, SAC, A2C, TD3) and its VecNormalize statistics, checked against ``env``.
 
