@@ -166,8 +166,8 @@ class PumpCycle:
             self.annulus.rate_multiplier = multiplier
 
     def return_liquid(self, volume_m3: float) -> None:
-        """Liquid the pump lifted that falls back into the annulus (the part of a stroke an interval does not
-        own: the interval runner books it in the next)."""
+        """Liquid the pump lifted that falls back into the annulus: the part of a stroke an interval does not own
+        (the interval runner books it in the next), or what a leak or parted rods lose (v2)."""
         if self.annulus is not None:
             self.annulus.give_back(volume_m3)
 
