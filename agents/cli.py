@@ -13,22 +13,15 @@ import math
 import numbers
 import signal
 import sys
-import warnings
 from pathlib import Path
 from typing import Any
 
 import yaml
 
+from srenv.cli_types import EXIT_BAD_INPUT, command_parser
 from srenv.shipped import shipped_dir
 
-EXIT_BAD_INPUT = 2
 QUICK_BENCHMARK = shipped_dir("benchmark") / "v1_quick.yaml"  # the checkout's configs/, or the wheel's
-
-
-class _Parser(argparse.ArgumentParser):
-    def error(self, message: str) -> None:  # one line, status 2, no usage dump
-        print(f"agents: error: {message}", file=sys.stderr)
-        sys.exit(EXIT_BAD_INPUT)
 
 
 def _flag(command: str, flag: str) -> Any:
@@ -70,8 +63,7 @@ def _print_json(obj: dict) -> None:
 
 
 def build_parser() -> argparse.ArgumentParser:
-    p = _Parser(prog="python -m agents", description="Baselines, SB3 training and evaluation for srenv.")
-    sub = p.add_subparsers(dest="command", required=True, parser_class=_Parser)
+    p, sub = command_parser("agents", "python -m agents", "Baselines, SB3 training and evaluation for srenv.")
 
     t = sub.add_parser("train", help="train PPO/SAC from a hyperparameter YAML (SB3, or RLlib with backend: rllib)")
     t.add_argument("config", help="training YAML, e.g. configs/train/ppo_default.yaml")
@@ -235,10 +227,6 @@ def _eval_env_kwargs(train_env_kwargs: dict) -> dict:
 
 def main(argv: list[str] | None = None) -> int:
     args = build_parser().parse_args(argv)
-    # gymnasium enables its DeprecationWarnings and takes v1 for v0's successor ("out of date, upgrade"): v1 is
-    # another task, and the warning would make every refusal of a v0 run two or three lines instead of one
-    warnings.filterwarnings("ignore", message=r".*is out of date\. You should consider upgrading",
-                            category=DeprecationWarning)
     from srenv.errors import ConfigError
 
     from .training.config import TrainConfigError

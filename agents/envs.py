@@ -9,9 +9,9 @@ from __future__ import annotations
 from typing import Any
 
 from srenv import ENV_ID as ENV_ID_V0
-from srenv import ENV_ID_V1
+from srenv import ENV_ID_V1, ENV_ID_V2
 
-__all__ = ["ENV_ID_V0", "ENV_ID_V1", "make_env"]
+__all__ = ["ENV_ID_V0", "ENV_ID_V1", "ENV_ID_V2", "make_env"]
 
 
 def make_env(env_id: str = ENV_ID_V1, **kwargs: Any) -> Any:

@@ -29,7 +29,6 @@ args = ap.parse_args()
 reps, strokes = args.repeats, args.strokes
 code = r'''
 import sys, time, json
-# the flat module names: the only ones a checkout from before the packages has (and aliases since, srenv/_compat.py)
 from srenv.config import load_config
 from srenv.simulation.simulator import Simulator
 from srenv.tools.bench import CASES
@@ -46,12 +45,13 @@ print(json.dumps(out))
 env_code = r'''
 import sys, time, json, warnings
 warnings.filterwarnings("ignore")
-import numpy as np, gymnasium as gym, srenv  # noqa
+import numpy as np, gymnasium as gym
+from srenv import ENV_ID_V1  # importing srenv registers the envs
 kw = {"fast_stepping": True} if sys.argv[2] == "fast" else {}
 out = {}
 for label, a0 in (("full_speed", 1.0), ("vsd_minimum", -0.6)):
     a = np.array([a0, 1.0], np.float32)
-    env = gym.make("srenv/SuckerRod-v1", scenario="train", **kw); env.reset(seed=3); env.step(a)
+    env = gym.make(ENV_ID_V1, scenario="train", **kw); env.reset(seed=3); env.step(a)
     n, t0 = 0, time.process_time()
     for seed in (11, 12):
         env.reset(seed=seed)

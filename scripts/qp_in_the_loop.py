@@ -20,7 +20,7 @@ import time
 import gymnasium as gym
 import numpy as np
 
-import srenv  # noqa: F401  (registers the env)
+from srenv import ENV_ID  # importing srenv registers the envs
 from srenv.config import load_config
 from srenv.simulation.simulator import Simulator
 
@@ -54,7 +54,7 @@ def simulator_figures(name: str) -> dict:
 
 
 def env_figures(name: str) -> dict:
-    envs = {m: gym.make("srenv/SuckerRod-v0", config=name, overrides=o) for m, o in MODES.items()}
+    envs = {m: gym.make(ENV_ID, config=name, overrides=o) for m, o in MODES.items()}
     rng = np.random.default_rng(0)
     calls: dict = {m: [] for m in MODES}
 

@@ -24,7 +24,7 @@ from typing import Any
 import gymnasium as gym
 import numpy as np
 
-import srenv  # noqa: F401 - registers srenv/SuckerRod-v0
+from srenv import ENV_ID  # importing srenv registers the envs
 from srenv.simulation.simulator import Simulator
 
 ENERGY_RTOL = 1e-6
@@ -68,7 +68,7 @@ def simulator_of(env: gym.Env) -> Simulator:
 
 
 def soak(strokes: int, seed: int, checkpoint: int, config: str | None) -> dict:
-    env = gym.make("srenv/SuckerRod-v0", **({"config": config} if config else {}))
+    env = gym.make(ENV_ID, **({"config": config} if config else {}))
     env.action_space.seed(seed)
     obs, _ = env.reset(seed=seed)
     strokes_per_step = int(simulator_of(env).cfg.control.strokes_per_step)

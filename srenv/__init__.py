@@ -41,13 +41,15 @@ def register_envs() -> None:
             gymnasium.register(id=env_id, entry_point=entry_point, kwargs=dict(kwargs),
                                max_episode_steps=None, reward_threshold=None, nondeterministic=False,
                                vector_entry_point=VECTOR_ENTRY_POINTS.get(env_id))
-    # gymnasium takes the highest registered version of a name as every lower version's successor and warns
-    # "v0 is out of date, upgrade to v1" on each make of v0 (and of v1 once v2 exists): wrong advice here, since
-    # each version is its own task kept with its numbers for reproducibility, and a warning that breaks callers
-    # running with warnings as errors (Gymnasium's and SB3's checkers, CI). A warnings filter cannot help (a
-    # strict caller's own filter wins), so the one documented place that touches the registry is here: every
-    # version after v0 reads EnvSpec.version None, which only takes it out of that lookup (id, kwargs, make and
-    # make_vec are unchanged).
+    # gymnasium takes the highest registered version of a name as every lower version's successor: registered
+    # with its API alone, make of v0 and of v1 raises DeprecationWarning "out of date, upgrade to v2" (from
+    # gymnasium.envs.registration._find_spec). That is wrong advice here, since each version is its own task
+    # kept with its numbers, and an error for callers running with warnings as errors (pytest, CI, checkers).
+    # register() takes no version (EnvSpec parses it from the fixed id), and a warnings filter installed here
+    # loses to any filter a strict caller adds later. So this is the one place that touches the registry:
+    # every version after v0 reads EnvSpec.version None, which only takes it out of that lookup (id, kwargs,
+    # make and make_vec unchanged). A further version must be added to ENVS: gymnasium refuses to register a
+    # versioned id of a name that has an unversioned spec (docs/scale.md, "Why the registry ...").
     for env_id in ENVS:
         spec = gymnasium.registry.get(env_id)
         if spec is not None and not env_id.endswith("-v0"):

@@ -5,9 +5,30 @@ value is one line naming the flag, the value and what is expected (argparse turn
 from __future__ import annotations
 
 import argparse
+import sys
 from collections.abc import Callable
+from typing import Any
 
 from .declarations import MAX_DURATION_S, Number  # noqa: F401  (MAX_DURATION_S: re-exported)
+
+EXIT_BAD_INPUT = 2  # the exit status of bad input, on every command line
+
+
+class OneLineParser(argparse.ArgumentParser):
+    """A parser whose error is one line ``<tool>: error: ...`` on stderr and exit status 2, no usage dump."""
+
+    tool = "srenv"
+
+    def error(self, message: str) -> None:
+        print(f"{self.tool}: error: {message}", file=sys.stderr)
+        sys.exit(EXIT_BAD_INPUT)
+
+
+def command_parser(tool: str, prog: str, description: str) -> tuple[argparse.ArgumentParser, Any]:
+    """The parser of a tool's command line and its required subcommands, both erring in one line as ``tool``."""
+    parser_class = type(f"{tool.title()}Parser", (OneLineParser,), {"tool": tool})
+    parser = parser_class(prog=prog, description=description)
+    return parser, parser.add_subparsers(dest="command", required=True, parser_class=parser_class)
 
 
 def positive(name: str, unit: str) -> Callable[[str], float]:

@@ -28,30 +28,42 @@ def short_repr(value: object, limit: int = VALUE_REPR_CHARS) -> str:
     return text if len(text) <= limit else text[: limit - 3] + "..."
 
 
-class ConfigError(ValueError):
+class _Fields:
+    """An error made of named fields (``_fields``, ``__init__``'s arguments in order): pickling rebuilds it from
+    them, so an error raised in a worker process reaches the parent whole. Exception's own pickling would call
+    ``__init__`` with the message alone, which these signatures refuse (the pool then reports a broken worker)."""
+
+    _fields: tuple[str, ...] = ()
+
+    def __reduce__(self) -> tuple:
+        return type(self), tuple(getattr(self, name) for name in self._fields)
+
+
+class ConfigError(_Fields, ValueError):
     """A config value is invalid. The message names the field, the value and the expected unit."""
 
+    _fields = ("field", "value", "expected")
+
     def __init__(self, field: str, value: object, expected: str) -> None:
-        self.field = field
-        self.value = value
-        self.expected = expected
+        self.field, self.value, self.expected = field, value, expected
         super().__init__(f"config field '{field}' = {short_repr(value)}: expected {expected}")
 
 
-class NumericFailure(RuntimeError):
+class NumericFailure(_Fields, RuntimeError):
     """A run produced non-finite numbers (the config's magnitudes are outside what the model can handle)."""
 
+    _fields = ("what", "detail")
+
     def __init__(self, what: str, detail: str) -> None:
-        self.what = what
-        self.detail = detail
+        self.what, self.detail = what, detail
         super().__init__(f"non-finite result in '{what}': {detail}")
 
 
-class SolverFailure(RuntimeError):
+class SolverFailure(_Fields, RuntimeError):
     """The step QP could not be solved by any backend in the retry chain."""
 
+    _fields = ("step", "time_s", "detail")
+
     def __init__(self, step: int, time_s: float, detail: str) -> None:
-        self.step = step
-        self.time_s = time_s
-        self.detail = detail
+        self.step, self.time_s, self.detail = step, time_s, detail
         super().__init__(f"step QP failed at step {step} (t = {time_s:.4f} s): {detail}")

@@ -156,3 +156,37 @@ def test_entry_points_resolve() -> None:
                            check=False)
         assert p.returncode == 0 and "usage" in p.stdout, p.stderr
         assert "Warning" not in p.stderr
+
+
+def _writes_into_the_simulator(tree: ast.AST) -> list[str]:
+    """Assignments whose target reaches into a simulator or its annulus (``sim.x = ``, ``self.sim.annulus.y += ``,
+    ``ann.volume_m3 -= ``): the object is named sim / annulus / ann somewhere in the target's chain."""
+    out = []
+    for node in ast.walk(tree):
+        targets = node.targets if isinstance(node, ast.Assign) else [node.target] if isinstance(
+            node, (ast.AugAssign, ast.AnnAssign)) else []
+        for t in targets:
+            if not isinstance(t, (ast.Attribute, ast.Subscript)):
+                continue
+            chain, x = [], t.value
+            while isinstance(x, (ast.Attribute, ast.Subscript)):
+                if isinstance(x, ast.Attribute):
+                    chain.append(x.attr)
+                x = x.value
+            if isinstance(x, ast.Name):
+                chain.append(x.id)
+            if {"sim", "annulus", "ann"} & set(chain):
+                out.append(f"line {node.lineno}: {ast.unparse(t)}")
+    return out
+
+
+def test_the_simulator_state_changes_only_through_its_own_methods() -> None:
+    """Outside srenv/simulation and the annulus' own module, code calls the simulator's methods
+    (set_inflow_multiplier, return_liquid, fast_forward, switch_config, idle, ...) instead of writing its fields."""
+    own = (SRENV / "simulation", SRENV / "physics" / "inflow.py")
+    found = {m: w for m, p in _modules().items() if not any(p == o or o in p.parents for o in own)
+             if (w := _writes_into_the_simulator(ast.parse(p.read_text())))}
+    assert found == {}
+    # the check sees a write: the form the interval runner used before
+    assert _writes_into_the_simulator(ast.parse("ann.volume_m3 -= take\nsim.time_s = t")) == [
+        "line 1: ann.volume_m3", "line 2: sim.time_s"]

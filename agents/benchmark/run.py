@@ -33,7 +33,7 @@ import time
 from pathlib import Path
 from typing import Any
 
-from ..envs import make_env
+from ..envs import ENV_ID_V1, make_env
 from ..evaluation.manifest import MODELS_HOME, write_manifest
 from ..evaluation.rollout import Runner
 from ..inputs import check_output_dir
@@ -106,7 +106,7 @@ def _write_report(cfg: dict[str, Any], out: Path, quick: bool, policies: dict[st
     report["tuning_history"] = {n: t.get("evaluated", []) for n, t in tuned.items()}
     fig_rel = "figures/benchmark_v1.png"
     figure(report, traces, out / fig_rel)
-    if cfg["env_id"] != "srenv/SuckerRod-v1":  # v2 on: the rliable figures (agents/benchmark/rliable_stats.py)
+    if cfg["env_id"] != ENV_ID_V1:  # v2 on: the rliable figures (agents/benchmark/rliable_stats.py)
         from .rliable_stats import rliable_section
 
         report["rliable"] = rliable_section(report)

@@ -23,7 +23,28 @@ from .model_io import algorithms, detect_algo, load_policy, read_data, space_sha
 from .normalizer import ObsNormalizer
 
 
-class AgentPolicy:
+class SB3Policy:
+    """A trained SB3 model and the observation normaliser it was trained with (observations only: the reward
+    normalisation is a training device, evaluation reports raw env rewards): any object with
+    ``normalize_obs`` (:class:`agents.evaluation.normalizer.ObsNormalizer`, or a trusted ``VecNormalize``)."""
+
+    def __init__(self, model: Any, norm: Any = None, path: str = "") -> None:
+        self.model = model
+        self.norm = norm
+        self.path = path
+
+    def predict(self, observation: Any, state: Any = None, episode_start: Any = None,
+                deterministic: bool = True) -> tuple[np.ndarray, Any]:
+        if self.norm is not None:
+            observation = self.norm.normalize_obs(observation)
+        return self.model.predict(observation, state=state, episode_start=episode_start,
+                                  deterministic=deterministic)
+
+    def __repr__(self) -> str:
+        return f"{type(self).__name__}({type(self.model).__name__}, {self.path})"
+
+
+class AgentPolicy(SB3Policy):
     """An SB3 model (PPO, SAC, ...) with its observation normaliser, deterministic by default.
 
     The zip is read as data (:func:`agents.evaluation.model_io.load_policy`: the network rebuilt from its plain-text
@@ -34,23 +55,16 @@ class AgentPolicy:
     def __init__(self, path: str, obs_norm: str | None = None) -> None:
         import gymnasium as gym
 
-        self.path = path
         data = read_data(path)
         obs_shape, act_shape = space_shape(data, "observation_space", path), space_shape(data, "action_space", path)
         self.observation_space = gym.spaces.Box(-np.inf, np.inf, obs_shape, np.float32)
         self.action_space = gym.spaces.Box(-1.0, 1.0, act_shape, np.float32)
-        self.model = load_policy(path, algorithms()[detect_algo(path)], self.observation_space, self.action_space)
-        self.norm = ObsNormalizer.load(obs_norm) if obs_norm else None
-        if self.norm is not None and self.norm.mean.shape != obs_shape:
-            raise ValueError(f"{obs_norm}: statistics of shape {self.norm.mean.shape} do not fit the model "
+        model = load_policy(path, algorithms()[detect_algo(path)], self.observation_space, self.action_space)
+        norm = ObsNormalizer.load(obs_norm) if obs_norm else None
+        if norm is not None and norm.mean.shape != obs_shape:
+            raise ValueError(f"{obs_norm}: statistics of shape {norm.mean.shape} do not fit the model "
                              f"{path} (observation shape {obs_shape})")
-
-    def predict(self, observation: Any, state: Any = None, episode_start: Any = None,
-                deterministic: bool = True) -> tuple[np.ndarray, Any]:
-        if self.norm is not None:
-            observation = self.norm(observation)
-        return self.model.predict(observation, state=state, episode_start=episode_start,
-                                  deterministic=deterministic)
+        super().__init__(model, norm, path)
 
 
 def build_policy(spec: dict[str, Any], env: Any) -> Any:

@@ -32,6 +32,7 @@ import numpy as np
 from ..envs import ENV_ID_V0, make_env
 from ..policies.protocol import Policy
 from ..policies.v0 import FillagePolicy, RockingMachinePolicy
+from .agent import SB3Policy
 from .model_io import (
     ModelFileError,
     algorithms,
@@ -44,6 +45,7 @@ from .model_io import (
     stats_path,
     vecnormalize_path,
 )
+from .rollout import play
 
 BASELINES = ("rocking", "fillage")
 # info keys averaged per episode (all in the env's SI units)
@@ -58,26 +60,6 @@ _TABLE = (("reward", "reward", "{:.2f}"), ("production_m3_day", "production (m3/
 
 
 # --------------------------------------------------------------------------------------------- loading
-class SB3Policy:
-    """A saved SB3 model plus the VecNormalize statistics it was trained with (observations only: the
-    reward normalisation is a training device, the evaluation reports raw env rewards)."""
-
-    def __init__(self, model: Any, obs_normalizer: Any = None, path: str = "") -> None:
-        self.model = model
-        self.obs_normalizer = obs_normalizer
-        self.path = path
-
-    def predict(self, observation: np.ndarray, state: Any = None, episode_start: np.ndarray | None = None,
-                deterministic: bool = True) -> tuple[np.ndarray, Any]:
-        if self.obs_normalizer is not None:
-            observation = self.obs_normalizer.normalize_obs(observation)
-        return self.model.predict(observation, state=state, episode_start=episode_start,
-                                  deterministic=deterministic)
-
-    def __repr__(self) -> str:
-        return f"SB3Policy({type(self.model).__name__}, {self.path})"
-
-
 def load_model(path: str | Path, env: Any, trust: bool = False) -> SB3Policy:
     """Load an SB3 zip (PPO, SAC, A2C, TD3) and its VecNormalize statistics, checked against ``env``.
 
@@ -181,27 +163,18 @@ class Episode:
         return m
 
 
-def run_episode(env: Any, policy: Policy, seed: int, record_cards: bool = False) -> Episode:
+def evaluate_episode(env: Any, policy: Policy, seed: int, record_cards: bool = False) -> Episode:
+    """One deterministic episode (:func:`agents.evaluation.rollout.play`) as the per-step metrics of this module."""
     ep = Episode(seed)
-    obs, info = env.reset(seed=seed)
-    state, start = None, True
-    # the info-fed route of FillagePolicy, for an env whose observation layout gives no fillage index
-    feed_info = isinstance(policy, FillagePolicy) and policy.fillage_index is None
-    while True:
-        action, state = policy.predict(obs, state=state, episode_start=np.array([start]), deterministic=True)
-        start = False
-        obs, reward, terminated, truncated, info = env.step(action)
-        if feed_info:
-            policy.observe(info)
+    for obs, reward, terminated, _, info in play(env, policy, seed)[1]:
         ep.rewards.append(float(reward))
         for k in _STEP_KEYS:
             if k in info:
                 ep.steps[k].append(float(info[k]))
         if record_cards:
             ep.cards.append(card_from_observation(env, obs, info["stroke_length_m"]))
-        if terminated or truncated:
-            ep.failure = info.get("failure") if terminated else None
-            return ep
+        ep.failure = info.get("failure") if terminated else None
+    return ep
 
 
 def card_from_observation(env: Any, obs: np.ndarray, stroke_length_m: float) -> dict:
@@ -239,7 +212,7 @@ def evaluate(specs: list[str], episodes: int, seed: int, config: str = "default"
     try:
         for spec in specs:
             policy = make_policy(spec, env, trust=trust_model)
-            eps = [run_episode(env, policy, seed + k, record_cards=plot is not None and k == 0)
+            eps = [evaluate_episode(env, policy, seed + k, record_cards=plot is not None and k == 0)
                    for k in range(episodes)]
             label = policy_label(spec)
             if label in results:  # e.g. two runs' best_model from directories of the same name

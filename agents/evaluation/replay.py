@@ -27,7 +27,7 @@ from typing import Any
 
 import numpy as np
 
-from ..envs import ENV_ID_V1, make_env
+from ..envs import ENV_ID_V1, ENV_ID_V2, make_env
 from ..inputs import baseline_params, report_env_kwargs, report_episodes
 from ..policies.ensemble import ensemble_spec
 from ..policies.residual import RESIDUAL_BASES, check_scales
@@ -35,7 +35,7 @@ from .manifest import MODELS_HOME
 from .rollout import run_episode
 from .v1_view import build_policy_any
 
-REPLAYABLE = (ENV_ID_V1, "srenv/SuckerRod-v2")
+REPLAYABLE = (ENV_ID_V1, ENV_ID_V2)
 
 MAX_REPORT_BYTES = 50_000_000
 

@@ -14,7 +14,7 @@ from __future__ import annotations
 
 import json
 import math
-from collections.abc import Callable, Iterable, Sequence
+from collections.abc import Callable, Iterable, Iterator, Sequence
 from concurrent.futures import ProcessPoolExecutor
 from multiprocessing import get_context
 from typing import TYPE_CHECKING, Any
@@ -36,23 +36,49 @@ TRACE_KEYS = ("avg_spm", "spm", "duty", "stroke_length_m", "fillage_est", "filla
 
 
 # ------------------------------------------------------------------------------------------ episodes
-def run_episode(env: Any, policy: Any, seed: int, trace: bool = False) -> dict[str, Any]:
-    """One deterministic episode from ``env.reset(seed=seed)``; the record described in the module doc."""
+Step = tuple[Any, float, bool, bool, dict]  # what env.step returns: obs, reward, terminated, truncated, info
+
+
+def play(env: Any, policy: Any, seed: int) -> tuple[dict, Iterator[Step]]:
+    """The one episode loop: ``env.reset(seed=seed)``, then deterministic actions until the episode ends.
+
+    Returns the reset's info and an iterator over the steps (each as ``env.step`` returned it). A policy with
+    ``reset(env)`` is reset with the env; one whose ``needs_info`` is true is fed each step's info through
+    ``observe(info)`` (v0's pump-off controller on an observation without the fillage).
+    """
     obs, info = env.reset(seed=int(seed))
     if hasattr(policy, "reset"):
         policy.reset(env)
+    return info, _steps(env, policy, obs)
+
+
+def _steps(env: Any, policy: Any, obs: Any) -> Iterator[Step]:
+    feed_info = getattr(policy, "needs_info", False)
+    state, start = None, True
+    while True:
+        action, state = policy.predict(obs, state=state, episode_start=np.array([start]), deterministic=True)
+        start = False
+        step = env.step(action)
+        obs, info = step[0], step[4]
+        if feed_info:
+            policy.observe(info)
+        yield step
+        if step[2] or step[3]:
+            return
+
+
+def run_episode(env: Any, policy: Any, seed: int, trace: bool = False) -> dict[str, Any]:
+    """One deterministic episode (:func:`play`); the record described in the module doc."""
+    info, steps = play(env, policy, seed)
     rec: dict[str, Any] = {"well_id": str(info.get("well_id", getattr(env.unwrapped.well, "well_id", "?"))),
                            "seed": int(seed)}
     sums: dict[str, float] = {}
     means: dict[str, list[float]] = {k: [] for k in MEAN_KEYS}
     tr: dict[str, list] = {k: [] for k in (*TRACE_KEYS, "reward", "card")} if trace else {}
-    state, start, ret, steps, failure = None, True, 0.0, 0, None
-    while True:
-        action, state = policy.predict(obs, state=state, episode_start=np.array([start]), deterministic=True)
-        start = False
-        obs, reward, terminated, truncated, info = env.step(action)
+    ret, n, failure = 0.0, 0, None
+    for obs, reward, terminated, _, info in steps:
         ret += float(reward)
-        steps += 1
+        n += 1
         for k, v in info.items():
             if (k.startswith(("reward_", "cost_")) or k == "cost") and _is_number(v):
                 sums[k] = sums.get(k, 0.0) + float(v)
@@ -64,10 +90,8 @@ def run_episode(env: Any, policy: Any, seed: int, trace: bool = False) -> dict[s
                 tr[k].append(float(info[k]) if k in info and _is_number(info[k]) else math.nan)
             tr["reward"].append(float(reward))
             tr["card"].append(np.asarray(obs, np.float64)[:64].round(4).tolist())
-        if terminated or truncated:
-            failure = info.get("failure") if terminated else None
-            break
-    rec.update(reward=ret, cost=sums.pop("cost", 0.0), steps=steps, reward_rate_usd_h=ret / max(steps, 1))
+        failure = info.get("failure") if terminated else None
+    rec.update(reward=ret, cost=sums.pop("cost", 0.0), steps=n, reward_rate_usd_h=ret / max(n, 1))
     rec.update(sorted(sums.items()))
     rec.update({f"mean_{k}": float(np.mean(v)) for k, v in means.items() if v})
     rec["failure"] = str(failure) if failure else None

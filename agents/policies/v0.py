@@ -1,7 +1,8 @@
 """Baseline controllers with the Stable-Baselines3 ``predict`` interface.
 
-Both map physical set-points (SPM, stroke length in m) into the env's action box [-1, 1]^2 with the same
-linear map the env uses (``control.spm_min..spm_max``, ``control.stroke_min_m..stroke_max_m``), so they can
+Both map physical set-points (SPM, stroke length in m) into the env's action box [-1, 1]^2 with the env's own
+linear map (:func:`srenv.envs.sucker_rod_v0.action_from_setpoints`: ``control.spm_min..spm_max``,
+``control.stroke_min_m..stroke_max_m``), so they can
 be dropped in wherever an SB3 model is evaluated (``evaluate_policy`` included: they accept and return the
 recurrent ``state`` and honour ``episode_start``).
 
@@ -20,29 +21,8 @@ from typing import Any
 
 import numpy as np
 
-from srenv.config import ControlConfig, WellConfig
-
-
-def _to_unit(x: np.ndarray | float, lo: float, hi: float) -> np.ndarray:
-    """Physical value in [lo, hi] -> action coordinate in [-1, 1] (inverse of the env's linear map)."""
-    return np.clip(2.0 * (np.asarray(x, dtype=np.float64) - lo) / (hi - lo) - 1.0, -1.0, 1.0)
-
-
-def action_from_setpoints(spm: np.ndarray | float, stroke_length_m: np.ndarray | float,
-                          control: ControlConfig) -> np.ndarray:
-    """Action(s) of shape (..., 2) for the given SPM and stroke length (clipped into the control range)."""
-    a_spm = _to_unit(spm, control.spm_min, control.spm_max)
-    a_stroke = _to_unit(stroke_length_m, control.stroke_min_m, control.stroke_max_m)
-    a_spm, a_stroke = np.broadcast_arrays(a_spm, a_stroke)
-    return np.stack([a_spm, a_stroke], axis=-1).astype(np.float32)
-
-
-def setpoints_from_action(action: np.ndarray, control: ControlConfig) -> tuple[np.ndarray, np.ndarray]:
-    """(SPM, stroke length in m) commanded by action(s) of shape (..., 2)."""
-    a = np.clip(np.asarray(action, dtype=np.float64), -1.0, 1.0)
-    spm = control.spm_min + 0.5 * (a[..., 0] + 1.0) * (control.spm_max - control.spm_min)
-    stroke = control.stroke_min_m + 0.5 * (a[..., 1] + 1.0) * (control.stroke_max_m - control.stroke_min_m)
-    return spm, stroke
+from srenv.config import WellConfig
+from srenv.envs.sucker_rod_v0 import action_from_setpoints, setpoints_from_action  # noqa: F401 - the env's map, public here
 
 
 def _batch(obs: np.ndarray) -> tuple[int, bool]:
@@ -102,6 +82,11 @@ class FillagePolicy:
         state = np.empty((n, 2))
         state[:, 0], state[:, 1] = self.initial_spm, 0.0
         return state
+
+    @property
+    def needs_info(self) -> bool:
+        """True when the observation has no fillage to read: the episode loop feeds each step's info."""
+        return self.fillage_index is None
 
     def observe(self, info: dict | list[dict]) -> None:
         """Feed the fillage from the env's ``info`` (one dict, or a VecEnv's list) for the next ``predict``."""

@@ -11,6 +11,8 @@ polished-rod and motor power (``gearbox.py``).
 
 from __future__ import annotations
 
+import weakref
+
 import numpy as np
 
 from ..physics.conditions import condition_name
@@ -38,16 +40,20 @@ def taper_tops(sim: Simulator) -> list[int]:
     return [int(np.argmax(taper == k)) for k in range(int(taper.max()) + 1)]
 
 
+# per simulator, kept here rather than written onto it (its state changes only through its own methods)
+_TAPER_TOP_DATA: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
+
+
 def _taper_top_data(sim: Simulator) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """(element index, area, p*A shift to true load, tensile strength) at each taper top; cached per sim."""
-    cached = getattr(sim, "_taper_top_data", None)
+    cached = _TAPER_TOP_DATA.get(sim)
     if cached is None:
         mesh, cfg = sim.mesh, sim.cfg
         e = np.array(taper_tops(sim))
         p_top = tubing_pressure_pa(cfg.fluid, sim.survey.tvd(mesh.x_m[e]))
         tensile = np.array([t.tensile_strength_pa or metrics.ROD_GRADE_TENSILE_PA[t.grade] for t in cfg.rod.tapers])
         cached = (e, mesh.area_m2[e], p_top * mesh.area_m2[e], tensile)
-        sim._taper_top_data = cached
+        _TAPER_TOP_DATA[sim] = cached
     return cached
 
 

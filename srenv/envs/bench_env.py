@@ -7,6 +7,8 @@ import time
 
 import numpy as np
 
+from .. import ENV_ID
+
 
 def env_overhead(repeats: int = 5, n_strokes: int = 50) -> dict:
     """Two identical envs, reset alike: one steps through the env API, the other's simulator runs the very
@@ -15,8 +17,8 @@ def env_overhead(repeats: int = 5, n_strokes: int = 50) -> dict:
     import gymnasium as gym
 
     action = np.zeros(2, dtype=np.float32)
-    env = gym.make("srenv/SuckerRod-v0").unwrapped
-    bare = gym.make("srenv/SuckerRod-v0").unwrapped
+    env = gym.make(ENV_ID).unwrapped
+    bare = gym.make(ENV_ID).unwrapped
     t_env, t_sim = [], []
     for rep in range(repeats + 1):  # the first repeat warms up (kernel compilation, caches)
         env.reset(seed=0, options={"randomize": False})

@@ -92,7 +92,7 @@ from gymnasium import spaces
 from ..analysis.metrics import resample_prescribed_card
 from ..analysis.render import CardWindow
 from ..analysis.stroke_summary import summarize
-from ..config import WellConfig, check_stroke_steps, field_bounds, load_config
+from ..config import ControlConfig, WellConfig, check_stroke_steps, field_bounds, load_config
 from ..errors import ConfigError, SolverFailure
 from ..simulation.simulator import Simulator
 from ..task.reward import RodFailureMonitor, SuckerRodReward
@@ -102,6 +102,29 @@ from .env_kwargs import CARD_POINTS, merged_overrides
 OBS_TAIL = ("spm", "stroke", "fluid_level", "intake_pressure", "fillage", "pprl", "goodman", "stick_slip")
 OBS_BOUND = 10.0
 RESET_ATTEMPTS = 5
+
+
+def _from_unit(a: Any, lo: float, hi: float) -> Any:
+    """Action coordinate in [-1, 1] -> physical value in [lo, hi]: v0's linear map (floats or arrays alike)."""
+    return lo + 0.5 * (a + 1.0) * (hi - lo)
+
+
+def setpoints_from_action(action: np.ndarray, control: ControlConfig) -> tuple[np.ndarray, np.ndarray]:
+    """(SPM, stroke length in m) commanded by action(s) of shape (..., 2), before the SPM rate limit."""
+    a = np.clip(np.asarray(action, dtype=np.float64), -1.0, 1.0)
+    return (_from_unit(a[..., 0], control.spm_min, control.spm_max),
+            _from_unit(a[..., 1], control.stroke_min_m, control.stroke_max_m))
+
+
+def action_from_setpoints(spm: np.ndarray | float, stroke_length_m: np.ndarray | float,
+                          control: ControlConfig) -> np.ndarray:
+    """Action(s) of shape (..., 2) for the given SPM and stroke length (clipped into the control range)."""
+    def to_unit(x: Any, lo: float, hi: float) -> np.ndarray:
+        return np.clip(2.0 * (np.asarray(x, dtype=np.float64) - lo) / (hi - lo) - 1.0, -1.0, 1.0)
+
+    a_spm, a_stroke = np.broadcast_arrays(to_unit(spm, control.spm_min, control.spm_max),
+                                          to_unit(stroke_length_m, control.stroke_min_m, control.stroke_max_m))
+    return np.stack([a_spm, a_stroke], axis=-1).astype(np.float32)
 
 
 def obs_index(name: str, card_points: int = 32) -> int:
@@ -162,8 +185,7 @@ class SuckerRodEnv(CardWindow, gym.Env):
         c = self.cfg.control
         # clipped to [-1, 1] in Python floats (the same IEEE arithmetic as numpy scalars, at a fraction of the cost)
         a0, a1 = (min(max(float(x), -1.0), 1.0) for x in action)
-        spm = c.spm_min + 0.5 * (a0 + 1.0) * (c.spm_max - c.spm_min)
-        stroke = c.stroke_min_m + 0.5 * (a1 + 1.0) * (c.stroke_max_m - c.stroke_min_m)
+        spm, stroke = _from_unit(a0, c.spm_min, c.spm_max), _from_unit(a1, c.stroke_min_m, c.stroke_max_m)
         if c.spm_rate_limit > 0 and self._spm is not None:
             spm = min(max(spm, self._spm - c.spm_rate_limit), self._spm + c.spm_rate_limit)
         return float(spm), float(stroke)

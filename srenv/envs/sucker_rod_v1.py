@@ -251,7 +251,7 @@ class SuckerRodV1Env(CardWindow, gym.Env):
         if ctl.spm_rate_limit > 0:
             avg = float(np.clip(avg, self._avg_spm - ctl.spm_rate_limit, self._avg_spm + ctl.spm_rate_limit))
         d_avg = avg - self._avg_spm
-        self.sim.annulus.rate_multiplier = self.inflow_multiplier(self._elapsed())
+        self.sim.set_inflow_multiplier(self.inflow_multiplier(self._elapsed()))
         self._before_interval()
         failure = None
         duration = min(self.cfg.task.interval_s, self.horizon_s - self._elapsed())

@@ -208,8 +208,8 @@ class SuckerRodV2Env(SuckerRodV1Env):
             b = ev.Booking()
         else:
             b = ev.bookkeeping(label, sev, r.lifted_m3, r.strokes)
-        if b.lost_m3 > 0 and self.sim.annulus is not None:
-            self.sim.annulus.volume_m3 += b.lost_m3  # the lost liquid falls back: it can be pumped again
+        if b.lost_m3 > 0:
+            self.sim.return_liquid(b.lost_m3)  # the lost liquid falls back: it can be pumped again
         hours = r.duration_s / 3600.0
         workover = self.cfg.economics.workover_usd
         parted = label == "parted_rods"

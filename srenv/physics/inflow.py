@@ -59,9 +59,18 @@ class Annulus:
 
     def take(self, displaced_m3: float, time_s: float) -> float:
         """End of an upstroke: the pump draws up to `displaced_m3`; returns the fillage."""
+        taken = self.draw(displaced_m3, time_s)
+        return taken / displaced_m3 if displaced_m3 > 0 else 1.0
+
+    def draw(self, displaced_m3: float, time_s: float) -> float:
+        """The annulus filled to `time_s`, then the pump draws up to `displaced_m3`; returns the volume drawn."""
         self.accumulate(time_s)
         if displaced_m3 <= 0:
-            return 1.0
+            return 0.0
         taken = min(displaced_m3, self.volume_m3)
         self.volume_m3 -= taken
-        return taken / displaced_m3
+        return taken
+
+    def give_back(self, volume_m3: float) -> None:
+        """Liquid lifted but not produced falls back into the annulus (no cap: it came from there)."""
+        self.volume_m3 += volume_m3

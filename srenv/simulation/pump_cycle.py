@@ -167,6 +167,25 @@ class PumpCycle:
         if self.annulus is not None:
             self.annulus.accumulate(self.time_s)
 
+    def set_inflow_multiplier(self, multiplier: float) -> None:
+        """The reservoir's deliverability from now on (v1's inflow schedule); no effect without an annulus."""
+        if self.annulus is not None:
+            self.annulus.rate_multiplier = multiplier
+
+    def return_liquid(self, volume_m3: float) -> None:
+        """Liquid the pump lifted that falls back into the annulus: the part of a stroke an interval does not own
+        (the interval runner books it in the next), or what a leak or parted rods lose (v2)."""
+        if self.annulus is not None:
+            self.annulus.give_back(volume_m3)
+
+    def fast_forward(self, until_s: float, displaced_m3: float) -> float:
+        """A stroke not simulated (the interval runner's fast-forward): the annulus fills to `until_s`, the pump
+        draws up to `displaced_m3` from it and the clock moves to `until_s`; returns the volume drawn (all of
+        `displaced_m3` without an annulus). The rod state is not touched."""
+        taken = self.annulus.draw(displaced_m3, until_s) if self.annulus is not None else displaced_m3
+        self.time_s = until_s
+        return taken
+
     def replan_upstroke(self, period_s: float) -> None:
         """Re-plan the coming upstroke's liquid (fluid pound) after the annulus changed outside a stroke."""
         if self.annulus is None or self._pump_phase != "up":

@@ -43,14 +43,14 @@ class Simulator(PumpCycle):
     """Exact nonsmooth FE sucker-rod string (design §2-§3)."""
 
     def __init__(self, cfg: WellConfig, *, always_qp: bool | None = None, qp_solver: str | None = None,
-                 persistent_qp: bool = False) -> None:
+                 persistent_qp: bool = False, linear_reference: bool = False) -> None:
         self.cfg = cfg
         sim = cfg.simulation
         self.always_qp = sim.always_qp if always_qp is None else always_qp
         check_dense_size(cfg, self.always_qp)  # the config alone was checked at load; --always-qp was not
         self.qp = StepQP(qp_solver or sim.qp_solver, sim.qp_eps_abs, persistent=persistent_qp)
         self.polish = True  # exact active-set polish of QP answers (off: keep the solver's raw velocity)
-        self.linear_reference = False  # bench only: skip friction and valve law (a plain linear Newmark step)
+        self.linear_reference = linear_reference  # bench only: skip friction and valve law (a plain linear Newmark step)
         self.mesh = build_mesh(cfg.rod, sim.element_length_m)
         self.survey = Survey.from_config(cfg.survey, cfg.rod_length_m)
         self.surface = SurfaceMotion(cfg.surface)

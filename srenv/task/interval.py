@@ -267,7 +267,7 @@ class IntervalRunner:
                 w = min(1.0, remaining)
                 lifted = f.lifted_m3
                 if w < 1.0 and ann is not None:  # only part of this stroke belongs to the interval
-                    ann.volume_m3 += (1.0 - w) * lifted
+                    sim.return_liquid((1.0 - w) * lifted)
                     lifted *= w
                 if transient_w is None:  # the first stroke after a change: its costs wait for the next one
                     self._add(res, f, w, lifted, w * f.displacement_m3, costs=False)
@@ -293,16 +293,10 @@ class IntervalRunner:
             f = exact[-1]
             w = min(1.0, remaining)
             t_next = min(sim.time_s + w * period, t_end) if w < 1.0 else sim.time_s + period
-            if ann is not None:
-                ann.accumulate(t_next)
-                # what the pump can draw: its displacement less the free gas's share (1 without gas)
-                cap = w * f.displacement_m3 * sim.gas_liquid_fraction(max(f.summary["pump_stroke_m"], 0.0))
-                take = min(cap, ann.volume_m3)
-                ann.volume_m3 -= take
-                fill = take / (w * f.displacement_m3) if f.displacement_m3 > 0 else 1.0
-            else:
-                take, fill = w * f.displacement_m3, 1.0
-            sim.time_s = t_next
+            # what the pump can draw: its displacement less the free gas's share (1 without gas)
+            cap = w * f.displacement_m3 * sim.gas_liquid_fraction(max(f.summary["pump_stroke_m"], 0.0))
+            take = sim.fast_forward(t_next, cap)
+            fill = take / (w * f.displacement_m3) if f.displacement_m3 > 0 else 1.0
             self._add(res, f, w, take, w * f.displacement_m3)
             res.fast_forward_strokes += w
             done += w

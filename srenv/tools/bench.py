@@ -30,9 +30,7 @@ def _time_strokes(sim: Simulator, n: int, record: bool = False) -> float:
 
 def _linear_reference(cfg) -> Simulator:
     """Same mesh and time step, no friction and no valve law: a plain linear Newmark step."""
-    sim = Simulator(cfg)
-    sim.linear_reference = True
-    return sim
+    return Simulator(cfg, linear_reference=True)
 
 
 def case_figures(name: str, repeats: int, strokes: int) -> dict:

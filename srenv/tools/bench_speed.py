@@ -13,16 +13,15 @@ import warnings
 
 import numpy as np
 
+from .. import ENV_ID, ENV_ID_V1, ENVS
+
 # the acceptance's operating points: a0 = 1 full speed, a0 = -0.6 an average rate at or below the VSD minimum
 MODES = {"full_speed": (1.0, 1.0), "vsd_minimum": (-0.6, 1.0), "idle": (-1.0, -1.0)}
 
 
 def task_env_ids() -> list[str]:
-    import gymnasium as gym
-
-    import srenv  # noqa: F401 - registers the envs
-
-    return sorted(i for i in gym.registry if i.startswith("srenv/SuckerRod-v") and i != "srenv/SuckerRod-v0")
+    """The control-task envs (every registered version after v0; importing srenv registered them)."""
+    return sorted(i for i in ENVS if i != ENV_ID)
 
 
 def env_rates(env_id: str, steps: int, seeds: tuple = (11, 12), **kwargs) -> dict:
@@ -83,7 +82,6 @@ def speed_figures(quick: bool) -> dict:
     out: dict = {"env_per_core": {}}
     for env_id in task_env_ids():
         out["env_per_core"][env_id] = env_rates(env_id, steps)
-    out["env_per_core"]["srenv/SuckerRod-v1 fast_stepping"] = env_rates("srenv/SuckerRod-v1", steps,
-                                                                        fast_stepping=True)
-    out["vector_env"] = {"srenv/SuckerRod-v1": vector_rates("srenv/SuckerRod-v1", steps=1 if quick else 3)}
+    out["env_per_core"][f"{ENV_ID_V1} fast_stepping"] = env_rates(ENV_ID_V1, steps, fast_stepping=True)
+    out["vector_env"] = {ENV_ID_V1: vector_rates(ENV_ID_V1, steps=1 if quick else 3)}
     return out

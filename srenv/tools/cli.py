@@ -13,13 +13,13 @@ import sys
 
 import numpy as np
 
+from ..cli_types import EXIT_BAD_INPUT, command_parser
 from ..declarations import MAX_STROKES, OUTPUTS, add_number  # noqa: F401  (MAX_STROKES: re-exported)
 from ..errors import ConfigError, NumericFailure, SolverFailure
 from ..interrupts import EXIT_INTERRUPTED, raise_on_sigterm
 from ..outputs import atomic_write_all, check_outputs, json_line
 from .finite import check_finite
 
-EXIT_BAD_INPUT = 2
 EXIT_SOLVER = 3
 DEFAULT_STROKES = 3
 # flags that only some surface motions use: with another motion they would be ignored without a word
@@ -29,12 +29,6 @@ MOTION_FLAGS = {
     "pull_velocity_m_s": ("pullout",),
     "strokes": ("harmonic", "conventional", "measured"),  # a pull-out runs for --duration-s
 }
-
-
-class _Parser(argparse.ArgumentParser):
-    def error(self, message: str) -> None:  # one line, status 2, no usage dump
-        print(f"srenv: error: {message}", file=sys.stderr)
-        sys.exit(EXIT_BAD_INPUT)
 
 
 def trace_csv_writer(trace: dict):
@@ -136,8 +130,7 @@ def pullout_summary(sim, result) -> dict:
 
 
 def build_parser() -> argparse.ArgumentParser:
-    p = _Parser(prog="srenv", description=__doc__.splitlines()[0])
-    sub = p.add_subparsers(dest="command", required=True, parser_class=_Parser)
+    p, sub = command_parser("srenv", "srenv", __doc__.splitlines()[0])
     s = sub.add_parser("simulate", help="simulate a well and write a per-time-step CSV")
     s.add_argument("config", help="well YAML path or shipped name")
     g = s.add_mutually_exclusive_group()

@@ -18,11 +18,12 @@ import pytest
 from agents.envs import ENV_ID_V0, make_env
 from agents.evaluation.evaluate import (
     evaluate,
+    evaluate_episode,
     fillage_index,
     load_model,
     make_policy,
     policy_label,
-    run_episode,
+    well_config,
 )
 from agents.policies.v0 import (
     FillagePolicy,
@@ -114,9 +115,20 @@ def test_fillage_index_matches_info(env) -> None:
     assert obs[idx] == pytest.approx(info["fillage"], rel=1e-6)
 
 
+def test_the_episode_loop_feeds_info_to_a_policy_that_needs_it(env) -> None:
+    """The one episode loop (rollout.play) calls observe(info) for a pump-off controller without a fillage index:
+    it steers the SPM as the observation-fed one does (same direction, same total move within a step's rate),
+    where without the info it would hold its first SPM for the whole episode."""
+    cfg = well_config(env)
+    fed = evaluate_episode(env, FillagePolicy(cfg, fillage_index=None, setpoint=0.95), seed=3).steps["spm"]
+    read = evaluate_episode(env, FillagePolicy(cfg, fillage_index=fillage_index(env), setpoint=0.95), seed=3).steps["spm"]
+    assert len(set(np.round(fed, 6))) > 1 and len(set(np.round(read, 6))) > 1
+    assert np.sign(fed[-1] - fed[0]) == np.sign(read[-1] - read[0])
+
+
 @pytest.mark.parametrize("name", ["rocking", "fillage"])
 def test_baselines_give_finite_metrics(env, name: str) -> None:
-    ep = run_episode(env, make_policy(name, env), seed=3)
+    ep = evaluate_episode(env, make_policy(name, env), seed=3)
     m = ep.metrics()
     assert m["steps"] == SHORT["control__max_episode_steps"]
     for key in ("reward", "production_m3_day", "pprl_n", "goodman_max_pct", "stick_slip_index"):

@@ -17,9 +17,9 @@ import numpy as np
 import pytest
 import qpsolvers
 
-import srenv  # noqa: F401 - registers srenv/SuckerRod-v0
+import srenv  # registers the envs
 from srenv.config import load_config
-from srenv.errors import SolverFailure
+from srenv.errors import NumericFailure, SolverFailure
 from srenv.numerics.step_qp import StepQP
 from srenv.simulation.simulator import RunResult, Simulator
 from srenv.tools.cli import EXIT_SOLVER, main
@@ -241,3 +241,16 @@ def test_randomised_reset_redraws_a_well_whose_warm_up_fails(monkeypatch: pytest
     built["n"] = 0
     with pytest.raises(SolverFailure):
         env.reset(seed=0, options={"randomize": False})
+
+
+@pytest.mark.parametrize("exc", [srenv.ConfigError("surface.spm", [1, 2], "a number in 1/min"),
+                                 srenv.SolverFailure(7, 0.25, "no backend converged"),
+                                 NumericFailure("trace", "nan in load")])
+def test_typed_errors_cross_a_process_boundary_whole(exc: Exception) -> None:
+    """A worker's error comes back pickled (ProcessPoolExecutor: sweep, benchmark runner): it must unpickle as the
+    same type with the same fields and one-line message, not as a TypeError from __init__ (a 'broken' pool)."""
+    import pickle
+
+    back = pickle.loads(pickle.dumps(exc))
+    assert type(back) is type(exc) and str(back) == str(exc)
+    assert {k: getattr(back, k) for k in exc._fields} == {k: getattr(exc, k) for k in exc._fields}

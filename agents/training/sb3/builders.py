@@ -5,7 +5,7 @@ from __future__ import annotations
 
 from typing import Any
 
-from ...envs import ENV_ID_V0
+from ...envs import make_env  # module-level: picklable into SubprocVecEnv workers, registers srenv there
 from ..config import TrainConfig, _expect
 
 
@@ -35,15 +35,6 @@ def build_policy_kwargs(policy_kwargs: dict[str, Any]) -> dict[str, Any]:
     if "activation_fn" in out:
         out["activation_fn"] = _activation(out["activation_fn"])
     return out
-
-
-def make_env(env_id: str = ENV_ID_V0, **env_kwargs: Any) -> Any:
-    """Module-level env factory: picklable into SubprocVecEnv workers, and registers srenv there."""
-    import gymnasium as gym
-
-    import srenv  # noqa: F401  (registers srenv/SuckerRod-v0 in this process)
-
-    return gym.make(env_id, **env_kwargs)
 
 
 def build_vec_env(cfg: TrainConfig, n_envs: int, seed: int, subproc: bool) -> Any:

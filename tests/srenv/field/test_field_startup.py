@@ -58,8 +58,7 @@ def _smooth_case_prl(dt: float) -> np.ndarray:
     start-up transient is gone by the second stroke; PRL of the second stroke on a 4 ms grid."""
     cfg = load_config(FIG3, [f"simulation.time_step_s={dt}", "fluid.density_kg_m3=0", "pump.downstroke_load_n=0",
                              "damping.damping_factor=0.5"])
-    sim = Simulator(cfg)
-    sim.linear_reference = True
+    sim = Simulator(cfg, linear_reference=True)
     load = sim.run_strokes(2)[-1].trace["polished_rod_load_n"]
     k = round(0.004 / dt)
     return load[k - 1::k]
