@@ -122,6 +122,8 @@ class FluidConfig:
 
 @dataclass(frozen=True)
 class PumpConfig:
+    # a set fluid level excludes the intake pressure (config._check_exclusive, to_dict)
+    EXCLUDES: typing.ClassVar[dict[str, str]] = {"fluid_level_m": "intake_pressure_pa"}
     load_source: str = choice("loads", ("loads", "pressures"),
                               "loads: the two plunger loads given; pressures: from diameters and pressures")
     upstroke_load_n: float = num(10000.0, unit="N", check="any", lo=-1.0e7, hi=1.0e7, doc="P- (true load at the rod end)")
@@ -173,6 +175,20 @@ class PumpConfig:
         doc="gradual load transfer: the pumped liquid's compressibility (water 4.5e-10); the chamber's liquid "
             "(and free gas, and unanchored tubing) is a spring in series with the valve law, so the load "
             "transfers over a plunger travel instead of at once; 0 = incompressible (docs/realism.md)")
+    # predictive inputs (docs/realism.md, "Predictive inputs"); None = not given
+    depth_m: float | None = num(None, unit="m", lo=1.0, hi=1.0e5,
+                                doc="measured depth of the pump when it sits below the rod string's end (an "
+                                    "extension, the pump's own length): the liquid column between rod end and "
+                                    "pump enters the valve law as an intake pressure lower by its weight; at or "
+                                    "below the sum of taper lengths; None = at the rod end")
+    fluid_level_m: float | None = num(None, unit="m", check="nonneg", hi=1.0e5,
+                                      doc="annulus fluid level measured from the surface along the hole (an acoustic "
+                                          "sounder's shot): the intake pressure follows, pump.casing_pressure_pa + "
+                                          "rho_f g (TVD of the pump - TVD of the level); instead of "
+                                          "pump.intake_pressure_pa; None = not given")
+    casing_pressure_pa: float | None = num(None, unit="Pa", check="nonneg", hi=1.0e9,
+                                           doc="casing-head pressure of the fluid-level shot (the same reference as "
+                                               "pump.intake_pressure_pa); given with pump.fluid_level_m only")
 
 
 @dataclass(frozen=True)

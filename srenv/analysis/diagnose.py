@@ -29,6 +29,7 @@ import numpy as np
 
 from ..config import WellConfig
 from ..physics.fluid import tubing_pressure_pa
+from ..physics.pump_inputs import column_below_rods_pa
 from ..physics.rod import GRAVITY_M_S2, build_mesh, damping_per_length
 from ..physics.survey import Survey
 from ..surface_unit.measured_motion import read_card_csv, stroke_period_s
@@ -36,6 +37,17 @@ from ..surface_unit.measured_motion import read_card_csv, stroke_period_s
 CARD_COLUMNS = ("t_s", "polished_rod_position_m", "polished_rod_load_n")
 PUMP_COLUMNS = ("t_s", "pump_position_m", "pump_load_n")
 DEFAULT_HARMONICS = 60
+LOAD_CONVENTIONS = ("true", "effective")
+
+
+def load_in_convention(true_load_n, convention: str, rod_end_pressure_pa: float, rod_end_area_m2: float):
+    """A true rod-end load in the named convention: ``true`` as it is, ``effective`` (buoyant, the vendors'
+    pump cards) = true + p A with p the tubing pressure at the rod end and A the bottom rod's area. The one
+    conversion of ``srenv diagnose`` and ``srenv validate`` (docs/realism.md)."""
+    if convention not in LOAD_CONVENTIONS:
+        raise ValueError(f"load convention {convention!r}: expected one of {', '.join(LOAD_CONVENTIONS)}")
+    shift = rod_end_pressure_pa * rod_end_area_m2 if convention == "effective" else 0.0
+    return true_load_n + shift
 
 
 @dataclass(frozen=True)
@@ -79,6 +91,8 @@ class PumpCard:
     polished_rod_load_n: np.ndarray
     period_s: float
     harmonics: int
+    rod_end_pressure_pa: float = 0.0   # tubing pressure at the rod end: effective load = true + p A
+    rod_end_area_m2: float = 0.0       # the bottom rod's area
 
 
 def _resample_periodic(t: np.ndarray, y: np.ndarray, t0: float, period: float, m: int) -> np.ndarray:
@@ -187,7 +201,7 @@ def diagnose_card(cfg: WellConfig, t_s: np.ndarray, position_m: np.ndarray, load
     pos = np.interp(t, np.r_[tt, tt[0] + period], np.r_[-ub, -ub[0]])
     load = np.interp(t, np.r_[tt, tt[0] + period], np.r_[nb, nb[0]]) - p_pump * sg_top.bottom_area_m2
     vel = np.interp(t, np.r_[tt, tt[0] + period], np.r_[-vb, -vb[0]])
-    return PumpCard(t, pos, load, vel, x, f, period, min(harmonics, m // 2 - 1))
+    return PumpCard(t, pos, load, vel, x, f, period, min(harmonics, m // 2 - 1), p_pump, sg_top.bottom_area_m2)
 
 
 # ------------------------------------------------------------------------------------------ card in, summary out
@@ -195,12 +209,18 @@ def read_surface_card(path: str, reverse: bool = False) -> dict[str, np.ndarray]
     return read_card_csv(path, "CARD.csv", CARD_COLUMNS, reverse=reverse)
 
 
-def summary(cfg: WellConfig, card: PumpCard) -> dict:
+def summary(cfg: WellConfig, card: PumpCard, convention: str = "true") -> dict:
+    """The diagnosis's JSON figures; the card is analysed in true loads, and its two load levels are reported
+    in ``convention`` together with the rod end's pressure and area that convert them."""
     from .pump_card import analyse_pump_card
 
     s = analyse_pump_card(card.pump_position_m, card.pump_load_n)
+    for key in ("upstroke_load_n", "downstroke_load_n"):
+        if s.get(key) is not None:
+            s[key] = load_in_convention(s[key], convention, card.rod_end_pressure_pa, card.rod_end_area_m2)
     survey = Survey.from_config(cfg.survey, cfg.rod_length_m)
-    p_out = float(tubing_pressure_pa(cfg.fluid, survey.tvd(cfg.rod_length_m)))
+    # the discharge pressure at the pump: the rod end's plus the liquid column down to a deeper pump
+    p_out = float(tubing_pressure_pa(cfg.fluid, survey.tvd(cfg.rod_length_m))) + column_below_rods_pa(cfg, survey)
     from ..physics.pump import plunger_area_m2
 
     a_pl = plunger_area_m2(cfg.pump)
@@ -219,6 +239,9 @@ def summary(cfg: WellConfig, card: PumpCard) -> dict:
         **s,
         "discharge_pressure_pa": p_out,
         "intake_pressure_pa": p_in,
+        "load_convention": convention,
+        "rod_end_pressure_pa": card.rod_end_pressure_pa,
+        "rod_end_area_m2": card.rod_end_area_m2,
     }
 
 

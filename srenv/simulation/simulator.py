@@ -24,6 +24,7 @@ from ..physics.inflow import Annulus
 from ..physics.laws import rod_friction
 from ..physics.laws import valve as valve_law_record
 from ..physics.pump import GasChamber, ValveLaw, liquid_stiffness_n_m, series_stiffness_n_m, valve_law
+from ..physics.pump_inputs import pump_at_rod_end
 from ..physics.rod import (
     GRAVITY_M_S2,
     build_mesh,
@@ -59,6 +60,8 @@ class Simulator(PumpCycle):
 
     # ------------------------------------------------------------------------------------------ model
     def _assemble(self) -> None:
+        # a pump below the rods or a fluid level: the laws see the pump at the rod end (physics.pump_inputs)
+        self.cfg = pump_at_rod_end(self.cfg, self.survey)
         cfg, mesh = self.cfg, self.mesh
         x = mesh.x_m
         n = mesh.n_nodes - 1
