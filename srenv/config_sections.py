@@ -91,6 +91,12 @@ class DampingConfig:
                                           doc="Kelvin-Voigt retardation time tau: element force EA/L (du + tau dv); "
                                               "damps mode k by zeta_k = tau w_k / 2 (the string's high modes: "
                                               "couplings, guides, fluid); 0 = off (docs/realism.md)")
+    upstroke_factor: float = num(1.0, unit="-", check="nonneg", hi=100.0,
+                                 doc="the viscous damping (above, not tau) times this while the polished rod rises "
+                                     "(a vendor's upstroke coefficient / the string's); chosen from the polished "
+                                     "rod's velocity at the previous step (docs/realism.md); 1 = as the string")
+    downstroke_factor: float = num(1.0, unit="-", check="nonneg", hi=100.0,
+                                   doc="the same while the polished rod falls; 1 = as the string")
 
 
 @dataclass(frozen=True)

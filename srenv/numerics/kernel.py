@@ -215,6 +215,13 @@ def steps(const, fric_p, valve_p, prog, cnt, ksd, kso, kd, ko, md, mo, cd, f, ea
         b0[0] -= kc * ua_new + mc * aa_new
         if kv_tau != 0.0:  # the top column of C_K = tau K, moved over like K's
             b0[0] -= kv_tau * kc * va_new
+        if c.damp_split != 0 and p.have_qp == 0:  # damping per direction of the prescribed polished rod
+            p.damp_prev = p.damp_s
+            ds = c.damp_up if va_new < 0.0 else (c.damp_down if va_new > 0.0 else p.damp_s)
+            if ds != p.damp_s:  # a turn: K* takes the other direction's C
+                for i in range(n):
+                    ksd[i] += (ds - p.damp_s) * cd[i]
+                p.damp_s = ds
         if vp.fluid_kg != 0.0:  # the liquid column rides on the rising plunger: extra mass at the pump node
             if p.have_qp == 0:
                 vp.fluid_dk = c1 * vp.fluid_kg if p.plunger_dir < 0 else 0.0
@@ -311,7 +318,8 @@ def steps(const, fric_p, valve_p, prog, cnt, ksd, kso, kd, ko, md, mo, cd, f, ea
             du = u_new - u[i]
             energy[E_GRAV] += f[i] * du
             energy[E_REACT] -= 0.5 * (lam[i] + prev_lam[i]) * du
-            energy[E_VISC] += 0.5 * cd[i] * (v[i] + prev_v[i]) * du
+            # trapezoidal work of each end's own damping force (both factors 1 without the split: exactly cd)
+            energy[E_VISC] += 0.5 * cd[i] * (p.damp_s * v[i] + p.damp_prev * prev_v[i]) * du
             prev_lam[i] = lam[i]
             prev_v[i] = v[i]
             u[i] = u_new
@@ -322,9 +330,9 @@ def steps(const, fric_p, valve_p, prog, cnt, ksd, kso, kd, ko, md, mo, cd, f, ea
         if kv_tau != 0.0:
             n0 += kv_tau * c.top_ea_len_n_m * (v[0] - va_new)
         prl_eq = (n0 + c.top_load_n - c.top_mass_kg * aa_new - c.top_coupling_mass_kg * a[0]
-                  - c.top_damping_n_s_m * va_new)
+                  - (p.damp_s * c.top_damping_n_s_m) * va_new)
         energy[E_TOP] += -0.5 * (prl_eq + top[TOP_PRL]) * du_a
-        energy[E_VISC] += 0.5 * c.top_damping_n_s_m * (va_new + va_old) * du_a
+        energy[E_VISC] += 0.5 * c.top_damping_n_s_m * (p.damp_s * va_new + p.damp_prev * va_old) * du_a
         top[TOP_PRL] = prl_eq
         top[TOP_U] = ua_new
         top[TOP_V] = va_new
