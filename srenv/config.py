@@ -369,7 +369,8 @@ def config_doc() -> str:
                 lines.append(f"| `{key}` | list | [] | | {f.metadata.get('doc', '')} |")
                 walk(item, key + "[i].")
                 continue
-            default = "required" if f.default is dataclasses.MISSING else repr(f.default)
+            default = "required" if f.default is dataclasses.MISSING else (
+                "null" if f.default is None else repr(f.default))  # null: an optional field not given
             doc = f.metadata.get("doc", "")
             if "options" in f.metadata:
                 doc = (doc + "; " if doc else "") + "one of " + ", ".join(f.metadata["options"])

@@ -65,8 +65,7 @@ def test_effective_and_true_pump_cards_differ_by_exactly_p_a_at_the_rod_end(card
 
 
 def test_one_conversion_serves_validate_and_diagnose() -> None:
-    import srenv.tools.diagnose_cli as diagnose_cli
-    import srenv.tools.validate as validate
+    from srenv.tools import diagnose_cli, validate
 
     assert validate.load_in_convention is load_in_convention is diagnose_cli.load_in_convention
     assert load_in_convention(np.array([1.0, -2.0]), "effective", 1e6, 2e-4).tolist() == [201.0, 198.0]
