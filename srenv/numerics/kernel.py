@@ -310,6 +310,8 @@ def steps(const, fric_p, valve_p, prog, cnt, ksd, kso, kd, ko, md, mo, cd, f, ea
         ua_old = top[TOP_U]
         va_old = top[TOP_V]
         du_a = ua_new - ua_old
+        split = c.damp_split != 0
+        ds_new, ds_old = p.damp_s, p.damp_prev
         if kv_tau != 0.0:  # Kelvin-Voigt work, before u and prev_v move on (kv = 0: nothing changes)
             kv_work(energy, kv_tau, ea_len, u, v, prev_v, a, dt, beta, gamma, ua_old, ua_new, va_old, va_new)
         for i in range(n):
@@ -318,8 +320,9 @@ def steps(const, fric_p, valve_p, prog, cnt, ksd, kso, kd, ko, md, mo, cd, f, ea
             du = u_new - u[i]
             energy[E_GRAV] += f[i] * du
             energy[E_REACT] -= 0.5 * (lam[i] + prev_lam[i]) * du
-            # trapezoidal work of each end's own damping force (both factors 1 without the split: exactly cd)
-            energy[E_VISC] += 0.5 * cd[i] * (p.damp_s * v[i] + p.damp_prev * prev_v[i]) * du
+            energy[E_VISC] += 0.5 * cd[i] * (v[i] + prev_v[i]) * du
+            if split:  # the trapezoid of each end's own damping force: the factors' share beyond C's
+                energy[E_VISC] += 0.5 * cd[i] * ((ds_new - 1.0) * v[i] + (ds_old - 1.0) * prev_v[i]) * du
             prev_lam[i] = lam[i]
             prev_v[i] = v[i]
             u[i] = u_new
@@ -330,9 +333,12 @@ def steps(const, fric_p, valve_p, prog, cnt, ksd, kso, kd, ko, md, mo, cd, f, ea
         if kv_tau != 0.0:
             n0 += kv_tau * c.top_ea_len_n_m * (v[0] - va_new)
         prl_eq = (n0 + c.top_load_n - c.top_mass_kg * aa_new - c.top_coupling_mass_kg * a[0]
-                  - (p.damp_s * c.top_damping_n_s_m) * va_new)
+                  - c.top_damping_n_s_m * va_new)
+        if split:  # the top element's damping at the step's factor
+            prl_eq -= (ds_new - 1.0) * c.top_damping_n_s_m * va_new
+            energy[E_VISC] += 0.5 * c.top_damping_n_s_m * ((ds_new - 1.0) * va_new + (ds_old - 1.0) * va_old) * du_a
         energy[E_TOP] += -0.5 * (prl_eq + top[TOP_PRL]) * du_a
-        energy[E_VISC] += 0.5 * c.top_damping_n_s_m * (p.damp_s * va_new + p.damp_prev * va_old) * du_a
+        energy[E_VISC] += 0.5 * c.top_damping_n_s_m * (va_new + va_old) * du_a
         top[TOP_PRL] = prl_eq
         top[TOP_U] = ua_new
         top[TOP_V] = va_new
