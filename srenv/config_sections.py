@@ -183,10 +183,10 @@ class PumpConfig:
             "transfers over a plunger travel instead of at once; 0 = incompressible (docs/realism.md)")
     # predictive inputs (docs/realism.md, "Predictive inputs"); None = not given
     depth_m: float | None = num(None, unit="m", lo=1.0, hi=1.0e5,
-                                doc="measured depth of the pump when it sits below the rod string's end (an "
-                                    "extension, the pump's own length): the liquid column between rod end and "
-                                    "pump enters the valve law as an intake pressure lower by its weight; at or "
-                                    "below the sum of taper lengths; None = at the rod end")
+                                doc="measured depth of the pump when it sits below the rod string's end (the "
+                                    "pump's own length, a pull tube; sinker bars are a taper): the liquid column "
+                                    "between rod end and pump enters the valve law as an intake pressure lower by "
+                                    "its weight; at or below the sum of taper lengths; null = at the rod end")
     fluid_level_m: float | None = num(None, unit="m", check="nonneg", hi=1.0e5,
                                       doc="annulus fluid level measured from the surface along the hole (an acoustic "
                                           "sounder's shot): the intake pressure follows, pump.casing_pressure_pa + "
