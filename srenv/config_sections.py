@@ -191,7 +191,7 @@ class PumpConfig:
                                       doc="annulus fluid level measured from the surface along the hole (an acoustic "
                                           "sounder's shot): the intake pressure follows, pump.casing_pressure_pa + "
                                           "rho_f g (TVD of the pump - TVD of the level); instead of "
-                                          "pump.intake_pressure_pa; None = not given")
+                                          "pump.intake_pressure_pa; null = not given")
     casing_pressure_pa: float | None = num(None, unit="Pa", check="nonneg", hi=1.0e9,
                                            doc="casing-head pressure of the fluid-level shot (the same reference as "
                                                "pump.intake_pressure_pa); given with pump.fluid_level_m only")
