@@ -24,7 +24,7 @@ from ..physics.inflow import Annulus
 from ..physics.laws import rod_friction
 from ..physics.laws import valve as valve_law_record
 from ..physics.pump import GasChamber, ValveLaw, liquid_stiffness_n_m, series_stiffness_n_m, valve_law
-from ..physics.pump_inputs import pump_at_rod_end
+from ..physics.pump_inputs import intake_at_pump_pa, pump_at_rod_end
 from ..physics.rod import (
     GRAVITY_M_S2,
     build_mesh,
@@ -60,7 +60,10 @@ class Simulator(PumpCycle):
 
     # ------------------------------------------------------------------------------------------ model
     def _assemble(self) -> None:
-        # a pump below the rods or a fluid level: the laws see the pump at the rod end (physics.pump_inputs)
+        # a pump below the rods or a fluid level: the laws see the pump at the rod end (physics.pump_inputs);
+        # the intake pressure at the pump is what a run reports
+        # (every caller sets a config as given before it assembles: __init__, task.events.apply_condition)
+        self.intake_at_pump_pa = intake_at_pump_pa(self.cfg, self.survey)
         self.cfg = pump_at_rod_end(self.cfg, self.survey)
         cfg, mesh = self.cfg, self.mesh
         x = mesh.x_m
@@ -336,8 +339,7 @@ class Simulator(PumpCycle):
             certified_steps=int(cnt["certified"]), corrected_steps=int(cnt["corrected"]),
             qp_steps=int(cnt["qp"]), qp_calls=self.qp.stats.calls - qp_calls0,
             dc_iterations=int(cnt["dc_iterations"]), fillage=fillage, pumped_m3=self._pumped_m3,
-            intake_pressure_pa=(self.annulus.intake_pressure_pa() if self.annulus else
-                                self.cfg.pump.intake_pressure_pa),
+            intake_pressure_pa=(self.annulus.intake_pressure_pa() if self.annulus else self.intake_at_pump_pa),
             rod_stick_episodes=out.stick[:-1].copy(), element_force_max_eq_n=out.emax,
             element_force_min_eq_n=out.emin, energy_j=self.energy_balance(), trace=trace, events=events)
 

@@ -149,3 +149,12 @@ def test_simulate_and_diagnose_honour_the_pump_depth(tmp_path: Path, capsys: pyt
     assert rc == 0
     out = json.loads(capsys.readouterr().out)
     assert out["intake_pressure_pa"] == pytest.approx(deeper["intake_pressure_pa"], rel=1e-9)
+
+
+def test_a_run_reports_the_intake_pressure_at_the_pump() -> None:
+    """The laws see the intake referred to the rod end; a run reports the one at the pump (given or from the
+    level)."""
+    deep = _sim(BASE[1], "pump.depth_m=1042")
+    assert deep.run_stroke().intake_pressure_pa == 2.0e6
+    level = _sim("pump.fluid_level_m=700", "pump.casing_pressure_pa=3.0e5")
+    assert level.run_stroke().intake_pressure_pa == level.cfg.pump.intake_pressure_pa > 2.7e6
