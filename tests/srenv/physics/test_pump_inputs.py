@@ -158,3 +158,19 @@ def test_a_run_reports_the_intake_pressure_at_the_pump() -> None:
     assert deep.run_stroke().intake_pressure_pa == 2.0e6
     level = _sim("pump.fluid_level_m=700", "pump.casing_pressure_pa=3.0e5")
     assert level.run_stroke().intake_pressure_pa == level.cfg.pump.intake_pressure_pa > 2.7e6
+
+
+def test_simulate_takes_the_fluid_level_from_the_command_line(tmp_path: Path, monkeypatch: pytest.MonkeyPatch,
+                                                              capsys: pytest.CaptureFixture) -> None:
+    """srenv simulate with a level shot runs the card of the intake pressure it implies, and reports it."""
+    monkeypatch.chdir(tmp_path)
+    base = ["simulate", "default", "--strokes", "1", "--set", "inflow.model=none"]
+    assert main([*base, "--set", "pump.fluid_level_m=700", "--set", "pump.casing_pressure_pa=3e5",
+                 "--out", "a.csv"]) == 0
+    reported = json.loads(capsys.readouterr().out.strip().splitlines()[-1])
+    p_in = _sim("pump.fluid_level_m=700", "pump.casing_pressure_pa=3.0e5").cfg.pump.intake_pressure_pa
+    assert main([*base, "--set", f"pump.intake_pressure_pa={p_in!r}", "--out", "b.csv"]) == 0
+    a = np.genfromtxt("a.csv", delimiter=",", names=True)
+    b = np.genfromtxt("b.csv", delimiter=",", names=True)
+    assert np.array_equal(a["polished_rod_load_n"], b["polished_rod_load_n"])
+    assert reported["intake_pressure_pa"] == pytest.approx(p_in, rel=1e-12)

@@ -81,3 +81,28 @@ def test_the_diagnosis_joins_the_two_directions_marches(name: str) -> None:
     split, mean = rms(SPLIT), rms(["damping.upstroke_factor=1.75", "damping.downstroke_factor=1.75"])
     assert split < 0.003
     assert mean > 3 * split
+
+
+def test_simulate_and_diagnose_take_the_factors_from_the_command_line(tmp_path, capsys, monkeypatch) -> None:
+    """End to end: srenv simulate with the split, srenv diagnose of its surface card with the same --set: the
+    pump card comes back within 0.3 % of PPRL; the factors also move the card (against factors 1)."""
+    import json
+
+    from srenv.tools.cli import main
+
+    monkeypatch.chdir(tmp_path)
+    sets = [a for s in SPLIT for a in ("--set", s)]
+    assert main(["simulate", FIG3, "--strokes", "4", *sets, "--out", "s.csv"]) == 0
+    assert main(["simulate", FIG3, "--strokes", "4", "--out", "b.csv"]) == 0
+    s = np.genfromtxt("s.csv", delimiter=",", names=True)
+    b = np.genfromtxt("b.csv", delimiter=",", names=True)
+    assert np.max(np.abs(s["polished_rod_load_n"] - b["polished_rod_load_n"])) > 500.0
+    last = s["t_s"] > s["t_s"][-1] - 10.0 + 1e-9  # the last stroke (6 SPM)
+    np.savetxt("card.csv", np.c_[s["t_s"][last], s["polished_rod_position_m"][last], s["polished_rod_load_n"][last]],
+               delimiter=",", header="t_s,polished_rod_position_m,polished_rod_load_n", comments="")
+    capsys.readouterr()
+    assert main(["diagnose", "card.csv", "--config", FIG3, *sets, "--out", "p.csv"]) == 0
+    assert json.loads(capsys.readouterr().out)["card_class"]
+    p = np.genfromtxt("p.csv", delimiter=",", names=True)
+    err = np.sqrt(np.mean((p["pump_load_n"] - s["pump_load_n"][last]) ** 2)) / s["polished_rod_load_n"].max()
+    assert err < 0.003
