@@ -172,7 +172,11 @@ def _parse(cls: type, data: Any, path: str) -> Any:
         elif _is_dataclass_type(tp):
             kwargs[name] = _parse(tp, value, where)
         elif origin in (typing.Union, types.UnionType):
-            raise TypeError(f"unsupported union at {where}")
+            # an optional field (``float | None``): null is "not given", anything else is the type's value
+            args = [a for a in typing.get_args(tp) if a is not type(None)]
+            if len(args) != 1 or len(typing.get_args(tp)) != 2:
+                raise TypeError(f"unsupported union at {where}")
+            kwargs[name] = None if value is None else _parse_scalar(args[0], value, where, dict(f.metadata))
         else:
             kwargs[name] = _parse_scalar(tp, value, where, dict(f.metadata))
     return cls(**kwargs)
@@ -288,7 +292,21 @@ def _material_defaults(data: dict) -> dict:
     return data
 
 
+def _check_exclusive(data: dict) -> None:
+    """Fields a set field excludes (a section's EXCLUDES: the intake pressure follows from a fluid level, so
+    both cannot be given): refused on the raw mapping, where "given" can still be seen."""
+    for section, cls in _type_hints(WellConfig).items():
+        raw = data.get(section)
+        if not isinstance(raw, dict):
+            continue
+        for key, excluded in getattr(cls, "EXCLUDES", {}).items():
+            if raw.get(key) is not None and excluded in raw:
+                raise ConfigError(f"{section}.{excluded}", raw[excluded], f"absent when {section}.{key} is given "
+                                  f"(it follows from {section}.{key}; give one of them)")
+
+
 def config_from_dict(data: dict) -> WellConfig:
+    _check_exclusive(data)
     cfg = _parse(WellConfig, _material_defaults(data), "")
     _check_consistency(cfg)
     _check_resources(cfg)
@@ -315,8 +333,9 @@ def load_config(path_or_name: str | Path | WellConfig = "default",
 
 
 def to_dict(cfg: Any) -> Any:
-    if dataclasses.is_dataclass(cfg):
-        return {f.name: to_dict(getattr(cfg, f.name)) for f in dataclasses.fields(cfg)}
+    if dataclasses.is_dataclass(cfg):  # a field another set field excludes is left out (it follows from it)
+        skip = {ex for key, ex in getattr(cfg, "EXCLUDES", {}).items() if getattr(cfg, key) is not None}
+        return {f.name: to_dict(getattr(cfg, f.name)) for f in dataclasses.fields(cfg) if f.name not in skip}
     if isinstance(cfg, tuple):
         return [to_dict(x) for x in cfg]
     return cfg
@@ -350,7 +369,8 @@ def config_doc() -> str:
                 lines.append(f"| `{key}` | list | [] | | {f.metadata.get('doc', '')} |")
                 walk(item, key + "[i].")
                 continue
-            default = "required" if f.default is dataclasses.MISSING else repr(f.default)
+            default = "required" if f.default is dataclasses.MISSING else (
+                "null" if f.default is None else repr(f.default))  # null: an optional field not given
             doc = f.metadata.get("doc", "")
             if "options" in f.metadata:
                 doc = (doc + "; " if doc else "") + "one of " + ", ".join(f.metadata["options"])

@@ -16,6 +16,7 @@ def _check_consistency(cfg: WellConfig) -> None:
     if not cfg.rod.tapers:
         raise ConfigError("rod.tapers", [], "at least one taper")
     _check_pump(cfg)
+    _check_pump_inputs(cfg)
     _check_tubing(cfg)
     f = cfg.friction
     if f.law == "nonmonotone" and f.kinetic_coefficient > f.coefficient:
@@ -61,6 +62,33 @@ def _check_pump(cfg: WellConfig) -> None:
     if p.liquid_compressibility_per_pa > 0 and p.law != "constant":
         raise ConfigError("pump.liquid_compressibility_per_pa", p.liquid_compressibility_per_pa,
                           "0 with pump.law 'nonmonotone' (the liquid spring carries the constant law only)")
+
+
+def _check_pump_inputs(cfg: WellConfig) -> None:
+    """The predictive inputs (physics.pump_inputs): a pump at or below the rods' end, a fluid level above the
+    pump with its casing pressure, neither where the loads are given or an inflow model keeps its own level."""
+    p = cfg.pump
+    if p.depth_m is not None and p.depth_m < cfg.rod_length_m:
+        raise ConfigError("pump.depth_m", p.depth_m, f"a depth in m at or below the rod string's end "
+                          f"({cfg.rod_length_m:g} m, the sum of taper lengths), or null")
+    if (p.fluid_level_m is None) != (p.casing_pressure_pa is None):
+        field, value = (("pump.casing_pressure_pa", p.casing_pressure_pa) if p.fluid_level_m is None
+                        else ("pump.fluid_level_m", p.fluid_level_m))
+        raise ConfigError(field, value, "given together with "
+                          + ("pump.fluid_level_m" if p.fluid_level_m is None else "pump.casing_pressure_pa")
+                          + " (a fluid-level shot is the level and its casing pressure), or both null")
+    depth = cfg.rod_length_m if p.depth_m is None else p.depth_m
+    if p.fluid_level_m is not None and p.fluid_level_m > depth:
+        raise ConfigError("pump.fluid_level_m", p.fluid_level_m, f"a level in m from the surface at or above the "
+                          f"pump ({depth:g} m)")
+    for name in ("depth_m", "fluid_level_m"):
+        value = getattr(p, name)
+        if value is not None and p.load_source != "pressures":
+            raise ConfigError(f"pump.{name}", value, "null when pump.load_source is 'loads' (the plunger loads are "
+                              "given at the rod end)")
+        if value is not None and cfg.inflow.model != "none":
+            raise ConfigError(f"pump.{name}", value, "null with an inflow model (its annulus sets the level and "
+                              "the pump is at the rod end)")
 
 
 def _check_tubing(cfg: WellConfig) -> None:

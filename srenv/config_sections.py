@@ -91,6 +91,12 @@ class DampingConfig:
                                           doc="Kelvin-Voigt retardation time tau: element force EA/L (du + tau dv); "
                                               "damps mode k by zeta_k = tau w_k / 2 (the string's high modes: "
                                               "couplings, guides, fluid); 0 = off (docs/realism.md)")
+    upstroke_factor: float = num(1.0, unit="-", check="nonneg", hi=100.0,
+                                 doc="the viscous damping (above, not tau) times this while the polished rod rises "
+                                     "(a vendor's upstroke coefficient / the string's); chosen from the polished "
+                                     "rod's velocity at the previous step (docs/realism.md); 1 = as the string")
+    downstroke_factor: float = num(1.0, unit="-", check="nonneg", hi=100.0,
+                                   doc="the same while the polished rod falls; 1 = as the string")
 
 
 @dataclass(frozen=True)
@@ -122,6 +128,8 @@ class FluidConfig:
 
 @dataclass(frozen=True)
 class PumpConfig:
+    # a set fluid level excludes the intake pressure (config._check_exclusive, to_dict)
+    EXCLUDES: typing.ClassVar[dict[str, str]] = {"fluid_level_m": "intake_pressure_pa"}
     load_source: str = choice("loads", ("loads", "pressures"),
                               "loads: the two plunger loads given; pressures: from diameters and pressures")
     upstroke_load_n: float = num(10000.0, unit="N", check="any", lo=-1.0e7, hi=1.0e7, doc="P- (true load at the rod end)")
@@ -173,6 +181,20 @@ class PumpConfig:
         doc="gradual load transfer: the pumped liquid's compressibility (water 4.5e-10); the chamber's liquid "
             "(and free gas, and unanchored tubing) is a spring in series with the valve law, so the load "
             "transfers over a plunger travel instead of at once; 0 = incompressible (docs/realism.md)")
+    # predictive inputs (docs/realism.md, "Predictive inputs"); None = not given
+    depth_m: float | None = num(None, unit="m", lo=1.0, hi=1.0e5,
+                                doc="measured depth of the pump when it sits below the rod string's end (the "
+                                    "pump's own length, a pull tube; sinker bars are a taper): the liquid column "
+                                    "between rod end and pump enters the valve law as an intake pressure lower by "
+                                    "its weight; at or below the sum of taper lengths; null = at the rod end")
+    fluid_level_m: float | None = num(None, unit="m", check="nonneg", hi=1.0e5,
+                                      doc="annulus fluid level measured from the surface along the hole (an acoustic "
+                                          "sounder's shot): the intake pressure follows, pump.casing_pressure_pa + "
+                                          "rho_f g (TVD of the pump - TVD of the level); instead of "
+                                          "pump.intake_pressure_pa; null = not given")
+    casing_pressure_pa: float | None = num(None, unit="Pa", check="nonneg", hi=1.0e9,
+                                           doc="casing-head pressure of the fluid-level shot (the same reference as "
+                                               "pump.intake_pressure_pa); given with pump.fluid_level_m only")
 
 
 @dataclass(frozen=True)

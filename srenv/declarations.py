@@ -142,6 +142,48 @@ def from_config_field(flag: str, key: str) -> Number:
                   lo_open=(check == "positive" and lo == 0.0), why=f"the range of config field {key}")
 
 
+# the lower bound each config check implies where a field gives none (config_sections._CHECKS)
+_CHECK_LO = {"positive": (0.0, True), "nonneg": (0.0, False), "unit_interval": (0.0, False),
+             "angle": (0.0, False), "azimuth": (-360.0, False)}
+_CHECK_HI = {"unit_interval": 1.0, "angle": 180.0, "azimuth": 360.0}
+
+
+def config_fields() -> dict[str, tuple[Number, bool]]:
+    """Every numeric field of a well config (sections; lists at their first item, ``rod.tapers.0.x``) as a
+    declaration with the range the loader checks, and whether null is accepted (an optional field): the
+    generated bad-value tests (tests/test_declared_files.py) cover a field added to config_sections by
+    construction."""
+    import dataclasses
+    import types
+    import typing
+
+    from .config_sections import WellConfig
+
+    out: dict[str, tuple[Number, bool]] = {}
+
+    def walk(cls: type, prefix: str) -> None:
+        hints = typing.get_type_hints(cls)
+        for f in dataclasses.fields(cls):
+            tp, key = hints[f.name], prefix + f.name
+            optional = typing.get_origin(tp) in (typing.Union, types.UnionType) and type(None) in typing.get_args(tp)
+            if optional:
+                tp = next(a for a in typing.get_args(tp) if a is not type(None))
+            if dataclasses.is_dataclass(tp):
+                walk(tp, key + ".")
+            elif typing.get_origin(tp) is tuple:
+                walk(typing.get_args(tp)[0], key + ".0.")
+            elif tp in (int, float) and "check" in f.metadata:
+                m = f.metadata
+                lo, lo_open = _CHECK_LO.get(m["check"], (-math.inf, False))
+                if "lo" in m:
+                    lo, lo_open = float(m["lo"]), False
+                hi = m.get("hi", _CHECK_HI.get(m["check"]))
+                out[key] = (Number(key, tp, m.get("unit", ""), lo, hi, lo_open), optional)
+
+    walk(WellConfig, "")
+    return out
+
+
 # ------------------------------------------------------------------------------------ resource bounds
 MAX_STROKES = 100_000      # simulate --strokes; the recorded samples are bounded too (MAX_RUN_SAMPLES)
 MAX_DURATION_S = 1.0e6     # --duration-s (the recorded samples bound it first at any real time step)

@@ -326,3 +326,28 @@ def test_a_degenerate_card_is_refused_by_diagnose(over: dict, tmp_path: Path, ca
     rc, err = run_srenv(["diagnose", "card.csv", "--config", FIG3, "--out", "p.csv"], capsys)
     one_line(rc, err, "card.csv", "expected")
     assert sorted(os.listdir(tmp_path)) == ["card.csv"]
+
+
+# ------------------------------------------------------------------------ every numeric well-config field
+def _config_field_cases() -> list[Any]:
+    from srenv.declarations import config_fields
+
+    return [pytest.param(key, d, optional, id=key) for key, (d, optional) in config_fields().items()]
+
+
+@pytest.mark.parametrize(("key", "decl", "optional"), _config_field_cases())
+def test_every_numeric_config_field_refuses_bad_values(key: str, decl: Any, optional: bool) -> None:
+    """Generated from the fields' own declarations (config_sections.num, via declarations.config_fields): each
+    bad value is one ConfigError naming the field (null too, unless the field is optional); a field added to
+    a config section is covered by construction."""
+    from srenv.config import apply_overrides, config_from_dict, read_raw
+
+    raw = read_raw("default")
+    dotted = key.replace(".0.", "[0].")
+    for value in decl.bad_values():
+        if value is None and optional:
+            continue
+        with pytest.raises(ConfigError) as ex:
+            config_from_dict(apply_overrides(raw, {key: value}))
+        assert ex.value.field == dotted, (key, value, str(ex.value))
+        assert "\n" not in str(ex.value) and "expected" in str(ex.value)

@@ -29,6 +29,7 @@ import numpy as np
 
 from ..config import WellConfig
 from ..physics.fluid import tubing_pressure_pa
+from ..physics.pump_inputs import column_below_rods_pa
 from ..physics.rod import GRAVITY_M_S2, build_mesh, damping_per_length
 from ..physics.survey import Survey
 from ..surface_unit.measured_motion import read_card_csv, stroke_period_s
@@ -36,6 +37,17 @@ from ..surface_unit.measured_motion import read_card_csv, stroke_period_s
 CARD_COLUMNS = ("t_s", "polished_rod_position_m", "polished_rod_load_n")
 PUMP_COLUMNS = ("t_s", "pump_position_m", "pump_load_n")
 DEFAULT_HARMONICS = 60
+LOAD_CONVENTIONS = ("true", "effective")
+
+
+def load_in_convention(true_load_n, convention: str, rod_end_pressure_pa: float, rod_end_area_m2: float):
+    """A true rod-end load in the named convention: ``true`` as it is, ``effective`` (buoyant, the vendors'
+    pump cards) = true + p A with p the tubing pressure at the rod end and A the bottom rod's area. The one
+    conversion of ``srenv diagnose`` and ``srenv validate`` (docs/realism.md)."""
+    if convention not in LOAD_CONVENTIONS:
+        raise ValueError(f"load convention {convention!r}: expected one of {', '.join(LOAD_CONVENTIONS)}")
+    shift = rod_end_pressure_pa * rod_end_area_m2 if convention == "effective" else 0.0
+    return true_load_n + shift
 
 
 @dataclass(frozen=True)
@@ -54,7 +66,7 @@ class Segments:
     bottom_area_m2: float
 
 
-def segments(cfg: WellConfig, segment_length_m: float | None = None) -> Segments:
+def segments(cfg: WellConfig, segment_length_m: float | None = None, damping_scale: float = 1.0) -> Segments:
     seg = segment_length_m or min(cfg.simulation.element_length_m, 25.0)
     mesh = build_mesh(cfg.rod, seg)
     survey = Survey.from_config(cfg.survey, cfg.rod_length_m)
@@ -64,7 +76,8 @@ def segments(cfg: WellConfig, segment_length_m: float | None = None) -> Segments
     w_b = (rho_rod - cfg.fluid.density_kg_m3) * GRAVITY_M_S2 * mesh.area_m2
     mu = cfg.friction.coefficient
     turn = survey.turn_rate(xm) if cfg.survey.three_d else np.zeros_like(xm)
-    return Segments(mesh.length_m, mesh.ea_n, mesh.rho_a_kg_m, damping_per_length(mesh, cfg.damping),
+    c = damping_per_length(mesh, cfg.damping)
+    return Segments(mesh.length_m, mesh.ea_n, mesh.rho_a_kg_m, c * damping_scale if damping_scale != 1.0 else c,
                     w_b * np.cos(incl), mu * w_b * np.sin(incl), mu * survey.build_rate(xm),
                     mu * np.sin(incl) * turn, float(mesh.area_m2[0]), float(mesh.area_m2[-1]))
 
@@ -79,6 +92,8 @@ class PumpCard:
     polished_rod_load_n: np.ndarray
     period_s: float
     harmonics: int
+    rod_end_pressure_pa: float = 0.0   # tubing pressure at the rod end: effective load = true + p A
+    rod_end_area_m2: float = 0.0       # the bottom rod's area
 
 
 def _resample_periodic(t: np.ndarray, y: np.ndarray, t0: float, period: float, m: int) -> np.ndarray:
@@ -91,10 +106,10 @@ def _resample_periodic(t: np.ndarray, y: np.ndarray, t0: float, period: float, m
 
 def march(cfg: WellConfig, u0_m: np.ndarray, n0_eq_n: np.ndarray, period_s: float, harmonics: int,
           segment_length_m: float | None = None, friction: bool = True, v_eps_fraction: float = 0.02,
-          kv_tau_s: float = 0.0) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """March (u, N_eq) from the polished rod to the pump over one periodic stroke sampled at m equal times.
-    Returns (u, N_eq, u_t) at the pump, u positive down."""
-    sg = segments(cfg, segment_length_m)
+          kv_tau_s: float = 0.0, damping_scale: float = 1.0) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """March (u, N_eq) from the polished rod to the pump over one periodic stroke sampled at m equal times
+    (the viscous damping times ``damping_scale``). Returns (u, N_eq, u_t) at the pump, u positive down."""
+    sg = segments(cfg, segment_length_m, damping_scale)
     m = len(u0_m)
     nh = min(harmonics, m // 2 - 1)
     w0 = 2 * math.pi / period_s
@@ -159,6 +174,24 @@ def kv_harmonic_cap(cfg: WellConfig, period_s: float) -> int:
     return max(4, int(w_max * period_s / (2 * math.pi)))
 
 
+def _march_per_direction(cfg: WellConfig, xs: np.ndarray, n0: np.ndarray, period: float, harmonics: int,
+                         segment_length_m: float | None, friction: bool):
+    """The march with the string's damping; with damping per stroke direction (damping.upstroke_factor,
+    downstroke_factor) it is marched once with each and each sample taken from the march of the polished
+    rod's direction at that time (the simulator's rule; Gibbs' method is linear per harmonic, so a
+    direction-dependent damping cannot enter one march: the two halves are joined at the turns, as vendors'
+    up- and downstroke damping coefficients are used)."""
+    d = cfg.damping
+    kw = {"kv_tau_s": d.stiffness_proportional_s}
+    if (d.upstroke_factor, d.downstroke_factor) == (1.0, 1.0):
+        return march(cfg, -xs, n0, period, harmonics, segment_length_m, friction, **kw)
+    up = march(cfg, -xs, n0, period, harmonics, segment_length_m, friction, damping_scale=d.upstroke_factor, **kw)
+    down = march(cfg, -xs, n0, period, harmonics, segment_length_m, friction, damping_scale=d.downstroke_factor,
+                 **kw)
+    rising = np.gradient(np.r_[xs[-1], xs, xs[0]])[1:-1] > 0  # the polished rod's velocity, periodic
+    return tuple(np.where(rising, a, b) for a, b in zip(up, down))
+
+
 def diagnose_card(cfg: WellConfig, t_s: np.ndarray, position_m: np.ndarray, load_n: np.ndarray,
                   harmonics: int = DEFAULT_HARMONICS, period_s: float | None = None,
                   segment_length_m: float | None = None, friction: bool = True) -> PumpCard:
@@ -180,14 +213,14 @@ def diagnose_card(cfg: WellConfig, t_s: np.ndarray, position_m: np.ndarray, load
     if f_sb > 0:  # the stuffing box's share of the measured load: opposite to the polished rod's velocity
         vx = np.gradient(np.r_[xs[-1], xs, xs[0]])[1:-1]
         fs = fs - f_sb * np.sign(vx)
-    ub, nb, vb = march(cfg, -xs, fs + p_top * sg_top.top_area_m2, period, harmonics, segment_length_m, friction,
-                       kv_tau_s=cfg.damping.stiffness_proportional_s)
+    ub, nb, vb = _march_per_direction(cfg, xs, fs + p_top * sg_top.top_area_m2, period, harmonics,
+                                      segment_length_m, friction)
     tt = t[0] + np.arange(m) * (period / m)
     # back onto the input's own times (the same base as the surface card)
     pos = np.interp(t, np.r_[tt, tt[0] + period], np.r_[-ub, -ub[0]])
     load = np.interp(t, np.r_[tt, tt[0] + period], np.r_[nb, nb[0]]) - p_pump * sg_top.bottom_area_m2
     vel = np.interp(t, np.r_[tt, tt[0] + period], np.r_[-vb, -vb[0]])
-    return PumpCard(t, pos, load, vel, x, f, period, min(harmonics, m // 2 - 1))
+    return PumpCard(t, pos, load, vel, x, f, period, min(harmonics, m // 2 - 1), p_pump, sg_top.bottom_area_m2)
 
 
 # ------------------------------------------------------------------------------------------ card in, summary out
@@ -195,12 +228,18 @@ def read_surface_card(path: str, reverse: bool = False) -> dict[str, np.ndarray]
     return read_card_csv(path, "CARD.csv", CARD_COLUMNS, reverse=reverse)
 
 
-def summary(cfg: WellConfig, card: PumpCard) -> dict:
+def summary(cfg: WellConfig, card: PumpCard, convention: str = "true") -> dict:
+    """The diagnosis's JSON figures; the card is analysed in true loads, and its two load levels are reported
+    in ``convention`` together with the rod end's pressure and area that convert them."""
     from .pump_card import analyse_pump_card
 
     s = analyse_pump_card(card.pump_position_m, card.pump_load_n)
+    for key in ("upstroke_load_n", "downstroke_load_n"):
+        if s.get(key) is not None:
+            s[key] = load_in_convention(s[key], convention, card.rod_end_pressure_pa, card.rod_end_area_m2)
     survey = Survey.from_config(cfg.survey, cfg.rod_length_m)
-    p_out = float(tubing_pressure_pa(cfg.fluid, survey.tvd(cfg.rod_length_m)))
+    # the discharge pressure at the pump: the rod end's plus the liquid column down to a deeper pump
+    p_out = float(tubing_pressure_pa(cfg.fluid, survey.tvd(cfg.rod_length_m))) + column_below_rods_pa(cfg, survey)
     from ..physics.pump import plunger_area_m2
 
     a_pl = plunger_area_m2(cfg.pump)
@@ -219,6 +258,9 @@ def summary(cfg: WellConfig, card: PumpCard) -> dict:
         **s,
         "discharge_pressure_pa": p_out,
         "intake_pressure_pa": p_in,
+        "load_convention": convention,
+        "rod_end_pressure_pa": card.rod_end_pressure_pa,
+        "rod_end_area_m2": card.rod_end_area_m2,
     }
 
 

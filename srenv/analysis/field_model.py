@@ -7,10 +7,9 @@ What follows from the description (docs/realism.md):
   share is the body density times the area, the rest is ``coupling_mass_kg_per_m``;
 - the liquid's density is the well test's water cut mixing the water's specific gravity and the oil's API
   gravity (or the record's fluid density);
-- the pump sits at its own depth, below the listed rods where the record says so: the liquid column between
-  the rod string's end and the pump adds rho g dz to the discharge pressure at the plunger, which enters
-  the valve law as an intake pressure lower by the same amount (the upstroke load
-  (p_out - p_in) A_pl is then exact); the rod end's true load keeps the pressure at the rod end;
+- the pump sits at its own depth, below the listed rods where the record says so: ``pump.depth_m``
+  (physics.pump_inputs: the liquid column between the rod string's end and the pump enters the valve law as
+  an intake pressure lower by its weight; the rod end's true load keeps the pressure at the rod end);
 - a pump that does not fill (fillage f < 1) is ``pump.fillage``: free gas in the intake whose compression
   takes (1 - f) of the stroke (``physics.pump.gas_fraction_for_fillage``).
 """
@@ -57,13 +56,6 @@ def tapers(rec: FieldRecord) -> list[dict]:
                     "coupling_mass_kg_per_m": max(t["weight_kg_m"] - body, 0.0),
                     "grade": t["grade"] if t["grade"] in ("C", "K", "D") else "D"})
     return out
-
-
-def pump_column_pa(rec: FieldRecord) -> float:
-    """rho g dz of the liquid between the rod string's end and the pump (0 when the rods reach the pump)."""
-    dz = max(rec.pump_depth_m - rec.rod_length_m, 0.0)
-    incl = math.radians(rec.survey[-1]["inclination_deg"]) if rec.survey else 0.0
-    return rec.fluid_density_kg_m3 * GRAVITY_M_S2 * dz * math.cos(incl)
 
 
 def fluid_column_kg(rec: FieldRecord, tubing_inner_diameter_m: float = TUBING_ID_M) -> float:
@@ -118,14 +110,16 @@ def well_config(rec: FieldRecord, card_csv: str, intake_pressure_pa: float, fill
     """The config dict of the record's well, driven by the measured motion in `card_csv` (t_s, position)."""
     stations = [{"md_m": 0.0, "inclination_deg": 0.0, "azimuth_deg": 0.0}] + [
         s for s in rec.survey if 0.0 < s["md_m"]] if rec.survey else []
-    p_in_model = max(intake_pressure_pa - pump_column_pa(rec), MIN_INTAKE_PA)  # the gas law needs p_in > 0
+    # a pump below the listed rods is pump.depth_m; the intake at the pump is read as one atmosphere at least
+    depth = rec.pump_depth_m if rec.pump_depth_m > rec.rod_length_m else None
     return {
         "name": "field-record",
         "description": f"built from {rec.source} by srenv validate",
         "rod": {"tapers": tapers(rec)},
         "fluid": {"density_kg_m3": rec.fluid_density_kg_m3, "wellhead_pressure_pa": rec.tubing_pressure_pa},
         "pump": {"load_source": "pressures", "plunger_diameter_mm": 1e3 * rec.plunger_diameter_m,
-                 "intake_pressure_pa": p_in_model, "plunger_friction_n": plunger_friction_n,
+                 "intake_pressure_pa": max(intake_pressure_pa, MIN_INTAKE_PA), "depth_m": depth,
+                 "plunger_friction_n": plunger_friction_n,
                  "fillage": min(max(fillage, 0.05), 1.0), "clearance_volume_fraction": CLEARANCE_FRACTION,
                  "liquid_compressibility_per_pa": liquid_compressibility_per_pa(rec)},
         "damping": {"model": "dimensionless", "damping_factor": damping_factor,

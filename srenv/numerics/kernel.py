@@ -215,6 +215,13 @@ def steps(const, fric_p, valve_p, prog, cnt, ksd, kso, kd, ko, md, mo, cd, f, ea
         b0[0] -= kc * ua_new + mc * aa_new
         if kv_tau != 0.0:  # the top column of C_K = tau K, moved over like K's
             b0[0] -= kv_tau * kc * va_new
+        if c.damp_split != 0 and p.have_qp == 0:  # damping per direction of the prescribed polished rod
+            p.damp_prev = p.damp_s
+            ds = c.damp_up if va_new < 0.0 else (c.damp_down if va_new > 0.0 else p.damp_s)
+            if ds != p.damp_s:  # a turn: K* takes the other direction's C
+                for i in range(n):
+                    ksd[i] += (ds - p.damp_s) * cd[i]
+                p.damp_s = ds
         if vp.fluid_kg != 0.0:  # the liquid column rides on the rising plunger: extra mass at the pump node
             if p.have_qp == 0:
                 vp.fluid_dk = c1 * vp.fluid_kg if p.plunger_dir < 0 else 0.0
@@ -303,6 +310,8 @@ def steps(const, fric_p, valve_p, prog, cnt, ksd, kso, kd, ko, md, mo, cd, f, ea
         ua_old = top[TOP_U]
         va_old = top[TOP_V]
         du_a = ua_new - ua_old
+        split = c.damp_split != 0
+        ds_new, ds_old = p.damp_s, p.damp_prev
         if kv_tau != 0.0:  # Kelvin-Voigt work, before u and prev_v move on (kv = 0: nothing changes)
             kv_work(energy, kv_tau, ea_len, u, v, prev_v, a, dt, beta, gamma, ua_old, ua_new, va_old, va_new)
         for i in range(n):
@@ -312,6 +321,8 @@ def steps(const, fric_p, valve_p, prog, cnt, ksd, kso, kd, ko, md, mo, cd, f, ea
             energy[E_GRAV] += f[i] * du
             energy[E_REACT] -= 0.5 * (lam[i] + prev_lam[i]) * du
             energy[E_VISC] += 0.5 * cd[i] * (v[i] + prev_v[i]) * du
+            if split:  # the trapezoid of each end's own damping force: the factors' share beyond C's
+                energy[E_VISC] += 0.5 * cd[i] * ((ds_new - 1.0) * v[i] + (ds_old - 1.0) * prev_v[i]) * du
             prev_lam[i] = lam[i]
             prev_v[i] = v[i]
             u[i] = u_new
@@ -323,6 +334,9 @@ def steps(const, fric_p, valve_p, prog, cnt, ksd, kso, kd, ko, md, mo, cd, f, ea
             n0 += kv_tau * c.top_ea_len_n_m * (v[0] - va_new)
         prl_eq = (n0 + c.top_load_n - c.top_mass_kg * aa_new - c.top_coupling_mass_kg * a[0]
                   - c.top_damping_n_s_m * va_new)
+        if split:  # the top element's damping at the step's factor
+            prl_eq -= (ds_new - 1.0) * c.top_damping_n_s_m * va_new
+            energy[E_VISC] += 0.5 * c.top_damping_n_s_m * ((ds_new - 1.0) * va_new + (ds_old - 1.0) * va_old) * du_a
         energy[E_TOP] += -0.5 * (prl_eq + top[TOP_PRL]) * du_a
         energy[E_VISC] += 0.5 * c.top_damping_n_s_m * (va_new + va_old) * du_a
         top[TOP_PRL] = prl_eq

@@ -59,9 +59,15 @@ CONSTANTS = np.dtype([
     # Kelvin-Voigt (stiffness-proportional) damping C_K = tau K: enters K*, the top element's force and the
     # viscous work; 0 leaves every formula as it was (docs/realism.md)
     ("kv_tau_s", "f8"),
+    # viscous damping per stroke direction: C times damp_up in a step that ends with the polished rod rising
+    # (its prescribed velocity), times damp_down falling, the last factor at rest (K* changes at the turns
+    # only); damp_split 0 = off
+    ("damp_up", "f8"), ("damp_down", "f8"), ("damp_split", "i8"),
 ])
 PROGRESS = np.dtype([("step", "i8"), ("dc_iterations", "i8"), ("have_qp", "i8"), ("plunger_dir", "i8"),
-                     ("event", "i8"), ("ub_max_m", "f8"), ("ub_min_m", "f8")])
+                     ("event", "i8"), ("ub_max_m", "f8"), ("ub_min_m", "f8"),
+                     # the factor on C that K* holds in this step, and the previous step's
+                     ("damp_s", "f8"), ("damp_prev", "f8")])
 COUNTERS = np.dtype([("certified", "i8"), ("corrected", "i8"), ("qp", "i8"), ("dc_iterations", "i8"),
                      ("recorded", "i8")])
 
@@ -158,7 +164,8 @@ def build(*, dt_s: float, beta: float, gamma: float, stiffness, mass, damping: n
           dc_max_iterations: int, dc_tolerance_m_s: float, tol_v_m_s: float = 1e-13, tol_lambda: float = 1e-12,
           always_qp: bool = False, nonsmooth: bool = True, pump_pressure_force_n: float = 0.0,
           top_pressure_force_n: float = 0.0, plunger_dir: int = 0, ub_extremes_m=(0.0, 0.0),
-          kv_tau_s: float = 0.0) -> Stepper:
+          kv_tau_s: float = 0.0, damping_factors: tuple[float, float] = (1.0, 1.0),
+          damping_now: float = 1.0) -> Stepper:
     """The kernel's arguments for one run of `n_steps` steps from the whole string's matrices (top node first:
     ``stiffness`` and ``mass`` as (diagonal, off-diagonal), ``damping`` and ``load_n`` diagonals)."""
     (kd, ko), (md, mo) = stiffness, mass
@@ -173,10 +180,14 @@ def build(*, dt_s: float, beta: float, gamma: float, stiffness, mass, damping: n
     c["top_load_n"], c["top_coupling_stiffness_n_m"], c["top_ea_len_n_m"] = load_n[0], ko[0], ea_len_n_m[0]
     c["pump_pressure_force_n"], c["top_pressure_force_n"] = pump_pressure_force_n, top_pressure_force_n
     c["kv_tau_s"] = kv_tau_s
+    c["damp_up"], c["damp_down"] = damping_factors
+    c["damp_split"] = split = int(tuple(damping_factors) != (1.0, 1.0))
     progress = np.zeros(1, PROGRESS)
+    progress["damp_s"] = progress["damp_prev"] = damping_now if split else 1.0
     progress["plunger_dir"] = plunger_dir
     progress["ub_max_m"], progress["ub_min_m"] = ub_extremes_m
-    ksd, kso = kstar(stiffness, mass, damping, dt_s, beta, gamma, kv_tau_s)
+    # K* with the factor on C that the last run ended with (damping per direction; 1 otherwise)
+    ksd, kso = kstar(stiffness, mass, damping * damping_now if split else damping, dt_s, beta, gamma, kv_tau_s)
     model = Model(ksd, kso, kd[1:], ko[1:], md[1:], mo[1:], damping[1:], load_n[1:], ea_len_n_m)
     out = Output(np.empty((N_REC, n_steps if record else 0)), energy, np.full(n, -np.inf), np.full(n, np.inf),
                  np.zeros(n, dtype=np.int64))

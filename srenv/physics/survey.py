@@ -63,3 +63,9 @@ class Survey:
         """True vertical depth at measured depth s_m."""
         grid, z = self._tvd_table
         return np.interp(s_m, grid, z)
+
+    def tvd_beyond(self, s_m: float) -> float:
+        """True vertical depth at s_m, also below the last station (a pump set deeper than the survey or the
+        rods reach): the last station's inclination is held there."""
+        end = float(self.md_m[-1])
+        return float(self.tvd(min(s_m, end))) + max(s_m - end, 0.0) * float(np.cos(self.inclination_rad[-1]))

@@ -24,6 +24,7 @@ from ..physics.inflow import Annulus
 from ..physics.laws import rod_friction
 from ..physics.laws import valve as valve_law_record
 from ..physics.pump import GasChamber, ValveLaw, liquid_stiffness_n_m, series_stiffness_n_m, valve_law
+from ..physics.pump_inputs import intake_at_pump_pa, pump_at_rod_end
 from ..physics.rod import (
     GRAVITY_M_S2,
     build_mesh,
@@ -59,6 +60,11 @@ class Simulator(PumpCycle):
 
     # ------------------------------------------------------------------------------------------ model
     def _assemble(self) -> None:
+        # a pump below the rods or a fluid level: the laws see the pump at the rod end (physics.pump_inputs);
+        # the intake pressure at the pump is what a run reports
+        # (every caller sets a config as given before it assembles: __init__, task.events.apply_condition)
+        self.intake_at_pump_pa = intake_at_pump_pa(self.cfg, self.survey)
+        self.cfg = pump_at_rod_end(self.cfg, self.survey)
         cfg, mesh = self.cfg, self.mesh
         x = mesh.x_m
         n = mesh.n_nodes - 1
@@ -122,9 +128,11 @@ class Simulator(PumpCycle):
         return law
 
     def _kstar(self, dt: float) -> tuple[np.ndarray, np.ndarray]:
-        s = self.cfg.simulation
-        return L.kstar(self._k, self._m, self._c, dt, s.newmark_beta, s.newmark_gamma,
-                       self.cfg.damping.stiffness_proportional_s)
+        s, d = self.cfg.simulation, self.cfg.damping
+        c = self._c
+        if (d.upstroke_factor, d.downstroke_factor) != (1.0, 1.0):  # the convexity check's least K*
+            c = c * min(d.upstroke_factor, d.downstroke_factor, 1.0)
+        return L.kstar(self._k, self._m, c, dt, s.newmark_beta, s.newmark_gamma, d.stiffness_proportional_s)
 
     def _friction_record(self) -> np.ndarray:
         fr = self.cfg.friction
@@ -176,6 +184,7 @@ class Simulator(PumpCycle):
         self.prev_v = np.zeros(n)
         self.prev_stuck = np.zeros(n, dtype=np.bool_)
         self.pl_dir = 0
+        self._damp_s = 1.0
         self.void = 0
         self.void_until = 0.0
         # plunger stroke bookkeeping: extremes since the last accepted reversal (see _on_event)
@@ -310,7 +319,9 @@ class Simulator(PumpCycle):
             always_qp=self.always_qp, nonsmooth=not self.linear_reference,
             pump_pressure_force_n=self.p_pump_pa * self.area_bottom_m2,
             top_pressure_force_n=self.p_top_pa * self.area_top_m2, plunger_dir=self.pl_dir,
-            ub_extremes_m=(self._ub_max, self._ub_min), kv_tau_s=self.cfg.damping.stiffness_proportional_s)
+            ub_extremes_m=(self._ub_max, self._ub_min), kv_tau_s=self.cfg.damping.stiffness_proportional_s,
+            damping_factors=(self.cfg.damping.upstroke_factor, self.cfg.damping.downstroke_factor),
+            damping_now=self._damp_s)
 
     def _run(self, va: np.ndarray, dt: float, record: bool, spm: float, stroke: float) -> RunResult:
         n_steps = len(va)
@@ -334,6 +345,7 @@ class Simulator(PumpCycle):
         self._at_rest = False
         p, v, cnt = progress[0], valve[0], counters[0]
         self.pl_dir, self.void = int(p["plunger_dir"]), int(v["void"])
+        self._damp_s = float(p["damp_s"])  # damping per direction: the factor K* ends the run with
         self._ub_max, self._ub_min = float(p["ub_max_m"]), float(p["ub_min_m"])
         self.void_until = float(v["void_until_m"])
         self._cond_keep(valve)
@@ -349,8 +361,7 @@ class Simulator(PumpCycle):
             certified_steps=int(cnt["certified"]), corrected_steps=int(cnt["corrected"]),
             qp_steps=int(cnt["qp"]), qp_calls=self.qp.stats.calls - qp_calls0,
             dc_iterations=int(cnt["dc_iterations"]), fillage=fillage, pumped_m3=self._pumped_m3,
-            intake_pressure_pa=(self.annulus.intake_pressure_pa() if self.annulus else
-                                self.cfg.pump.intake_pressure_pa),
+            intake_pressure_pa=(self.annulus.intake_pressure_pa() if self.annulus else self.intake_at_pump_pa),
             rod_stick_episodes=out.stick[:-1].copy(), element_force_max_eq_n=out.emax,
             element_force_min_eq_n=out.emin, energy_j=self.energy_balance(), trace=trace, events=events)
 
@@ -358,12 +369,14 @@ class Simulator(PumpCycle):
         w, c = st.work, st.const[0]
         ksd, kso = st.model.ksd, st.model.kso
         dk = float(st.valve["lin_dk"][0])
+        ds = float(st.progress["damp_s"][0])
+        key = dt if ds == 1.0 else (dt, ds)  # damping per direction: one cached K*^-1 per direction
         if dk == 0.0:
-            inv = self.qp.inverse(ksd, kso, dt)
+            inv = self.qp.inverse(ksd, kso, key)
         else:  # the kernel added the gas spring dk to K*_BB (ksd holds it): Sherman-Morrison on the cached K*^-1
             ksd0 = ksd.copy()
             ksd0[-1] -= dk
-            inv = self.qp.inverse(ksd0, kso, dt)
+            inv = self.qp.inverse(ksd0, kso, key)
             col = inv[:, -1] / (1.0 + dk * inv[-1, -1])
             inv = inv - dk * np.outer(col, inv[-1, :])
         v_raw, status = self.qp.solve(inv, w.wb, w.wlo, w.whi, w.ns.copy(), step, time_s)

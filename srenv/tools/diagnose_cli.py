@@ -11,18 +11,21 @@ import argparse
 
 import numpy as np
 
-from ..analysis.diagnose import DEFAULT_HARMONICS, PUMP_COLUMNS
+from ..analysis.diagnose import DEFAULT_HARMONICS, LOAD_CONVENTIONS, PUMP_COLUMNS, load_in_convention
 from ..cli_types import card_command
 from ..declarations import OUTPUTS, add_number
 from ..errors import ConfigError, NumericFailure
 from ..outputs import atomic_write_all, check_outputs, json_line
 
 
-def _pump_csv_writer(card):
-    data = np.column_stack([card.t_s, card.pump_position_m, card.pump_load_n])
+def _pump_csv_writer(card, convention: str):
+    """The pump card CSV; effective loads go under their own column name (pump_effective_load_n)."""
+    load = load_in_convention(card.pump_load_n, convention, card.rod_end_pressure_pa, card.rod_end_area_m2)
+    data = np.column_stack([card.t_s, card.pump_position_m, load])
+    columns = PUMP_COLUMNS if convention == "true" else (*PUMP_COLUMNS[:2], "pump_effective_load_n")
 
     def write(tmp: str) -> None:
-        np.savetxt(tmp, data, delimiter=",", header=",".join(PUMP_COLUMNS), comments="", fmt="%.12g")
+        np.savetxt(tmp, data, delimiter=",", header=",".join(columns), comments="", fmt="%.12g")
     return write
 
 
@@ -41,8 +44,8 @@ def cmd_diagnose(args: argparse.Namespace) -> int:
     for name in ("pump_position_m", "pump_load_n"):
         if not np.all(np.isfinite(getattr(card, name))):
             raise NumericFailure(name, "the diagnosed pump card is not finite; check the card's magnitudes")
-    line = json_line(summary(cfg, card))  # before any file: a failed summary leaves no output
-    writers = [(args.out, _pump_csv_writer(card))]
+    line = json_line(summary(cfg, card, args.load_convention))  # before any file: a failed summary leaves no output
+    writers = [(args.out, _pump_csv_writer(card, args.load_convention))]
     if args.plot:
         writers.append((args.plot, lambda tmp: save_plot(card, tmp, cfg.name)))
     atomic_write_all(writers)
@@ -61,4 +64,7 @@ def add_parser(sub) -> None:
                help=f"Fourier harmonics kept (default {DEFAULT_HARMONICS})")
     d.add_argument("--no-friction", action="store_true", help="skip the deviated-well friction correction")
     d.add_argument("--reverse", action="store_true", help="the card is stored in reverse time: reverse it")
+    d.add_argument("--load-convention", choices=LOAD_CONVENTIONS, default="true",
+                   help="pump loads written as true loads (default) or effective (buoyant) loads: true + p A at "
+                        "the rod end (the JSON carries rod_end_pressure_pa and rod_end_area_m2)")
     d.set_defaults(func=cmd_diagnose)

@@ -27,11 +27,11 @@ import tempfile
 import numpy as np
 import yaml
 
+from ..analysis.diagnose import LOAD_CONVENTIONS, load_in_convention
 from ..errors import ConfigError, NumericFailure
 from ..outputs import atomic_write, check_output_path
 
 DEFAULT_STROKES = 4
-LOAD_CONVENTIONS = ("true", "effective")
 
 
 def _write_motion_csv(rec, path: str) -> None:
@@ -51,13 +51,21 @@ def _diagnose(cfg_dict: dict, rec) -> tuple[object, dict]:
 def pump_state(rec, work_dir: str) -> dict:
     """Intake pressure (Pa), fillage and plunger friction (N): the record's own analysis where it has one,
     else srenv's diagnosis of the measured card (never a fit to the surface card)."""
-    from ..analysis.field_model import MIN_INTAKE_PA, pump_column_pa, pump_drag_n, well_config
+    from ..analysis.field_model import MIN_INTAKE_PA, pump_drag_n, well_config
+    from ..config import apply_overrides, config_from_dict
+    from ..physics.pump_inputs import column_below_rods_pa
+    from ..physics.survey import Survey
 
     if rec.intake_pressure_pa is not None:
         p_in, fill, fluid, source = rec.intake_pressure_pa, rec.fillage or 1.0, rec.fluid_load_n, "record"
     else:
-        _, s = _diagnose(well_config(rec, os.path.join(work_dir, "motion.csv"), MIN_INTAKE_PA), rec)
-        p_in = max(float(s["intake_pressure_pa"] or 0.0) + pump_column_pa(rec), MIN_INTAKE_PA)
+        cfg = well_config(rec, os.path.join(work_dir, "motion.csv"), MIN_INTAKE_PA)
+        # the diagnosis's intake at the rod end (clipped at 0 there) plus the column down to the pump: an
+        # intake that clips at the rod end is read as the column's weight at the pump (docs/realism.md)
+        _, s = _diagnose(apply_overrides(cfg, {"pump.depth_m": None}), rec)
+        parsed = config_from_dict(cfg)
+        column = column_below_rods_pa(parsed, Survey.from_config(parsed.survey, parsed.rod_length_m))
+        p_in = max(float(s["intake_pressure_pa"] or 0.0) + column, MIN_INTAKE_PA)
         fill, fluid, source = float(s["fillage"]), float(s["fluid_load_n"]), "srenv diagnose"
     return {"intake_pressure_pa": p_in, "fillage": fill, "plunger_friction_n": pump_drag_n(rec, fluid, p_in),
             "source": source}
@@ -107,8 +115,7 @@ def compare(rec, sim, result, pump_card, convention: str) -> dict:
                      "ratio_above_h20": pred_s[1] / meas_s[1] if meas_s[1] > 0 else None},
     }
     if rec.pump_load_n is not None:
-        shift = sim.p_pump_pa * sim.area_bottom_m2 if convention == "effective" else 0.0
-        fp = pump_card.pump_load_n + shift
+        fp = load_in_convention(pump_card.pump_load_n, convention, sim.p_pump_pa, sim.area_bottom_m2)
         rng = float(np.ptp(rec.pump_load_n))
         out["pump_card_rms_pct_of_range"] = 100.0 * card_rms(rec.pump_position_m, rec.pump_load_n,
                                                              pump_card.pump_position_m, fp, align_bottom=True) / rng
