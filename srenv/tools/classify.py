@@ -49,6 +49,15 @@ def last_stroke(t: np.ndarray, x: np.ndarray) -> slice:
     return slice(int(starts[-2]), int(starts[-1]) + 1)
 
 
+def _column(names: list[str], exact: str, stem: str) -> int | None:
+    """The column named `exact`, else the only one whose name holds `stem` (case-insensitive): field exports name
+    them "Position (in)", "Load, lbf"... and the classifier is scale-free, so the unit in the name does not matter."""
+    if exact in names:
+        return names.index(exact)
+    hits = [i for i, n in enumerate(names) if stem in n.lower()]
+    return hits[0] if len(hits) == 1 else None
+
+
 def read_card(path: Path) -> tuple[np.ndarray, np.ndarray]:
     """(position, load) of one card file (data only)."""
     if path.is_symlink() or not path.is_file():
@@ -78,9 +87,10 @@ def read_card(path: Path) -> tuple[np.ndarray, np.ndarray]:
         if data.shape[1] != 2:
             raise _bad(path, f"a header {POS},{LOAD} (or exactly two columns)")
         return data[:, 0], data[:, 1]
-    if POS not in names or LOAD not in names or len(names) != data.shape[1]:
-        raise _bad(path, f"a header with columns {POS} and {LOAD}")
-    x, y = data[:, names.index(POS)], data[:, names.index(LOAD)]
+    pos, load = _column(names, POS, "pos"), _column(names, LOAD, "load")
+    if pos is None or load is None or len(names) != data.shape[1]:
+        raise _bad(path, f"a header with columns {POS} and {LOAD} (or one column named *position* and one *load*)")
+    x, y = data[:, pos], data[:, load]
     if "t_s" in names and len(x) > 2:
         s = last_stroke(data[:, names.index("t_s")], x)
         x, y = x[s], y[s]

@@ -60,6 +60,22 @@ def test_full_card_in_si_and_field_units(tmp_path, capsys) -> None:
         assert sum(row["probabilities"].values()) == pytest.approx(1.0, abs=1e-4)
 
 
+def test_field_export_headers_name_the_columns(tmp_path, capsys) -> None:
+    """A field export's own header ("Load (lbf)" first, "Position (in)" second) reads as the same card; a header
+    that names neither column, or two of one kind, is refused."""
+    card = simulate_card(condition_config(load_config("paper_fig3_vertical"), "full", 0.0))
+    idx = np.linspace(0, len(card.t_s) - 1, 220).astype(int)
+    x, y = card.polished_rod_position_m[idx], card.polished_rod_load_n[idx]
+    write_card(tmp_path / "si.csv", x, y)
+    np.savetxt(tmp_path / "export.csv", np.c_[y / 4.448, x / 0.0254], delimiter=",", header="Load (lbf),Position (in)",
+               comments="")
+    got = classify_dir(tmp_path, capsys)
+    assert got["export.csv"]["label"] == got["si.csv"]["label"] == "full"
+    assert got["export.csv"]["probabilities"] == pytest.approx(got["si.csv"]["probabilities"], abs=1e-5)
+    (tmp_path / "two.csv").write_text("position_a,position_b\n1,2\n")
+    assert main(["classify", str(tmp_path / "two.csv")]) == 2 and "header" in capsys.readouterr().err
+
+
 @pytest.mark.parametrize("name", sorted(REFERENCE))
 def test_reference_cards(name, tmp_path, capsys, request) -> None:
     if name in MISSED:
