@@ -172,11 +172,19 @@ def _parse(cls: type, data: Any, path: str) -> Any:
         elif _is_dataclass_type(tp):
             kwargs[name] = _parse(tp, value, where)
         elif origin in (typing.Union, types.UnionType):
-            raise TypeError(f"unsupported union at {where}")
+            # ``Section | None``: an optional section (None = absent); no other union is a config type
+            kwargs[name] = None if value is None else _parse(_optional_section(tp, where), value, where)
         else:
             kwargs[name] = _parse_scalar(tp, value, where, dict(f.metadata))
     return cls(**kwargs)
 
+
+
+def _optional_section(tp: Any, where: str) -> type:
+    args = [a for a in typing.get_args(tp) if a is not type(None)]
+    if len(args) != 1 or not _is_dataclass_type(args[0]):
+        raise TypeError(f"unsupported union at {where}")  # programming error, not user input
+    return args[0]
 
 
 # ----------------------------------------------------------------------------------------------- loading
@@ -342,6 +350,10 @@ def config_doc() -> str:
         for f in dataclasses.fields(cls):
             tp = hints[f.name]
             key = f"{prefix}{f.name}"
+            if typing.get_origin(tp) in (typing.Union, types.UnionType):
+                lines.append(f"| `{key}` | section | None | | {f.metadata.get('doc', '')} |")
+                walk(_optional_section(tp, key), key + ".")
+                continue
             if _is_dataclass_type(tp):
                 walk(tp, key + ".")
                 continue
