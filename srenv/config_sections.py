@@ -248,8 +248,9 @@ class SurfaceConfig:
     stuffing_box_friction_n: float = num(0.0, unit="N", check="nonneg", hi=1.0e6,
                                          doc="Coulomb friction of the polished rod in the stuffing box (adds to "
                                          "the load going up, subtracts going down)")
-    beam_unit: BeamUnitConfig | None = opt(None, doc="motion beam_unit: the unit by its nameplate (API 11E "
-                                           "dimensions; docs/surface_unit.md) instead of a catalogue designation")
+    beam_unit: BeamUnitConfig | None = field(default=None, metadata={"doc": (
+        "motion beam_unit: the unit by its nameplate (API 11E dimensions; docs/surface_unit.md) instead of a "
+        "catalogue designation")})
 
 
 @dataclass(frozen=True)

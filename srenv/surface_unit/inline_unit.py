@@ -56,7 +56,10 @@ def _check_counterbalance(u: BeamUnitConfig) -> None:
 
 def _check_rating(u: BeamUnitConfig) -> None:
     if u.designation:
-        parse_designation(u.designation)  # refuses a malformed one, naming the field
+        try:
+            parse_designation(u.designation)
+        except ConfigError as exc:
+            raise ConfigError(f"{WHERE}.designation", u.designation, exc.expected) from None
     elif u.torque_rating_nm <= 0:
         raise ConfigError(f"{WHERE}.torque_rating_nm", u.torque_rating_nm,
                           f"a positive gearbox rating in N*m (or {WHERE}.designation, e.g. M-228D-213-86)")
