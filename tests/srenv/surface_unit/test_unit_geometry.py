@@ -46,12 +46,12 @@ IN = 0.0254
 # nameplate (configs/wells/mark_ii_fig4.yaml); air_balanced: representative Class III proportions
 _C228 = get_unit("C-228D-213-86")
 UNITS: dict[str, dict[str, Any]] = {
-    "conventional": dict(a_m=_C228.a_m, c_m=_C228.c_m, i_m=_C228.i_m, k_m=_C228.k_m, p_m=_C228.p_m,
-                         r_m=_C228.crank_radii_m[0], rotation="clockwise", torque_rating_nm=25760.5),
-    "mark_ii": dict(a_m=2.032, c_m=1.166, i_m=1.161, k_m=1.732, p_m=1.437, r_m=0.4526, rotation="counterclockwise",
-                    torque_rating_nm=18077.6),
-    "air_balanced": dict(a_m=3.0, c_m=1.5, i_m=1.45, k_m=2.25, p_m=1.75, r_m=0.6, rotation="clockwise",
-                         torque_rating_nm=36155.1),
+    "conventional": {"a_m": _C228.a_m, "c_m": _C228.c_m, "i_m": _C228.i_m, "k_m": _C228.k_m, "p_m": _C228.p_m,
+                     "r_m": _C228.crank_radii_m[0], "rotation": "clockwise", "torque_rating_nm": 25760.5},
+    "mark_ii": {"a_m": 2.032, "c_m": 1.166, "i_m": 1.161, "k_m": 1.732, "p_m": 1.437, "r_m": 0.4526,
+                "rotation": "counterclockwise", "torque_rating_nm": 18077.6},
+    "air_balanced": {"a_m": 3.0, "c_m": 1.5, "i_m": 1.45, "k_m": 2.25, "p_m": 1.75, "r_m": 0.6,
+                     "rotation": "clockwise", "torque_rating_nm": 36155.1},
 }
 
 
@@ -93,7 +93,7 @@ def _reference_fraction(kind: str, theta: np.ndarray) -> np.ndarray:
     for sign in (1.0, -1.0):
         grid = np.linspace(0, 2 * np.pi, 721)
         start = grid[np.argmin(sign * _reference(kind, grid)[0])]
-        res = minimize_scalar(lambda t: sign * _reference(kind, np.array([t]))[0][0],
+        res = minimize_scalar(lambda t, sg=sign: sg * _reference(kind, np.array([t]))[0][0],
                               bracket=(start - 0.01, start, start + 0.01), tol=1e-12)
         ends.append(sign * res.fun)
     lo, hi = ends
@@ -124,7 +124,7 @@ def test_torque_factor_is_the_derivative_of_position_and_positive_on_the_upstrok
     tf = np.asarray(unit.torque_factor_m(th))
     assert np.all(tf[up] >= -1e-9) and np.all(tf[~up] <= 1e-9)
     omega = 2 * np.pi * 7 / 60
-    _, v, a = unit.kinematics(th, omega)
+    a = unit.kinematics(th, omega)[2]
     dv = (np.asarray(unit.kinematics(th + h, omega)[1]) - np.asarray(unit.kinematics(th - h, omega)[1])) / (2 * h)
     assert np.allclose(a, dv * omega, atol=1e-6 * unit.stroke_m * omega**2)
 
