@@ -15,6 +15,8 @@ is"): the searched sources hold only their first pages. The tests therefore chec
   Knowledge: "this shifting, accompanied by a specified direction of rotation of the cranks, results in a
   longer time interval for the upstroke"), and a Mark II needs a smaller gearbox than a conventional unit for
   the same well ("usually these special geometry units will require one size smaller gear box size", ibid.);
+* the API Spec 11E torque-factor equations in their ψ form (Class I directly; Class III through the
+  left-right mirror that turns it into a Class I linkage with the rod's direction reversed);
 * for Class I, the measured polished-rod motion of the real well 7699227 (../shared/field, conventional,
   tests/srenv/field/test_realism.py): stroke within 0.2 %, position RMS within 1 % of the stroke.
 """
@@ -111,6 +113,47 @@ def test_position_and_torque_factor_match_the_independent_reference_every_15_deg
     pr = np.asarray(unit.position_m(THETA_15)) / unit.stroke_m
     assert np.max(np.abs(pr - _reference_fraction(kind, THETA_15))) < 1e-7
     assert np.max(np.abs(np.asarray(unit.torque_factor_m(THETA_15)) - _reference(kind, THETA_15)[1])) < 1e-7
+
+
+def _api_psi_form(kind: str) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(θ, PR, TF) of a clockwise Class I unit parametrised by ψ, the angle at the saddle between K and C:
+    the API Spec 11E torque-factor equations (ψ form, as the public API 11E implementation in
+    vamseeachanta/digitalmodel ``dynacard/gear_box_loading.py`` (MIT) states them):
+    ψ_b,t = acos((C² + K² - (P ± R)²)/(2CK)), E = √(C² + K² - 2CK cos ψ), α = ±acos((P² + R² - E²)/(2PR)),
+    ε = ±acos((E² + P² - R²)/(2EP)), β = acos((C² + E² - K²)/(2CE)) - ε, θ = β + ψ + φ - α (φ = asin(I/K)),
+    TF = A·R·sin α / (C·sin β), PR = (ψ_b - ψ)/(ψ_b - ψ_t); + on the upstroke, - on the downstroke."""
+    u = UNITS[kind]
+    a, c, i, k, p, r = (u[f"{n}_m"] for n in "acikpr")
+    psi_b = math.acos((c * c + k * k - (p + r) ** 2) / (2 * c * k))
+    psi_t = math.acos((c * c + k * k - (p - r) ** 2) / (2 * c * k))
+    rows = []
+    for d in (1.0, -1.0):
+        for psi in np.linspace(psi_t + 1e-3, psi_b - 1e-3, 40):
+            e = math.sqrt(c * c + k * k - 2 * c * k * math.cos(psi))
+            alpha = d * math.acos((p * p + r * r - e * e) / (2 * p * r))
+            eps = d * math.acos((e * e + p * p - r * r) / (2 * e * p))
+            beta = math.acos((c * c + e * e - k * k) / (2 * c * e)) - eps
+            rows.append((beta + psi + math.asin(i / k) - alpha, (psi_b - psi) / (psi_b - psi_t),
+                         a * r / c * math.sin(alpha) / math.sin(beta)))
+    theta, pr, tf = np.array(rows).T
+    return theta, pr, tf
+
+
+def test_conventional_matches_the_api_11e_psi_form() -> None:
+    unit = inline_unit(_block("conventional"))  # clockwise, as the form is written
+    theta, pr, tf = _api_psi_form("conventional")
+    assert np.max(np.abs(np.asarray(unit.position_m(theta)) / unit.stroke_m - pr)) < 1e-12
+    assert np.max(np.abs(np.asarray(unit.torque_factor_m(theta)) - tf)) < 1e-12
+
+
+def test_mark_ii_matches_the_api_11e_psi_form_mirrored() -> None:
+    """Mirrored left-right, a Class III linkage turning counterclockwise IS a Class I linkage turning
+    clockwise (the saddle comes in front of the crank, E behind it), with the rod's direction reversed: the
+    rod rises when E rises. So PR_III = 1 - PR_I and TF_III = -TF_I at the same θ."""
+    unit = inline_unit(_block("mark_ii"))
+    theta, pr, tf = _api_psi_form("mark_ii")
+    assert np.max(np.abs(np.asarray(unit.position_m(theta)) / unit.stroke_m - (1.0 - pr))) < 1e-12
+    assert np.max(np.abs(np.asarray(unit.torque_factor_m(theta)) + tf)) < 1e-12
 
 
 @pytest.mark.parametrize("kind", list(UNITS))
