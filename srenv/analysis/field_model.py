@@ -21,6 +21,7 @@ import math
 
 import numpy as np
 
+from ..errors import ConfigError
 from ..physics.rod import GRAVITY_M_S2
 from .field_record import FieldRecord
 
@@ -149,7 +150,10 @@ def unit_from_record(rec: FieldRecord):
     block = record_unit_config(rec.unit)
     if block is None:
         return None
-    return inline_unit(_parse(BeamUnitConfig, block, "equipmentData.SurfaceUnit"))
+    try:
+        return inline_unit(_parse(BeamUnitConfig, block, "equipmentData.SurfaceUnit"))
+    except ConfigError:  # a nameplate that cannot close (or out of range): no unit, the record stays usable
+        return None
 
 
 def unit_kinematics_check(rec: FieldRecord) -> dict | None:

@@ -139,7 +139,8 @@ def record_unit_config(unit: dict) -> dict | None:
              **{f"{k.lower()}_m": float(unit[k]) for k in "ACIKPR"},
              "structural_unbalance_n": float(unit.get("structural_unbalance_n") or 0.0),
              "torque_rating_nm": float(unit.get("torque_rating_nm") or 0.0),
-             "counterbalance_moment_nm": float(unit.get("counterbalance_moment_nm") or 0.0),
+             # the record's moment only feeds the gearbox report: a negative one (a vendor's sign) is no moment
+             "counterbalance_moment_nm": max(float(unit.get("counterbalance_moment_nm") or 0.0), 0.0),
              "crank_offset_deg": float(unit.get("phase_angle_deg") or 0.0)}
     if geometry == "air_balanced":
         block["counterbalance_moment_nm"] = 0.0  # the record's moment is no crank moment on an air unit

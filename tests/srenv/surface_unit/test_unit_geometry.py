@@ -269,6 +269,9 @@ def test_a_record_naming_mark_ii_builds_a_class_iii_unit() -> None:
     assert mark.stroke_m == pytest.approx(conv.stroke_m, rel=1e-12)
     gap = (mark.theta_bottom - conv.theta_bottom) % (2 * np.pi)
     assert abs(gap - np.pi) < math.radians(30)
+    # a nameplate that cannot close gives no unit (the record stays usable for validate), not an error
+    assert unit_from_record(dataclasses.replace(rec, unit={**rec.unit, "P": 0.2})) is None
+    assert unit_from_record(dataclasses.replace(rec, unit={**rec.unit, "geometry": "Q"})) is None
 
 
 # ------------------------------------------------------------------------------ bad input, by class
