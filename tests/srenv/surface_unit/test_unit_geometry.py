@@ -342,3 +342,22 @@ def _write(tmp_path: Path, data: dict) -> Path:
     p = tmp_path / "w.yaml"
     p.write_text(yaml.safe_dump(data))
     return p
+
+
+def test_a_catalogue_entry_can_be_a_class_iii_unit(tmp_path: Path) -> None:
+    """The catalogue is a list of named nameplates: ``kind`` makes an entry a Mark II (default conventional)."""
+    import yaml
+
+    from srenv.surface_unit.beam_unit import ConventionalUnit
+    from srenv.surface_unit.unit_catalogue import load_catalogue
+
+    m = UNITS["mark_ii"]
+    entry = {"designation": "M-160D-173-64", "kind": "mark_ii", "rotation": "counterclockwise",
+             **{k: m[k] for k in ("a_m", "c_m", "i_m", "k_m", "p_m")}, "crank_radii_m": [m["r_m"]],
+             "torque_rating_nm": 18077.6, "max_load_n": 76954.2, "max_stroke_m": 1.6256, "structural_unbalance_n": 0.0}
+    path = tmp_path / "cat.yaml"
+    path.write_text(yaml.safe_dump({"units": [entry]}))
+    unit = ConventionalUnit(load_catalogue(path)["M-160D-173-64"])
+    th = np.linspace(0, 2 * np.pi, 50)
+    assert unit.geometry.kind == "mark_ii"
+    assert np.allclose(unit.torque_factor_m(th), inline_unit(_block("mark_ii")).torque_factor_m(th), atol=1e-12)
