@@ -172,15 +172,26 @@ def _parse(cls: type, data: Any, path: str) -> Any:
         elif _is_dataclass_type(tp):
             kwargs[name] = _parse(tp, value, where)
         elif origin in (typing.Union, types.UnionType):
-            # an optional field (``float | None``): null is "not given", anything else is the type's value
-            args = [a for a in typing.get_args(tp) if a is not type(None)]
-            if len(args) != 1 or len(typing.get_args(tp)) != 2:
-                raise TypeError(f"unsupported union at {where}")
-            kwargs[name] = None if value is None else _parse_scalar(args[0], value, where, dict(f.metadata))
+            # an optional field (``float | None``) or section (``Section | None``): null is "not given"
+            inner = _optional(tp, where)
+            if value is None:
+                kwargs[name] = None
+            elif _is_dataclass_type(inner):
+                kwargs[name] = _parse(inner, value, where)
+            else:
+                kwargs[name] = _parse_scalar(inner, value, where, dict(f.metadata))
         else:
             kwargs[name] = _parse_scalar(tp, value, where, dict(f.metadata))
     return cls(**kwargs)
 
+
+
+def _optional(tp: Any, where: str) -> type:
+    """The type of an optional field ``T | None``; no other union is a config type."""
+    args = [a for a in typing.get_args(tp) if a is not type(None)]
+    if len(args) != 1 or len(typing.get_args(tp)) != 2:
+        raise TypeError(f"unsupported union at {where}")  # programming error, not user input
+    return args[0]
 
 
 # ----------------------------------------------------------------------------------------------- loading
@@ -361,6 +372,10 @@ def config_doc() -> str:
         for f in dataclasses.fields(cls):
             tp = hints[f.name]
             key = f"{prefix}{f.name}"
+            if typing.get_origin(tp) in (typing.Union, types.UnionType) and _is_dataclass_type(_optional(tp, key)):
+                lines.append(f"| `{key}` | section | None | | {f.metadata.get('doc', '')} |")
+                walk(_optional(tp, key), key + ".")
+                continue
             if _is_dataclass_type(tp):
                 walk(tp, key + ".")
                 continue

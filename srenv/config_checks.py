@@ -8,6 +8,7 @@ from typing import Any
 
 from .config_sections import SurfaceConfig, WellConfig
 from .errors import ConfigError
+from .surface_unit.inline_unit import check_surface as check_inline_unit
 from .surface_unit.unit_catalogue import conventional_unit
 
 
@@ -25,6 +26,7 @@ def _check_consistency(cfg: WellConfig) -> None:
     _check_survey(cfg)
     if cfg.surface.motion == "conventional":
         _check_conventional_unit(cfg.surface)
+    check_inline_unit(cfg.surface)  # surface.beam_unit: the unit by its nameplate
     if cfg.surface.motion == "measured":  # a bad card file is refused at load time, before any work
         from .surface_unit.measured_motion import load_measured_motion
 

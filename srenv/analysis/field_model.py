@@ -20,6 +20,7 @@ import math
 
 import numpy as np
 
+from ..errors import ConfigError
 from ..physics.rod import GRAVITY_M_S2
 from .field_record import FieldRecord
 
@@ -133,20 +134,20 @@ def well_config(rec: FieldRecord, card_csv: str, intake_pressure_pa: float, fill
 
 
 def unit_from_record(rec: FieldRecord):
-    """The record's conventional (class I) unit from its inline API dimensions (A, C, I, K, P, R, rotation),
-    or None when the record names another geometry or lacks a dimension. Ratings are not used here."""
-    from ..surface_unit.beam_unit import BeamUnitGeometry, ConventionalUnit
+    """The record's unit from its inline API dimensions (A, C, I, K, P, R, geometry, rotation, unbalance) as
+    a ``surface.beam_unit`` block (conventional, Mark II or air-balanced), or None when the record names a
+    geometry srenv does not know or lacks a dimension."""
+    from ..config import _parse
+    from ..config_sections import BeamUnitConfig
+    from ..surface_unit.inline_unit import inline_unit, record_unit_config
 
-    u = rec.unit
-    if str(u.get("geometry") or "").upper() != "C" or any(u.get(k) is None for k in "ACIKPR"):
+    block = record_unit_config(rec.unit)
+    if block is None:
         return None
-    rot = str(u.get("rotation") or "").lower().replace(" ", "")
-    rotation = "counterclockwise" if rot.startswith(("c.clock", "counter", "ccw")) else "clockwise"
-    g = BeamUnitGeometry(designation="C-record", a_m=u["A"], c_m=u["C"], i_m=u["I"], k_m=u["K"], p_m=u["P"],
-                         crank_radii_m=(u["R"],), rotation=rotation, torque_rating_nm=1.0,
-                         structural_unbalance_n=u.get("structural_unbalance_n") or 0.0, max_stroke_m=1.0,
-                         max_load_n=1.0)
-    return ConventionalUnit(g)
+    try:
+        return inline_unit(_parse(BeamUnitConfig, block, "equipmentData.SurfaceUnit"))
+    except ConfigError:  # a nameplate that cannot close (or out of range): no unit, the record stays usable
+        return None
 
 
 def unit_kinematics_check(rec: FieldRecord) -> dict | None:
@@ -162,4 +163,4 @@ def unit_kinematics_check(rec: FieldRecord) -> dict | None:
                for k in range(n))
     return {"unit_stroke_error_pct": 100.0 * (cu.stroke_m / stroke - 1.0),
             "unit_position_rms_pct_of_stroke": 100.0 * best / stroke,
-            "unit_rotation": cu.geometry.rotation}
+            "unit_rotation": cu.geometry.rotation, "unit_geometry": cu.geometry.kind}

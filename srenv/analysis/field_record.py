@@ -157,6 +157,14 @@ def _unit(su: dict, where: str) -> dict:
     out["geometry"] = su.get("PumpingUnitGeometry")
     out["rotation"] = su.get("Rotation")
     out["structural_unbalance_n"] = _num(su, "StructuralImbalance", where, -1e5, 1e5, "lbf", optional=True)
+    # the layout gives the gearbox rating and the counterbalance moment in thousands of in-lb, the phase angle
+    # (a Mark II's crank offset) in degrees; srenv.surface_unit.inline_unit maps them onto surface.beam_unit
+    # wide ranges: these only feed the unit's report, and must not refuse a record the model does not need them for
+    rating = _num(su, "GearBoxRating", where, 0.0, 1e6, "-", optional=True)
+    moment = _num(su, "CounterbalanceMoment", where, -1e6, 1e6, "-", optional=True)
+    out["torque_rating_nm"] = None if rating is None else fu.to_si(1e3 * rating, "in") * fu.to_si(1.0, "lbf")
+    out["counterbalance_moment_nm"] = None if moment is None else fu.to_si(1e3 * moment, "in") * fu.to_si(1.0, "lbf")
+    out["phase_angle_deg"] = _num(su, "PhaseAngle", where, -360.0, 360.0, "-", optional=True)
     return out
 
 

@@ -1,5 +1,7 @@
-"""API 11E conventional (Class I, crank-balanced) beam pumping unit: exact four-bar kinematics, torque
-factor and net gearbox torque, from the unit's API RP 11L / Spec 11E dimensions.
+"""API 11E beam pumping units: exact four-bar kinematics, torque factor and net gearbox torque, from the unit's
+API RP 11L / Spec 11E dimensions, for the three API geometries: ``conventional`` (Class I, crank-balanced),
+``mark_ii`` and ``air_balanced`` (Class III: the beam pivots at its rear end, the pitmans drive it between
+the pivot and the horsehead). docs/surface_unit.md gives the equations and sign conventions.
 
 Frame
 -----
@@ -8,6 +10,8 @@ conventional unit carries its gearbox behind the Samson post, so the saddle (cen
 (I, H) with H = sqrt(K² - I²). The walking beam pivots at G: the equalizer bearing E is C behind G, the
 horsehead arc (radius A about G) is in front. The pitman (length P) joins E to the crank pin, R from O.
 Because the horsehead is an arc about G, the polished rod moves exactly A times the beam rotation.
+A Class III unit (Mark II, air-balanced) pivots the beam at its rear end: G sits at (-I, H), behind the crank
+shaft, and E is C in front of G, on the horsehead's side; the pin still joins E through the pitman.
 
 Crank angle θ
 -------------
@@ -47,6 +51,8 @@ FloatOrArray = float | FloatArray
 
 # +1: θ grows with the geometric clockwise angle ψ; -1: the mirror image.
 ROTATION_SIGNS: dict[str, float] = {"clockwise": 1.0, "counterclockwise": -1.0}
+# API lever class of each geometry: +1 Class I (saddle in front of the crank, E behind G), -1 Class III
+LEVER_SIGNS: dict[str, float] = {"conventional": 1.0, "mark_ii": -1.0, "air_balanced": -1.0}
 
 _LINK_FIELDS = ("a_m", "c_m", "i_m", "k_m", "p_m")
 _RATING_FIELDS = {"torque_rating_nm": "N*m", "max_stroke_m": "m", "max_load_n": "N"}
@@ -83,6 +89,7 @@ class BeamUnitGeometry:
     structural_unbalance_n: float
     max_stroke_m: float
     max_load_n: float
+    kind: str = "conventional"
 
     def __post_init__(self) -> None:
         if not isinstance(self.designation, str) or not self.designation.strip():
@@ -95,6 +102,8 @@ class BeamUnitGeometry:
             raise ConfigError("structural_unbalance_n", self.structural_unbalance_n, "a finite force in N")
         if self.rotation not in ROTATION_SIGNS:
             raise ConfigError("rotation", self.rotation, f"one of {sorted(ROTATION_SIGNS)}")
+        if self.kind not in LEVER_SIGNS:
+            raise ConfigError("geometry", self.kind, f"one of {', '.join(LEVER_SIGNS)}")
         self._check_crank_radii()
         if self.i_m >= self.k_m:
             raise ConfigError("i_m", self.i_m, f"m, less than k_m = {self.k_m} m (saddle above the crank)")
@@ -182,7 +191,8 @@ def _as_output(values: FloatArray) -> FloatOrArray:
 
 
 class ConventionalUnit:
-    """Kinematics and torque of a conventional unit with the pin in crank hole ``crank_hole`` (0 = longest).
+    """Kinematics and torque of a beam unit with the pin in crank hole ``crank_hole`` (0 = longest); the name
+    is historical: ``geometry.kind`` selects Class I (conventional) or Class III (Mark II, air-balanced).
 
     All angle inputs are the crank angle θ of the module doc (rad), vectorised; scalars in, floats out.
     """
@@ -196,9 +206,12 @@ class ConventionalUnit:
         self.crank_hole = int(crank_hole)
         self.crank_radius_m = geometry.crank_radii_m[self.crank_hole]
         self._sign = ROTATION_SIGNS[geometry.rotation]
-        self._saddle = (geometry.i_m, geometry.h_m)
-        psi_bottom, self._delta_bottom = self._dead_centre(extended=True)
-        psi_top, delta_top = self._dead_centre(extended=False)
+        self._lever = LEVER_SIGNS[geometry.kind]
+        self._saddle = (self._lever * geometry.i_m, geometry.h_m)
+        # Class I: pitman and crank in line (extended) is the bottom; Class III: the top (E is highest)
+        class_one = self._lever > 0
+        psi_bottom, self._delta_bottom = self._dead_centre(extended=class_one)
+        psi_top, delta_top = self._dead_centre(extended=not class_one)
         self._theta_bottom = float((self._sign * psi_bottom) % (2.0 * np.pi))
         self._theta_top = float((self._sign * psi_top) % (2.0 * np.pi))
         self._stroke_m = geometry.a_m * float(_wrap_pi(np.asarray(delta_top - self._delta_bottom)))
@@ -211,13 +224,15 @@ class ConventionalUnit:
     def _dead_centre(self, extended: bool) -> tuple[float, float]:
         """(ψ, beam angle δ) where pin, crank centre and pitman are collinear: the ends of the stroke.
 
-        Extended (pitman and crank in line, E farthest from O) pushes the back arm up: the bottom of the
-        stroke. Folded is the top. Solved in closed form on the triangle O-G-E.
+        Extended (pitman and crank in line, E farthest from O) pushes E up: the bottom of the stroke on a
+        Class I unit (E behind the saddle), the top on a Class III unit (E on the horsehead's side). Folded is
+        the other end. Solved in closed form on the triangle O-G-E.
         """
         g = self.geometry
         reach = g.p_m + self.crank_radius_m if extended else g.p_m - self.crank_radius_m
         cos_gamma = (g.c_m**2 + g.k_m**2 - reach**2) / (2.0 * g.c_m * g.k_m)
-        delta = math.atan2(-self._saddle[1], -self._saddle[0]) - math.acos(cos_gamma)
+        # E above the line G-O: clockwise of G→O on a Class I unit, counterclockwise on a Class III one
+        delta = math.atan2(-self._saddle[1], -self._saddle[0]) - self._lever * math.acos(cos_gamma)
         ex = self._saddle[0] + g.c_m * math.cos(delta)
         ey = self._saddle[1] + g.c_m * math.sin(delta)
         direction = 1.0 if extended else -1.0
@@ -231,8 +246,9 @@ class ConventionalUnit:
         vx, vy = qx - self._saddle[0], qy - self._saddle[1]
         dist = np.hypot(vx, vy)
         cos_gamma = (g.c_m**2 + dist**2 - g.p_m**2) / (2.0 * g.c_m * dist)
-        # the conventional branch: E clockwise from G→pin, i.e. above the pin (the pitman hangs down)
-        delta = np.arctan2(vy, vx) - np.arccos(np.clip(cos_gamma, -1.0, 1.0))
+        # the assembled branch: E above the pin (the pitman hangs down), i.e. clockwise from G→pin on a
+        # Class I unit, counterclockwise on a Class III one
+        delta = np.arctan2(vy, vx) - self._lever * np.arccos(np.clip(cos_gamma, -1.0, 1.0))
         ex = self._saddle[0] + g.c_m * np.cos(delta)
         ey = self._saddle[1] + g.c_m * np.sin(delta)
         return delta, np.arctan2(ey - qy, ex - qx)
@@ -311,17 +327,40 @@ class ConventionalUnit:
         polished_rod_load_n: npt.ArrayLike,
         counterbalance_moment_nm: float,
         crank_offset_rad: float = 0.0,
+        counterbalance_force_n: float = 0.0,
     ) -> FloatOrArray:
-        """API net gearbox torque T = TF·(PRL - SU) - M·sin(θ + τ) (N·m; sign convention in module doc).
+        """API net gearbox torque T = TF·(PRL - SU - B) - M·sin(θ + τ + φ) (N·m; sign convention in module doc).
 
         ``counterbalance_moment_nm`` M is the maximum moment of the crank counterweights (and crank arms)
-        about the crank shaft; ``crank_offset_rad`` τ is the lead of the counterweight arm over the pin.
+        about the crank shaft; ``crank_offset_rad`` τ is the lead of the counterweight arm, in the direction of
+        rotation, over its unphased position: the pin on a Class I unit, the side opposite the pin on a Class
+        III unit (φ = 0 and π). ``counterbalance_force_n`` B is an air-balanced unit's cylinder force referred
+        to the polished rod (it acts through the same lever as the rods' load).
         """
         theta_arr = np.asarray(theta, dtype=float)
         well = np.asarray(self.torque_factor_m(theta_arr)) * (
             np.asarray(polished_rod_load_n, dtype=float) - self.geometry.structural_unbalance_n
-        )
-        return _as_output(well - counterbalance_moment_nm * np.sin(theta_arr + crank_offset_rad))
+            - counterbalance_force_n)
+        crank = counterbalance_moment_nm * self._crank_arm(theta_arr, crank_offset_rad)
+        return _as_output(well - crank)
+
+    @property
+    def air_balanced(self) -> bool:
+        """An air cylinder, not crank weights, balances this unit (its counterbalance is a force B)."""
+        return self.geometry.kind == "air_balanced"
+
+    def counterbalance_arm(self, theta: npt.ArrayLike, crank_offset_rad: float = 0.0) -> FloatArray:
+        """dT/d(counterbalance) with the sign flipped: sin(θ + τ + φ) per N·m of crank moment, or TF(θ) per
+        N of an air cylinder's force at the polished rod; T = (well's torque) - counterbalance · arm."""
+        theta_arr = np.asarray(theta, dtype=float)
+        if self.air_balanced:
+            return np.asarray(self.torque_factor_m(theta_arr), dtype=float)
+        return self._crank_arm(theta_arr, crank_offset_rad)
+
+    def _crank_arm(self, theta: FloatArray, crank_offset_rad: float) -> FloatArray:
+        # Class III counterweights sit opposite the pin: they fall while the pin rises (the upstroke)
+        phase = 0.0 if self._lever > 0 else math.pi
+        return np.sin(theta + crank_offset_rad + phase)
 
     def polished_rod_power_w(
         self, theta: npt.ArrayLike, omega_rad_s: float, polished_rod_load_n: npt.ArrayLike

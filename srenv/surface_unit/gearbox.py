@@ -53,6 +53,7 @@ class GearboxReport:
     counterbalance_moment_nm: float
     optimal_counterbalance_nm: float
     motor_efficiency: float
+    air_balanced: bool = False  # the counterbalance is a cylinder force B at the polished rod (N), not M
 
     @property
     def peak_torque_nm(self) -> float:
@@ -87,8 +88,10 @@ class GearboxReport:
             "min_gearbox_torque_nm": float(np.min(self.net_torque_nm)),
             "gearbox_torque_rating_nm": self.torque_rating_nm,
             "gearbox_loading_pct": self.loading_pct,
-            "counterbalance_moment_nm": self.counterbalance_moment_nm,
-            "optimal_counterbalance_nm": self.optimal_counterbalance_nm,
+            **({"counterbalance_force_n": self.counterbalance_moment_nm,
+                "optimal_counterbalance_force_n": self.optimal_counterbalance_nm} if self.air_balanced else
+               {"counterbalance_moment_nm": self.counterbalance_moment_nm,
+                "optimal_counterbalance_nm": self.optimal_counterbalance_nm}),
             "polished_rod_power_w": self.mean_polished_rod_power_w,
             "motor_power_w": self.motor_power_w,
         }
@@ -100,15 +103,16 @@ def optimal_counterbalance_nm(
     polished_rod_load_n: npt.ArrayLike,
     crank_offset_rad: float = 0.0,
 ) -> float:
-    """The counterbalance moment M ≥ 0 minimising max |T(θ)| over the given samples, N·m.
+    """The counterbalance moment M ≥ 0 minimising max |T(θ)| over the given samples, N·m (an air-balanced
+    unit's: the cylinder force B at the polished rod, N).
 
-    T_i(M) = w_i − M·s_i with w_i = TF(θ_i)(PRL_i − SU) and s_i = sin(θ_i + τ), so max_i |T_i| is a
+    T_i(M) = w_i − M·s_i with w_i = TF(θ_i)(PRL_i − SU) and s_i = sin(θ_i + τ + φ) (or TF(θ_i)), so max_i |T_i| is a
     convex, piecewise-linear function of M. Bisection on the sign of a subgradient (−s_i·sign T_i at the
     worst sample) therefore converges to the exact minimiser without a general-purpose optimiser.
     """
     theta = np.asarray(crank_angle_rad, dtype=float)
     well = unit.net_torque_nm(theta, polished_rod_load_n, 0.0)
-    arm = np.sin(theta + crank_offset_rad)
+    arm = unit.counterbalance_arm(theta, crank_offset_rad)
     worst_arm = float(np.max(np.abs(arm)))
     if worst_arm == 0.0:
         return 0.0
@@ -142,12 +146,15 @@ def analyse(
     counterbalance_offset_rad: float = 0.0,
     motor_efficiency: float = 1.0,
 ) -> GearboxReport:
-    """Torque and power at each sample (arrays of equal length; velocity upward, ω > 0)."""
+    """Torque and power at each sample (arrays of equal length; velocity upward, ω > 0). On an air-balanced
+    unit ``counterbalance_moment_nm`` is the cylinder's force B at the polished rod, in N."""
     if not 0.0 < motor_efficiency <= 1.0:
         raise ValueError(f"motor_efficiency = {motor_efficiency!r}: expected a number in (0, 1]")
     theta = np.asarray(crank_angle_rad, dtype=float)
     load = np.asarray(polished_rod_load_n, dtype=float)
-    torque = np.asarray(unit.net_torque_nm(theta, load, counterbalance_moment_nm, counterbalance_offset_rad))
+    # an air-balanced unit's counterbalance is the cylinder's force at the polished rod, through TF
+    moment, force = (0.0, counterbalance_moment_nm) if unit.air_balanced else (counterbalance_moment_nm, 0.0)
+    torque = np.asarray(unit.net_torque_nm(theta, load, moment, counterbalance_offset_rad, force))
     shape = theta.shape
     return GearboxReport(
         crank_angle_rad=theta,
@@ -159,6 +166,7 @@ def analyse(
         counterbalance_moment_nm=float(counterbalance_moment_nm),
         optimal_counterbalance_nm=optimal_counterbalance_nm(unit, theta, load, counterbalance_offset_rad),
         motor_efficiency=float(motor_efficiency),
+        air_balanced=unit.air_balanced,
     )
 
 

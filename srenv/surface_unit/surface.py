@@ -4,6 +4,8 @@
 ``conventional``: API 11E beam-unit four-bar linkage (``beam_unit.py``) at constant crank speed; the stroke
 is the crank hole's, and the unit's gearbox torque and power follow from the simulated loads
 (``gearbox.py``, :meth:`SurfaceMotion.gearbox_report`).
+``beam_unit``: the same for a unit given by its nameplate, ``surface.beam_unit`` (``inline_unit.py``):
+conventional, Mark II or air-balanced.
 ``pullout``: constant upward speed V reached through a half-cosine ramp of ``pull_ramp_s``.
 ``measured``: one stroke of a measured polished-rod position (``measured_motion.py``), a periodic spline
 starting at the card's bottom; run at another SPM it is re-timed at the same phase, its stroke is the card's.
@@ -20,6 +22,7 @@ import numpy as np
 
 from ..errors import ConfigError
 from .beam_unit import ConventionalUnit
+from .inline_unit import counterbalance, inline_unit
 from .measured_motion import MeasuredMotion, load_measured_motion
 from .unit_catalogue import conventional_unit
 
@@ -27,6 +30,10 @@ if TYPE_CHECKING:  # annotations only: the surface unit sits below the config th
     from ..config import SurfaceConfig
     from ..simulation.run_result import RunResult
     from .gearbox import GearboxReport
+
+
+# motions driven by a beam unit's linkage (catalogue or nameplate): they have a gearbox
+LINKAGE_MOTIONS = ("conventional", "beam_unit")
 
 
 class SurfaceMotion:
@@ -39,11 +46,15 @@ class SurfaceMotion:
         # SurfaceConfig(...) built in code skips load_config's range checks on this field
         if not 0.0 < cfg.motor_efficiency <= 1.0:
             raise ConfigError("surface.motor_efficiency", cfg.motor_efficiency, "a number in (0, 1]")
-        if unit is not None and self.kind != "conventional":
-            raise ConfigError("surface.motion", self.kind, "'conventional' when a beam unit is given")
+        if unit is not None and self.kind not in LINKAGE_MOTIONS:
+            raise ConfigError("surface.motion", self.kind, "'conventional' or 'beam_unit' when a beam unit is given")
         self._unit: ConventionalUnit | None = None
         if self.kind == "conventional":
             self._unit = unit if unit is not None else conventional_unit(cfg.unit, cfg.crank_hole)
+        elif self.kind == "beam_unit":
+            if cfg.beam_unit is None:  # SurfaceConfig(...) built in code skips load_config's checks
+                raise ConfigError("surface.beam_unit", None, "the unit's nameplate with surface.motion 'beam_unit'")
+            self._unit = unit if unit is not None else inline_unit(cfg.beam_unit)
         self._measured: MeasuredMotion | None = None
         if self.kind == "measured":
             self._measured = load_measured_motion(cfg.measured_card_csv, cfg.measured_spm)
@@ -79,7 +90,7 @@ class SurfaceMotion:
         omega = 2 * math.pi * spm / 60.0
         if self.kind == "harmonic":
             return -0.5 * stroke_m * omega * np.sin(omega * t)
-        if self.kind == "conventional":
+        if self.kind in LINKAGE_MOTIONS:
             return -np.asarray(self._unit.torque_factor_m(self._unit.crank_angle_rad(t, spm))) * omega
         if self.kind == "measured":
             return self._measured.velocity_down_m_s(t, spm)
@@ -118,10 +129,14 @@ class SurfaceMotion:
             return None
         from .gearbox import analyse_runs
 
-        moment = self.cfg.counterbalance_moment_nm if counterbalance_moment_nm is None else counterbalance_moment_nm
+        if self.kind == "beam_unit" and self.cfg.beam_unit is not None:
+            configured, offset_rad = counterbalance(self.cfg.beam_unit)
+        else:
+            configured, offset_rad = self.cfg.counterbalance_moment_nm, math.radians(self.cfg.counterbalance_offset_deg)
+        moment = configured if counterbalance_moment_nm is None else counterbalance_moment_nm
         return analyse_runs(
             self._unit, results,
             counterbalance_moment_nm=moment,
-            counterbalance_offset_rad=math.radians(self.cfg.counterbalance_offset_deg),
+            counterbalance_offset_rad=offset_rad,
             motor_efficiency=self.cfg.motor_efficiency,
         )

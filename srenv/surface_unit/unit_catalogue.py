@@ -1,4 +1,6 @@
-"""Catalogue of API 11E conventional pumping units, read with ``yaml.safe_load`` (nothing is evaluated).
+"""Catalogue of API 11E pumping units, read with ``yaml.safe_load`` (nothing is evaluated). An entry is a
+named nameplate: the same fields as an inline ``surface.beam_unit`` plus its crank holes, ``kind`` one of
+conventional (the default: all shipped units), mark_ii, air_balanced.
 
 The loader reads ``configs/units/catalogue.yaml``: in a checkout directly, from a wheel as the package
 data it ships (:func:`srenv.shipped.shipped_dir`). Each entry gives either ``k_m`` or ``h_m`` (saddle bearing
@@ -49,7 +51,7 @@ def _geometry_from_entry(entry: Any, index: int) -> BeamUnitGeometry:
     if not isinstance(entry, dict):
         raise ConfigError(where, entry, "a mapping of unit fields")
     keys = set(entry)
-    allowed = _GEOMETRY_FIELDS | {"k_m", "h_m"}
+    allowed = _GEOMETRY_FIELDS | {"k_m", "h_m", "kind"}  # kind: conventional (default), mark_ii, air_balanced
     # a misspelt field would otherwise silently fall back to nothing and fail later with a vaguer message
     if unknown := sorted(keys - allowed):
         raise ConfigError(f"{where}.{unknown[0]}", entry[unknown[0]], f"one of the fields {sorted(allowed)}")

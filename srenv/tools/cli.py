@@ -24,10 +24,10 @@ EXIT_SOLVER = 3
 DEFAULT_STROKES = 3
 # flags that only some surface motions use: with another motion they would be ignored without a word
 MOTION_FLAGS = {
-    "spm": ("harmonic", "conventional"),         # a measured card runs at its own period
+    "spm": ("harmonic", "conventional", "beam_unit"),         # a measured card runs at its own period
     "stroke_length_m": ("harmonic",),             # a conventional unit's crank hole / the card set the stroke
     "pull_velocity_m_s": ("pullout",),
-    "strokes": ("harmonic", "conventional", "measured"),  # a pull-out runs for --duration-s
+    "strokes": ("harmonic", "conventional", "beam_unit", "measured"),  # a pull-out runs for --duration-s
 }
 
 
