@@ -82,9 +82,7 @@ Version history
   observations, the validation split and ``family:`` wells; the native vector env (srenv/envs/vector.py: N wells in threads,
   equal to N single envs). Planned before release: the realism branch's
   physics (damping, unit geometry per well), the conditions branch's physics of every condition and its
-  classifier, the speed branch's stepping. Pre-release change: the shipped classifier (``prob_<label>``)
-  was retrained on cards with per-card field variation (run 3, docs/conditions.md), so v2's classifier
-  probabilities differ from the earlier pre-release model's.
+  classifier, the speed branch's stepping.
 * v1 / v0: unchanged (see their modules).
 """
 
