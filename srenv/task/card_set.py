@@ -28,8 +28,19 @@ MAX_ATTEMPTS = 8
 DAMPING_RANGE = (0.02, 0.8)   # Gibbs factor, log-uniform: from ringing strings to strongly damped ones
 CONVENTIONAL_SHARE = 0.5      # cards driven by a catalogue beam unit (four-bar linkage), the rest harmonic
 MIN_SEVERITY = 0.25           # below it a condition's card is hard to tell from a full pump's
+# What real wells vary per card and the family holds fixed (docs/cards_dataset.md "Field variation"):
+KV_TAU_RANGE_S = (0.0, 0.05)  # Kelvin-Voigt retardation time: couplings, guides, fluid damp the high modes
+COLUMN_MASS_SHARE = 0.5       # cards whose lifted liquid column's inertia loads the rising plunger
+COMPRESSIBLE_SHARE = 0.5      # cards whose chamber liquid is compressible (gradual load transfer)
+OIL_COMPRESSIBILITY_PER_PA = (1.0e-9, 3.0e-9)  # live oil, log-uniform; water 4.5e-10
+WATER_COMPRESSIBILITY_PER_PA = 4.5e-10
+UNANCHORED_SHARE = 0.5        # of the compressible cards: tubing free to stretch under the fluid load
+# the kernel combines the liquid spring (compressibility, unanchored tubing) with these conditions only; with
+# the leak, tagging and tubing-leak laws it replaces them (measured: those cards become the full card)
+SPRING_LABELS = ("full", "fluid_pound", "gas_interference", "parted_rods", "heavy_oil", "flowing")
 WELL_COLUMNS = ("depth_m", "plunger_diameter_mm", "spm", "stroke_length_m", "damping_factor",
-                "max_inclination_deg", "friction_coefficient", "fluid_density_kg_m3", "conventional_unit")
+                "max_inclination_deg", "friction_coefficient", "fluid_density_kg_m3", "conventional_unit",
+                "kv_tau_s", "fluid_column_mass_kg", "liquid_compressibility_per_pa", "tubing_anchored")
 ARRAYS = ("polished_rod_position_m", "polished_rod_load_n", "pump_position_m", "pump_load_n")
 
 
@@ -48,6 +59,10 @@ class Draw:
     stroke_length_m: float
     damping_factor: float
     conventional: bool = False
+    kv_tau_s: float = 0.0
+    column_mass: bool = False
+    oil_compressibility_per_pa: float = 0.0  # 0: incompressible liquid
+    unanchored: bool = False
 
 
 def draw(seed: int, index: int, attempt: int, labels: tuple[str, ...]) -> Draw:
@@ -56,8 +71,39 @@ def draw(seed: int, index: int, attempt: int, labels: tuple[str, ...]) -> Draw:
     label = labels[int(rng.integers(len(labels)))]
     severity = 0.0 if label == "full" else float(rng.uniform(MIN_SEVERITY, 1.0))
     lo, hi = DAMPING_RANGE
-    return Draw(well_seed, label, severity, float(rng.uniform()), float(rng.uniform()),
-                float(math.exp(rng.uniform(math.log(lo), math.log(hi)))), bool(rng.uniform() < CONVENTIONAL_SHARE))
+    base = (float(rng.uniform()), float(rng.uniform()), float(math.exp(rng.uniform(math.log(lo), math.log(hi)))),
+            bool(rng.uniform() < CONVENTIONAL_SHARE))
+    # drawn after the older fields, so those stay what they were for a seed
+    tau = float(rng.uniform(*KV_TAU_RANGE_S))
+    column_mass = bool(rng.uniform() < COLUMN_MASS_SHARE)
+    c_lo, c_hi = OIL_COMPRESSIBILITY_PER_PA
+    c_oil = float(math.exp(rng.uniform(math.log(c_lo), math.log(c_hi))))
+    compressible = bool(rng.uniform() < COMPRESSIBLE_SHARE) and label in SPRING_LABELS
+    unanchored = bool(rng.uniform() < UNANCHORED_SHARE) and compressible
+    return Draw(well_seed, label, severity, *base, kv_tau_s=tau, column_mass=column_mass,
+                oil_compressibility_per_pa=c_oil if compressible else 0.0, unanchored=unanchored)
+
+
+def field_overrides(d: Draw, well) -> dict[str, object]:
+    """Config keys for what real wells vary and the family holds fixed: Kelvin-Voigt damping of the string's
+    high modes, the lifted column's inertia, the chamber liquid's compressibility (water and live oil mixed
+    by the well's water cut) and unanchored tubing."""
+    from ..physics.pump import fluid_column_mass_kg, plunger_area_m2
+    from .well_family import OIL_RHO, WATER_RHO
+
+    out: dict[str, object] = {"damping.stiffness_proportional_s": round(d.kv_tau_s, 6)}
+    if d.column_mass and d.label != "parted_rods":  # a parted string lifts no column
+        a_t = math.pi / 4 * (well.tubing.inner_diameter_mm * 1e-3) ** 2
+        a_r = math.pi / 4 * (well.rod.tapers[-1].diameter_mm * 1e-3) ** 2
+        m = fluid_column_mass_kg(well.fluid.density_kg_m3, well.rod_length_m, plunger_area_m2(well.pump), a_t, a_r)
+        out["pump.fluid_column_mass_kg"] = round(m, 3)
+    if d.oil_compressibility_per_pa > 0:
+        wc = min(max((well.fluid.density_kg_m3 - OIL_RHO) / (WATER_RHO - OIL_RHO), 0.0), 1.0)
+        c = wc * WATER_COMPRESSIBILITY_PER_PA + (1.0 - wc) * d.oil_compressibility_per_pa
+        out["pump.liquid_compressibility_per_pa"] = float(f"{c:.4g}")
+    if d.unanchored:
+        out["tubing.anchored"] = False
+    return out
 
 
 @functools.lru_cache(maxsize=1)
@@ -91,7 +137,7 @@ def card_config(d: Draw):
     well = dataclasses.replace(well, surface=_surface(well.surface, spm, stroke, d.conventional),
                                damping=dataclasses.replace(well.damping, model="dimensionless",
                                                            damping_factor=round(d.damping_factor, 6)))
-    return condition_config(well, d.label, d.severity)
+    return condition_config(well, d.label, d.severity, field_overrides(d, well))
 
 
 def resample(t: np.ndarray, y: np.ndarray, n: int = N_POINTS) -> np.ndarray:
@@ -119,7 +165,10 @@ def make_card(seed: int, index: int, labels: tuple[str, ...]) -> dict:
                 "damping_factor": cfg.damping.damping_factor,
                 "max_inclination_deg": max([s.inclination_deg for s in cfg.survey.stations] or [0.0]),
                 "friction_coefficient": cfg.friction.coefficient, "fluid_density_kg_m3": cfg.fluid.density_kg_m3,
-                "conventional_unit": float(cfg.surface.motion == "conventional")}
+                "conventional_unit": float(cfg.surface.motion == "conventional"),
+                "kv_tau_s": cfg.damping.stiffness_proportional_s, "fluid_column_mass_kg": cfg.pump.fluid_column_mass_kg,
+                "liquid_compressibility_per_pa": cfg.pump.liquid_compressibility_per_pa,
+                "tubing_anchored": float(cfg.tubing.anchored)}
         return {"arrays": arrays, "label": d.label, "severity": d.severity, "well_seed": d.well_seed,
                 "fillage": card.fillage, "period_s": float(card.t_s[-1]), "well": well}
     raise RuntimeError(f"card {index} of set {seed}: no simulation succeeded in {MAX_ATTEMPTS} draws")

@@ -24,12 +24,14 @@ REFERENCE = {"normal": "full", "insufficient_supply_fluid_pound": "fluid_pound",
              "tagging_down": "tagging_down", "travelling_valve_leak": "travelling_valve_leak",
              "standing_valve_leak": "standing_valve_leak"}
 LEFT_OUT = {"plunger_out_of_barrel": "no such label among the twelve", "sand": "no such label among the twelve"}
-# measured once with the shipped model, after training and selection on simulated wells (docs/conditions.md):
-# the reference cards the classifier gets wrong are kept as strict expected failures, a loss reported as such
+# measured once with the shipped model (run 2), after training and selection on simulated wells, and again in
+# run 3's one look, where the models trained on the card set's field variation (not shipped) missed the same
+# three with the same labels (docs/conditions.md): the reference cards the classifier gets wrong are kept as
+# strict expected failures, a loss reported as such
 MISSED: dict[str, str] = {
-    "normal": "measured: classified both_valves_leak (0.91)",
-    "gas_interference": "measured: classified fluid_pound (1.00)",
-    "rod_part": "measured: classified both_valves_leak (1.00)",
+    "normal": "measured: classified both_valves_leak (0.91; runs 3 and 3b the same)",
+    "gas_interference": "measured: classified fluid_pound (1.00; runs 3 and 3b the same)",
+    "rod_part": "measured: classified both_valves_leak (1.00; runs 3 and 3b the same)",
 }
 
 
