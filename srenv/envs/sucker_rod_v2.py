@@ -149,7 +149,8 @@ def _uniform(_: dict) -> np.ndarray:
 class SuckerRodV2Env(SuckerRodV1Env):
     def __init__(self, scenario: str = "train", observation: str = "field", render_mode: str | None = None,
                  overrides: dict | None = None, episode_hours: float | None = None, interval_s: float | None = None,
-                 event_rate_scale: float = 1.0, classifier: Classifier | None = None, **kwargs: Any) -> None:
+                 event_rate_scale: float = 1.0, classifier: Classifier | None = None, fast_stepping: bool = True,
+                 **kwargs: Any) -> None:
         scenario = str(scenario)
         family = scenario.startswith("family:")
         v2_only = family or scenario == "validation"
@@ -157,7 +158,7 @@ class SuckerRodV2Env(SuckerRodV1Env):
         if not 0.0 <= rate <= 1e3:
             raise ValueError(f"event_rate_scale = {event_rate_scale!r}: expected a number in [0, 1000]")
         super().__init__("train" if v2_only else scenario, observation, render_mode, overrides, episode_hours,
-                         interval_s, **kwargs)
+                         interval_s, fast_stepping, **kwargs)
         self.scenario = scenario
         if family:
             text = scenario.partition(":")[2]
@@ -169,6 +170,7 @@ class SuckerRodV2Env(SuckerRodV1Env):
             self.split = "validation"
         self.event_rate_scale = rate
         self.classifier = classifier or default_classifier() or _uniform
+        self._probs: tuple[Any, np.ndarray] = (None, np.zeros(0))  # (the stroke classified, its probabilities)
         self.obs_names = FIELD_OBS_NAMES if observation == "field" else PRIVILEGED_OBS_NAMES
         self.observation_space = spaces.Box(-OBS_BOUND, OBS_BOUND, (len(self.obs_names),), np.float32)
 
@@ -222,16 +224,24 @@ class SuckerRodV2Env(SuckerRodV1Env):
     # ------------------------------------------------------------------------------------------ obs / info
     def _observe(self) -> np.ndarray:
         base = super()._observe()
-        probs = np.asarray(self.classifier(self._last.trace), dtype=np.float64).reshape(-1)
-        if probs.shape != (len(LABELS),) or not np.all(np.isfinite(probs)):
-            raise ValueError(f"classifier returned {probs.shape} values: expected {len(LABELS)} finite probabilities")
-        parts = [base, probs.astype(np.float32)]
+        parts = [base, self._card_probabilities().astype(np.float32)]
         if self.observation == "privileged":
             onehot = np.zeros(len(LABELS) + 1, np.float32)
             onehot[LABELS.index(self._true[0])] = 1.0
             onehot[-1] = self._true[1]
             parts.append(onehot)
         return np.clip(np.concatenate(parts), -OBS_BOUND, OBS_BOUND).astype(np.float32)
+
+    def _card_probabilities(self) -> np.ndarray:
+        """The classifier's probabilities for the last stroke's card; an interval that reused a stroke (fast
+        stepping) shows the same card, so its probabilities are not computed again."""
+        if self._probs[0] is not self._last:
+            probs = np.asarray(self.classifier(self._last.trace), dtype=np.float64).reshape(-1)
+            if probs.shape != (len(LABELS),) or not np.all(np.isfinite(probs)):
+                raise ValueError(f"classifier returned {probs.shape} values: expected {len(LABELS)} finite "
+                                 "probabilities")
+            self._probs = (self._last, probs)
+        return self._probs[1]
 
     def _info(self, r: IntervalResult | None, terms: dict, costs: dict) -> dict:
         info = super()._info(r, terms, costs)

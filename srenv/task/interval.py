@@ -136,7 +136,7 @@ class IntervalRunner:
         # reuse_periodic (off in v1): an interval at the previous interval's setpoint starts from that
         # interval's converged stroke instead of simulating it again (docs/speed.md)
         self.reuse_periodic = reuse_periodic
-        self._periodic: dict[tuple, tuple[StrokeFigures, float]] = {}
+        self._periodic: dict[tuple, tuple[StrokeFigures, float, object]] = {}
         cfg = sim.cfg
         self.task = cfg.task
         self.econ = cfg.economics
@@ -222,7 +222,9 @@ class IntervalRunner:
         got = self._periodic.get(key) if self.reuse_periodic and allowed else None
         if got is None:
             return None
-        f, p_in = got
+        f, p_in, cfg = got
+        if cfg is not self.sim.cfg:  # a condition changed the physics since (v2's events): the stroke is stale
+            return None
         area = plunger_area_m2(self.sim.cfg.pump)
         if abs(self._intake_pa() - p_in) * area > REUSE_LOAD_FRACTION * abs(f.summary["pprl_n"]):
             return None
@@ -235,7 +237,7 @@ class IntervalRunner:
 
     def _remember(self, key: tuple, f: StrokeFigures, p_in: float) -> None:
         self._periodic.pop(key, None)
-        self._periodic[key] = (f, p_in)
+        self._periodic[key] = (f, p_in, self.sim.cfg)
         while len(self._periodic) > REUSE_CACHE_SIZE:
             self._periodic.pop(next(iter(self._periodic)))
 
