@@ -229,7 +229,7 @@ class SuckerRodV1Env(CardWindow, gym.Env):
             level0 = cfg.inflow.initial_fluid_level_m
         self.sim = Simulator(cfg)
         self.sim.reset(fluid_level_m=level0)
-        self.runner = IntervalRunner(self.sim, reuse_periodic=self.fast_stepping)
+        self.runner = self._interval_runner()
         self.econ = EconomicReward(cfg.economics)
         s = cfg.surface
         self._spm = float(s.spm)
@@ -296,7 +296,11 @@ class SuckerRodV1Env(CardWindow, gym.Env):
             self.render()
         return self._observe(), reward, terminated, truncated, info
 
-    # hooks for later versions (v2's conditions); v1 has none
+    # hooks for later versions (v2's conditions and stepping); v1 has none
+    def _interval_runner(self) -> IntervalRunner:
+        """The runner of the episode's intervals on ``self.sim``."""
+        return IntervalRunner(self.sim, reuse_periodic=self.fast_stepping)
+
     def _before_interval(self) -> None:
         """Called before each interval is run."""
 

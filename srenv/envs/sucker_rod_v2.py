@@ -97,7 +97,7 @@ from gymnasium import spaces
 
 from ..task import events as ev
 from ..task import well_family as wf
-from ..task.interval import IntervalResult
+from ..task.interval import IntervalResult, IntervalRunner
 from .sucker_rod_v1 import FIELD_OBS_NAMES as V1_FIELD
 from .sucker_rod_v1 import OBS_BOUND, SuckerRodV1Env
 from .sucker_rod_v1 import PRIVILEGED_OBS_NAMES as V1_PRIVILEGED
@@ -190,6 +190,10 @@ class SuckerRodV2Env(SuckerRodV1Env):
         self._condition: tuple[str | None, float] = (None, 0.0)
         self._true = ("full", 0.0)
         return spec
+
+    def _interval_runner(self) -> IntervalRunner:
+        # fast stepping (the default): earlier intervals' strokes reused, and cycles of strokes found
+        return IntervalRunner(self.sim, reuse_periodic=self.fast_stepping, cycles=self.fast_stepping)
 
     def _before_interval(self) -> None:
         label, sev = self._schedule.active(self._elapsed() / 3600.0)

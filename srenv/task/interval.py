@@ -32,6 +32,8 @@ from ..simulation.simulator import RunResult, Simulator
 # fluid load, as a fraction of the reused stroke's PPRL, and how many setpoints' strokes are kept
 REUSE_LOAD_FRACTION = 0.002
 REUSE_CACHE_SIZE = 8
+# with cycles (v2): the longest cycle of strokes looked for (a pumped-off well settles into pounds of 2-4 fillages)
+CYCLE_MAX = 4
 
 
 @dataclass
@@ -131,12 +133,15 @@ def stroke_figures(sim: Simulator, r: RunResult, fatigue_life: float, fatigue_ex
 class IntervalRunner:
     """Runs control intervals on one simulator (see the module docstring)."""
 
-    def __init__(self, sim: Simulator, reuse_periodic: bool = False) -> None:
+    def __init__(self, sim: Simulator, reuse_periodic: bool = False, cycles: bool = False) -> None:
         self.sim = sim
         # reuse_periodic (off in v1): an interval at the previous interval's setpoint starts from that
         # interval's converged stroke instead of simulating it again (docs/speed.md)
         self.reuse_periodic = reuse_periodic
-        self._periodic: dict[tuple, tuple[StrokeFigures, float, object]] = {}
+        # cycles (v2): the strokes may settle into a cycle of up to CYCLE_MAX strokes, which the fast-forward
+        # repeats in turn (v1 repeats one stroke, mispricing a pounding well's costs)
+        self.cycles = cycles
+        self._periodic: dict[tuple, tuple[list[StrokeFigures], float, object]] = {}
         cfg = sim.cfg
         self.task = cfg.task
         self.econ = cfg.economics
@@ -214,32 +219,69 @@ class IntervalRunner:
     def _intake_pa(self) -> float:
         return self.sim.annulus.intake_pressure_pa() if self.sim.annulus is not None else 0.0
 
-    def _reusable(self, key: tuple, allowed: bool) -> StrokeFigures | None:
-        """The converged stroke of an earlier interval at this setpoint (``key``: SPM, stroke, from rest), if
+    def _reusable(self, key: tuple, allowed: bool) -> list[StrokeFigures] | None:
+        """The settled strokes of an earlier interval at this setpoint (``key``: SPM, stroke, from rest), if
         the pump's state allows it: the string runs on at the same setpoint or restarts from rest, and the
-        intake pressure moved the plunger's fluid load by at most ``REUSE_LOAD_FRACTION`` of that stroke's
-        PPRL (the load is what the stroke depends on; the liquid follows the annulus in the fast-forward)."""
+        intake pressure moved the plunger's fluid load by at most ``REUSE_LOAD_FRACTION`` of their PPRL (the
+        load is what a stroke depends on; the liquid follows the annulus in the fast-forward)."""
         got = self._periodic.get(key) if self.reuse_periodic and allowed else None
         if got is None:
             return None
-        f, p_in, cfg = got
-        if cfg is not self.sim.cfg:  # a condition changed the physics since (v2's events): the stroke is stale
+        strokes, p_in, cfg = got
+        if cfg is not self.sim.cfg:  # a condition changed the physics since (v2's events): the strokes are stale
             return None
         area = plunger_area_m2(self.sim.cfg.pump)
-        if abs(self._intake_pa() - p_in) * area > REUSE_LOAD_FRACTION * abs(f.summary["pprl_n"]):
+        if abs(self._intake_pa() - p_in) * area > REUSE_LOAD_FRACTION * abs(strokes[-1].summary["pprl_n"]):
             return None
-        return f
+        return strokes
 
     def _quasi_steady(self, exact: list[StrokeFigures]) -> bool:
         """A pumped-off well's strokes differ stroke to stroke (the pound) while the interval is steady: its last
         two strokes' fillages within the fast-forward's drift tolerance."""
         return len(exact) >= 2 and abs(exact[-1].fillage - exact[-2].fillage) < self.task.fast_forward_fillage_tol
 
-    def _remember(self, key: tuple, f: StrokeFigures, p_in: float) -> None:
+    def _remember(self, key: tuple, strokes: list[StrokeFigures], p_in: float) -> None:
         self._periodic.pop(key, None)
-        self._periodic[key] = (f, p_in, self.sim.cfg)
+        self._periodic[key] = (strokes, p_in, self.sim.cfg)
         while len(self._periodic) > REUSE_CACHE_SIZE:
             self._periodic.pop(next(iter(self._periodic)))
+
+    @staticmethod
+    def _agree(a: StrokeFigures, b: StrokeFigures) -> bool:
+        """Stroke b repeats stroke a: fillage within 0.01, PPRL within 0.5 %, stick-slip energy within 10 % + 1 J."""
+        e1, e2 = a.stick_slip_j, b.stick_slip_j
+        return (abs(b.fillage - a.fillage) < 0.01 and abs(b.summary["pprl_n"] / a.summary["pprl_n"] - 1.0) < 0.005
+                and abs(e2 - e1) <= 0.1 * max(e1, e2) + 1.0)
+
+    def _settled(self, exact: list[StrokeFigures]) -> list[StrokeFigures] | None:
+        """The strokes the interval settled into, which the fast-forward repeats in turn: the last stroke when it
+        repeats the one before; with ``cycles``, also the last p strokes when each repeats the stroke p before it
+        (p <= CYCLE_MAX: a pumped-off well pounds in a cycle of strokes of different fillage). None: not yet."""
+        for p in range(1, (CYCLE_MAX if self.cycles else 1) + 1):
+            if len(exact) >= 2 * p and all(self._agree(exact[-i - p], exact[-i]) for i in range(1, p + 1)):
+                return exact[-p:]
+        return None
+
+    def _book_exact(self, res: IntervalResult, f: StrokeFigures, w: float, transient_w: float | None) -> float:
+        """Books a simulated stroke of weight w (of its liquid only w belongs to the interval); returns the
+        transient's weight still waiting for a settled stroke's costs."""
+        ann = self.sim.annulus
+        lifted = f.lifted_m3
+        if w < 1.0 and ann is not None:  # only part of this stroke belongs to the interval
+            ann.volume_m3 += (1.0 - w) * lifted
+            lifted *= w
+        if transient_w is None:  # the first stroke after a change: its costs wait for the next one
+            self._add(res, f, w, lifted, w * f.displacement_m3, costs=False)
+            transient_w = w
+        else:
+            self._add(res, f, w, lifted, w * f.displacement_m3)
+            if transient_w > 0:
+                self._add_costs(res, f, transient_w)
+                transient_w = 0.0
+        for k in res.solver:
+            res.solver[k] += int(f.summary[k])
+        res.exact_strokes += 1
+        return transient_w
 
     def _pump(self, res: IntervalResult, spm: float, stroke_m: float, period: float, n_total: float,
               exact_max: int) -> None:
@@ -256,43 +298,31 @@ class IntervalRunner:
         self._setpoint = setpoint
         key = (spm, stroke_m, self._restart)
         reused = self._reusable(key, transient_w is not None or self._restart)
+        cycle = reused or []  # the settled strokes the fast-forward repeats in turn
         if reused is not None:
-            exact.append(reused)
+            exact.extend(reused)
             need_exact, transient_w = False, 0.0
+        if self.cycles:  # the budget counts simulated strokes, not reused ones
+            exact_max += len(cycle)
         p_exact = None  # the intake pressure of the last stroke simulated here
+        ff = 0  # strokes fast-forwarded since the cycle was set
         while done < n_total - 1e-9:
             remaining = n_total - done
             if need_exact and len(exact) < max(exact_max, 1) and (remaining >= 1.0 - 1e-9 or not exact):
-                r = sim.run_stroke(spm, stroke_m, record=True)
-                f = self._figures(r)
+                f = self._figures(sim.run_stroke(spm, stroke_m, record=True))
                 p_exact = self._intake_pa() if self.reuse_periodic else None
                 w = min(1.0, remaining)
-                lifted = f.lifted_m3
-                if w < 1.0 and ann is not None:  # only part of this stroke belongs to the interval
-                    ann.volume_m3 += (1.0 - w) * lifted
-                    lifted *= w
-                if transient_w is None:  # the first stroke after a change: its costs wait for the next one
-                    self._add(res, f, w, lifted, w * f.displacement_m3, costs=False)
-                    transient_w = w
-                else:
-                    self._add(res, f, w, lifted, w * f.displacement_m3)
-                    if transient_w > 0:
-                        self._add_costs(res, f, transient_w)
-                        transient_w = 0.0
-                for k in res.solver:
-                    res.solver[k] += int(f.summary[k])
-                res.exact_strokes += 1
+                transient_w = self._book_exact(res, f, w, transient_w)
                 done += w
                 exact.append(f)
-                if len(exact) >= 2:
-                    a, b = exact[-2].summary, exact[-1].summary
-                    e1, e2 = exact[-2].stick_slip_j, exact[-1].stick_slip_j
-                    need_exact = not self._fast_forward or not (abs(exact[-1].fillage - exact[-2].fillage) < 0.01
-                                      and abs(b["pprl_n"] / a["pprl_n"] - 1.0) < 0.005
-                                      and abs(e2 - e1) <= 0.1 * max(e1, e2) + 1.0)
+                settled = self._settled(exact) if self._fast_forward else None
+                need_exact = settled is None
+                # budget spent unsettled: v1 repeats the last stroke; cycles, every stroke after the first
+                cycle, ff = settled or (exact[1:] if self.cycles and len(exact) > 1 else exact[-1:]), 0
                 continue
-            # fast-forward from the last exact stroke
-            f = exact[-1]
+            # fast-forward from the settled strokes, in turn
+            f = cycle[ff % len(cycle)]
+            ff += 1
             w = min(1.0, remaining)
             t_next = min(sim.time_s + w * period, t_end) if w < 1.0 else sim.time_s + period
             if ann is not None:
@@ -306,12 +336,14 @@ class IntervalRunner:
             self._add(res, f, w, take, w * f.displacement_m3)
             res.fast_forward_strokes += w
             done += w
-            if (abs(fill - f.fillage) > self.task.fast_forward_fillage_tol and len(exact) < exact_max):
+            # the annulus feeds a cycle its mean fillage: that is what the drift is measured from
+            mean_fill = f.fillage if len(cycle) == 1 else sum(c.fillage for c in cycle) / len(cycle)
+            if abs(fill - mean_fill) > self.task.fast_forward_fillage_tol and len(exact) < exact_max:
                 sim.replan_upstroke(period)
                 need_exact = True
         if transient_w and exact:  # no settled stroke followed: the transient stroke prices itself
             self._add_costs(res, exact[0], transient_w)
         res.last = exact[-1] if exact else None
         if p_exact is not None and (not need_exact or self._quasi_steady(exact)):
-            self._remember(key, exact[-1], p_exact)
+            self._remember(key, cycle if self.cycles else exact[-1:], p_exact)
         sim.replan_upstroke(period)
