@@ -238,13 +238,13 @@ class SuckerRodV2Env(SuckerRodV1Env):
 
     def _card_probabilities(self) -> np.ndarray:
         """The classifier's probabilities for the last stroke's card; an interval that reused a stroke (fast
-        stepping) shows the same card, so its probabilities are not computed again."""
-        if self._probs[0] is not self._last:
+        stepping) shows the same card (trace), so its probabilities are not computed again."""
+        if self._probs[0] is not self._last.trace:
             probs = np.asarray(self.classifier(self._last.trace), dtype=np.float64).reshape(-1)
             if probs.shape != (len(LABELS),) or not np.all(np.isfinite(probs)):
                 raise ValueError(f"classifier returned {probs.shape} values: expected {len(LABELS)} finite "
                                  "probabilities")
-            self._probs = (self._last, probs)
+            self._probs = (self._last.trace, probs)
         return self._probs[1]
 
     def _info(self, r: IntervalResult | None, terms: dict, costs: dict) -> dict:

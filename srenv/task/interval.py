@@ -27,6 +27,7 @@ from ..analysis import card_features as cf
 from ..analysis.stroke_summary import summarize
 from ..physics.pump import plunger_area_m2
 from ..simulation.simulator import RunResult, Simulator
+from . import reuse
 
 # the fast option (IntervalRunner(reuse_periodic=True)): how far the intake pressure may move the plunger's
 # fluid load, as a fraction of the reused stroke's PPRL, and how many setpoints' strokes are kept
@@ -142,6 +143,7 @@ class IntervalRunner:
         # repeats in turn (v1 repeats one stroke, mispricing a pounding well's costs)
         self.cycles = cycles
         self._periodic: dict[tuple, tuple[list[StrokeFigures], float, object]] = {}
+        self._slopes: dict[tuple, reuse.Slopes] = {}
         cfg = sim.cfg
         self.task = cfg.task
         self.econ = cfg.economics
@@ -231,9 +233,13 @@ class IntervalRunner:
         if cfg is not self.sim.cfg:  # a condition changed the physics since (v2's events): the strokes are stale
             return None
         area = plunger_area_m2(self.sim.cfg.pump)
-        if abs(self._intake_pa() - p_in) * area > REUSE_LOAD_FRACTION * abs(strokes[-1].summary["pprl_n"]):
-            return None
-        return strokes
+        p_now = self._intake_pa()
+        if abs(p_now - p_in) * area <= REUSE_LOAD_FRACTION * abs(strokes[-1].summary["pprl_n"]):
+            return strokes
+        s = self._slopes.get(key) if self.cycles and len(strokes) == 1 else None
+        if s is not None and s.reaches(p_now):  # v2: carried along two kept strokes' slopes (srenv/task/reuse.py)
+            return [reuse.carried(strokes[0], s, p_now - p_in)]
+        return None
 
     def _quasi_steady(self, exact: list[StrokeFigures]) -> bool:
         """A pumped-off well's strokes differ stroke to stroke (the pound) while the interval is steady: its last
@@ -241,9 +247,16 @@ class IntervalRunner:
         return len(exact) >= 2 and abs(exact[-1].fillage - exact[-2].fillage) < self.task.fast_forward_fillage_tol
 
     def _remember(self, key: tuple, strokes: list[StrokeFigures], p_in: float) -> None:
-        self._periodic.pop(key, None)
+        old = self._periodic.pop(key, None)
+        if self.cycles:  # v2: two single settled strokes at one physics and different pressures give slopes
+            self._slopes.pop(key, None)
+            if old is not None and old[2] is self.sim.cfg and len(old[0]) == 1 and len(strokes) == 1:
+                span = abs(p_in - old[1]) * plunger_area_m2(self.sim.cfg.pump)
+                if span > reuse.MIN_SPAN_LOAD_FRACTION * abs(strokes[0].summary["pprl_n"]):
+                    self._slopes[key] = reuse.slopes(old[0][0], old[1], strokes[0], p_in)
         self._periodic[key] = (strokes, p_in, self.sim.cfg)
         while len(self._periodic) > REUSE_CACHE_SIZE:
+            self._slopes.pop(next(iter(self._periodic)), None)
             self._periodic.pop(next(iter(self._periodic)))
 
     @staticmethod
