@@ -23,6 +23,7 @@ class Annulus:
         self.fluid = fluid
         self.pump_md_m = pump_md_m
         self._tvd = tvd
+        self._pump_tvd = tvd(pump_md_m)  # asked for at every stroke the env fast-forwards: computed once
         d_c, d_t = cfg.casing_inner_diameter_mm * 1e-3, cfg.tubing_outer_diameter_mm * 1e-3
         self.area_m2 = math.pi / 4 * (d_c * d_c - d_t * d_t)
         self.rate_multiplier = 1.0  # the reservoir's deliverability over time (v1's inflow schedule)
@@ -39,7 +40,7 @@ class Annulus:
 
     def intake_pressure_pa(self) -> float:
         h = min(self.level_m, self.pump_md_m)
-        column_tvd = float(self._tvd(self.pump_md_m) - self._tvd(self.pump_md_m - h))
+        column_tvd = float(self._pump_tvd - self._tvd(self.pump_md_m - h))
         return self.cfg.casing_pressure_pa + self.fluid.density_kg_m3 * GRAVITY_M_S2 * column_tvd
 
     def inflow_m3_s(self) -> float:
