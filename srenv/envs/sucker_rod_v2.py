@@ -16,7 +16,8 @@ Constructor
 | ``episode_hours`` | ``12.0`` (spec) | horizon in hours of well time (``task.episode_hours``) |
 | ``interval_s`` | ``300.0`` (spec) | control interval in s of well time (``task.interval_s``) |
 | ``event_rate_scale`` | ``1.0`` | multiplies every condition's rate (0: no conditions, the v1 task on v2's spaces) |
-| ``classifier`` | ``None`` | callable(trace dict of the last stroke) -> 12 label probabilities in :data:`LABELS` order; ``None``: :func:`default_classifier` (``srenv classify``'s model) |
+| ``classifier`` | ``None`` | callable(trace dict of the last stroke) -> 12 label probabilities in :data:`LABELS` order; ``None``: :func:`default_classifier` (``srenv classify``'s model); called once per card |
+| ``fast_stepping`` | ``True`` | v2's stepping (docs/speed.md): an interval reuses the strokes an earlier interval at its setpoint settled into, carried to the pump's intake pressure, and a pounding well's cycle of strokes is repeated in turn; ``False``: v1's stepping |
 | ``render_mode`` | ``None`` | ``"rgb_array"`` or ``"human"`` |
 | ``overrides`` / ``**kwargs`` | ``None`` | config overrides, as v1 |
 
@@ -80,9 +81,11 @@ Version history
 ---------------
 * v2: conditions as events with their costs, classifier probabilities and the true condition in the
   observations, the validation split and ``family:`` wells; the native vector env (srenv/envs/vector.py: N wells in threads,
-  equal to N single envs). Planned before release: the realism branch's
+  equal to N single envs); the speed branch's stepping (``fast_stepping=True`` by default: settled strokes
+  reused across intervals and carried to the intake pressure, cycles of strokes; its error against every
+  stroke in docs/speed.md). Planned before release: the realism branch's
   physics (damping, unit geometry per well), the conditions branch's physics of every condition and its
-  classifier, the speed branch's stepping.
+  classifier.
 * v1 / v0: unchanged (see their modules).
 """
 

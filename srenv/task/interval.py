@@ -15,6 +15,12 @@ level. When the fast-forwarded fillage drifts from the exact stroke's by more th
 again. A fractional last stroke is counted by its fraction (of its liquid, work and costs), so every figure
 is continuous in the stroke rate. The error of the fast-forward against simulating every stroke is measured
 by ``tests/test_interval.py`` (production and PPRL within 1 %).
+
+Options (off in v1; v2's default, docs/speed.md): ``reuse_periodic`` starts an interval from the strokes an
+earlier interval at the same setpoint settled into, while the intake pressure has barely moved and the physics
+is the same; ``cycles`` also accepts a cycle of up to ``CYCLE_MAX`` strokes as settled (a pumped-off well
+pounds in cycles of 2-4 fillages) and fast-forwards it in turn, and carries a kept stroke to a farther intake
+pressure along the slopes of two kept strokes (:mod:`srenv.task.reuse`).
 """
 
 from __future__ import annotations

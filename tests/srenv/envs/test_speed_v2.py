@@ -4,12 +4,16 @@ the uncached paths give."""
 
 from __future__ import annotations
 
+import dataclasses
+
 import numpy as np
+import pytest
 
 from srenv.config import load_config
 from srenv.envs.sucker_rod_v1 import SuckerRodV1Env, _spec
 from srenv.envs.sucker_rod_v2 import SuckerRodV2Env, default_classifier
 from srenv.task import events as ev
+from srenv.task import reuse
 from srenv.task.interval import IntervalRunner, StrokeFigures
 from srenv.tools.stepping_error import compare
 
@@ -119,3 +123,20 @@ def test_the_classifier_runs_once_per_card_and_gives_what_a_direct_call_gives() 
     n = len(env.obs_names)
     probs = obs[n - 12:]
     assert np.array_equal(probs, np.asarray(counting(env._last.trace), np.float32))
+
+
+def test_a_kept_stroke_carried_back_along_the_slopes_is_the_other_kept_stroke() -> None:
+    a = _stroke(0.95, 47_000.0, 10.0)
+    b = dataclasses.replace(_stroke(1.0, 46_000.0, 4.0), work_j=9.0e4, damage=2e-7)
+    a.summary.update(mprl_n=20_000.0, goodman_max_pct=80.0)
+    b.summary.update(mprl_n=20_100.0, goodman_max_pct=78.0)
+    s = reuse.slopes(a, 3.0e6, b, 3.2e6)
+    back = reuse.carried(b, s, -0.2e6)
+    for k in ("fillage", "stick_slip_j", "work_j", "damage"):
+        assert getattr(back, k) == pytest.approx(getattr(a, k), rel=1e-12, abs=1e-15)
+    for k in ("pprl_n", "mprl_n", "goodman_max_pct"):
+        assert back.summary[k] == pytest.approx(a.summary[k], rel=1e-12)
+    assert back.trace is b.trace  # the card stays the kept stroke's
+    far = reuse.carried(b, s, 0.6e6)  # further on: fillage capped at 1, stick-slip not below 0
+    assert far.fillage == 1.0 and far.stick_slip_j == 0.0
+    assert s.reaches(3.2e6 + reuse.EXTRAPOLATE * 0.2e6 - 1.0) and not s.reaches(3.2e6 + reuse.EXTRAPOLATE * 0.2e6 + 1e3)
