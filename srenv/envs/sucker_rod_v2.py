@@ -17,7 +17,7 @@ Constructor
 | ``interval_s`` | ``300.0`` (spec) | control interval in s of well time (``task.interval_s``) |
 | ``event_rate_scale`` | ``1.0`` | multiplies every condition's rate (0: no conditions, the v1 task on v2's spaces) |
 | ``classifier`` | ``None`` | callable(trace dict of the last stroke) -> 12 label probabilities in :data:`LABELS` order; ``None``: :func:`default_classifier` (``srenv classify``'s model); called once per card |
-| ``fast_stepping`` | ``True`` | v2's stepping (docs/speed.md): an interval reuses the strokes an earlier interval at its setpoint settled into, carried to the pump's intake pressure, and a pounding well's cycle of strokes is repeated in turn; ``False``: v1's stepping |
+| ``fast_stepping`` | ``True`` | v2's stepping (docs/speed.md): an interval reuses the stroke an earlier interval at its setpoint converged to, carried to the pump's intake pressure; ``False``: v1's stepping |
 | ``render_mode`` | ``None`` | ``"rgb_array"`` or ``"human"`` |
 | ``overrides`` / ``**kwargs`` | ``None`` | config overrides, as v1 |
 
@@ -81,9 +81,9 @@ Version history
 ---------------
 * v2: conditions as events with their costs, classifier probabilities and the true condition in the
   observations, the validation split and ``family:`` wells; the native vector env (srenv/envs/vector.py: N wells in threads,
-  equal to N single envs); the speed branch's stepping (``fast_stepping=True`` by default: settled strokes
-  reused across intervals and carried to the intake pressure, cycles of strokes; its error against every
-  stroke in docs/speed.md). Planned before release: the realism branch's
+  equal to N single envs); the speed branch's stepping (``fast_stepping=True`` by default: converged strokes
+  reused across intervals and carried to the intake pressure; its error against every stroke in
+  docs/speed.md). Planned before release: the realism branch's
   physics (damping, unit geometry per well), the conditions branch's physics of every condition and its
   classifier.
 * v1 / v0: unchanged (see their modules).
@@ -195,8 +195,8 @@ class SuckerRodV2Env(SuckerRodV1Env):
         return spec
 
     def _interval_runner(self) -> IntervalRunner:
-        # fast stepping (the default): earlier intervals' strokes reused, and cycles of strokes found
-        return IntervalRunner(self.sim, reuse_periodic=self.fast_stepping, cycles=self.fast_stepping)
+        # fast stepping (the default): earlier intervals' strokes reused, carried to the intake pressure
+        return IntervalRunner(self.sim, reuse_periodic=self.fast_stepping, carry=self.fast_stepping)
 
     def _before_interval(self) -> None:
         label, sev = self._schedule.active(self._elapsed() / 3600.0)

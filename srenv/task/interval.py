@@ -16,11 +16,10 @@ again. A fractional last stroke is counted by its fraction (of its liquid, work 
 is continuous in the stroke rate. The error of the fast-forward against simulating every stroke is measured
 by ``tests/test_interval.py`` (production and PPRL within 1 %).
 
-Options (off in v1; v2's default, docs/speed.md): ``reuse_periodic`` starts an interval from the strokes an
-earlier interval at the same setpoint settled into, while the intake pressure has barely moved and the physics
-is the same; ``cycles`` also accepts a cycle of up to ``CYCLE_MAX`` strokes as settled (a pumped-off well
-pounds in cycles of 2-4 fillages) and fast-forwards it in turn, and carries a kept stroke to a farther intake
-pressure along the slopes of two kept strokes (:mod:`srenv.task.reuse`).
+Options (off in v1; v2's default, docs/speed.md): ``reuse_periodic`` starts an interval from the stroke an
+earlier interval at the same setpoint converged to, while the intake pressure has barely moved and the physics
+is the same; ``carry`` also carries a kept stroke to a farther intake pressure along the slopes of two kept
+strokes (:mod:`srenv.task.reuse`).
 """
 
 from __future__ import annotations
@@ -39,8 +38,6 @@ from . import reuse
 # fluid load, as a fraction of the reused stroke's PPRL, and how many setpoints' strokes are kept
 REUSE_LOAD_FRACTION = 0.002
 REUSE_CACHE_SIZE = 8
-# with cycles (v2): the longest cycle of strokes looked for (a pumped-off well settles into pounds of 2-4 fillages)
-CYCLE_MAX = 4
 
 
 @dataclass
@@ -140,15 +137,14 @@ def stroke_figures(sim: Simulator, r: RunResult, fatigue_life: float, fatigue_ex
 class IntervalRunner:
     """Runs control intervals on one simulator (see the module docstring)."""
 
-    def __init__(self, sim: Simulator, reuse_periodic: bool = False, cycles: bool = False) -> None:
+    def __init__(self, sim: Simulator, reuse_periodic: bool = False, carry: bool = False) -> None:
         self.sim = sim
         # reuse_periodic (off in v1): an interval at the previous interval's setpoint starts from that
         # interval's converged stroke instead of simulating it again (docs/speed.md)
         self.reuse_periodic = reuse_periodic
-        # cycles (v2): the strokes may settle into a cycle of up to CYCLE_MAX strokes, which the fast-forward
-        # repeats in turn (v1 repeats one stroke, mispricing a pounding well's costs)
-        self.cycles = cycles
-        self._periodic: dict[tuple, tuple[list[StrokeFigures], float, object]] = {}
+        # carry (v2): a kept stroke is carried to a farther intake pressure along two kept strokes' slopes
+        self.carry = carry
+        self._periodic: dict[tuple, tuple[StrokeFigures, float, object]] = {}
         self._slopes: dict[tuple, reuse.Slopes] = {}
         cfg = sim.cfg
         self.task = cfg.task
@@ -227,24 +223,24 @@ class IntervalRunner:
     def _intake_pa(self) -> float:
         return self.sim.annulus.intake_pressure_pa() if self.sim.annulus is not None else 0.0
 
-    def _reusable(self, key: tuple, allowed: bool) -> list[StrokeFigures] | None:
-        """The settled strokes of an earlier interval at this setpoint (``key``: SPM, stroke, from rest), if
+    def _reusable(self, key: tuple, allowed: bool) -> StrokeFigures | None:
+        """The converged stroke of an earlier interval at this setpoint (``key``: SPM, stroke, from rest), if
         the pump's state allows it: the string runs on at the same setpoint or restarts from rest, and the
-        intake pressure moved the plunger's fluid load by at most ``REUSE_LOAD_FRACTION`` of their PPRL (the
-        load is what a stroke depends on; the liquid follows the annulus in the fast-forward)."""
+        intake pressure moved the plunger's fluid load by at most ``REUSE_LOAD_FRACTION`` of that stroke's
+        PPRL (the load is what the stroke depends on; the liquid follows the annulus in the fast-forward)."""
         got = self._periodic.get(key) if self.reuse_periodic and allowed else None
         if got is None:
             return None
-        strokes, p_in, cfg = got
-        if cfg is not self.sim.cfg:  # a condition changed the physics since (v2's events): the strokes are stale
+        f, p_in, cfg = got
+        if cfg is not self.sim.cfg:  # a condition changed the physics since (v2's events): the stroke is stale
             return None
         area = plunger_area_m2(self.sim.cfg.pump)
         p_now = self._intake_pa()
-        if abs(p_now - p_in) * area <= REUSE_LOAD_FRACTION * abs(strokes[-1].summary["pprl_n"]):
-            return strokes
-        s = self._slopes.get(key) if self.cycles and len(strokes) == 1 else None
+        if abs(p_now - p_in) * area <= REUSE_LOAD_FRACTION * abs(f.summary["pprl_n"]):
+            return f
+        s = self._slopes.get(key) if self.carry else None
         if s is not None and s.reaches(p_now):  # v2: carried along two kept strokes' slopes (srenv/task/reuse.py)
-            return [reuse.carried(strokes[0], s, p_now - p_in)]
+            return reuse.carried(f, s, p_now - p_in)
         return None
 
     def _quasi_steady(self, exact: list[StrokeFigures]) -> bool:
@@ -252,55 +248,18 @@ class IntervalRunner:
         two strokes' fillages within the fast-forward's drift tolerance."""
         return len(exact) >= 2 and abs(exact[-1].fillage - exact[-2].fillage) < self.task.fast_forward_fillage_tol
 
-    def _remember(self, key: tuple, strokes: list[StrokeFigures], p_in: float) -> None:
+    def _remember(self, key: tuple, f: StrokeFigures, p_in: float) -> None:
         old = self._periodic.pop(key, None)
-        if self.cycles:  # v2: two single settled strokes at one physics and different pressures give slopes
+        if self.carry:  # v2: two strokes kept at one physics and different intake pressures give slopes
             self._slopes.pop(key, None)
-            if old is not None and old[2] is self.sim.cfg and len(old[0]) == 1 and len(strokes) == 1:
+            if old is not None and old[2] is self.sim.cfg:
                 span = abs(p_in - old[1]) * plunger_area_m2(self.sim.cfg.pump)
-                if span > reuse.MIN_SPAN_LOAD_FRACTION * abs(strokes[0].summary["pprl_n"]):
-                    self._slopes[key] = reuse.slopes(old[0][0], old[1], strokes[0], p_in)
-        self._periodic[key] = (strokes, p_in, self.sim.cfg)
+                if span > reuse.MIN_SPAN_LOAD_FRACTION * abs(f.summary["pprl_n"]):
+                    self._slopes[key] = reuse.slopes(old[0], old[1], f, p_in)
+        self._periodic[key] = (f, p_in, self.sim.cfg)
         while len(self._periodic) > REUSE_CACHE_SIZE:
             self._slopes.pop(next(iter(self._periodic)), None)
             self._periodic.pop(next(iter(self._periodic)))
-
-    @staticmethod
-    def _agree(a: StrokeFigures, b: StrokeFigures) -> bool:
-        """Stroke b repeats stroke a: fillage within 0.01, PPRL within 0.5 %, stick-slip energy within 10 % + 1 J."""
-        e1, e2 = a.stick_slip_j, b.stick_slip_j
-        return (abs(b.fillage - a.fillage) < 0.01 and abs(b.summary["pprl_n"] / a.summary["pprl_n"] - 1.0) < 0.005
-                and abs(e2 - e1) <= 0.1 * max(e1, e2) + 1.0)
-
-    def _settled(self, exact: list[StrokeFigures]) -> list[StrokeFigures] | None:
-        """The strokes the interval settled into, which the fast-forward repeats in turn: the last stroke when it
-        repeats the one before; with ``cycles``, also the last p strokes when each repeats the stroke p before it
-        (p <= CYCLE_MAX: a pumped-off well pounds in a cycle of strokes of different fillage). None: not yet."""
-        for p in range(1, (CYCLE_MAX if self.cycles else 1) + 1):
-            if len(exact) >= 2 * p and all(self._agree(exact[-i - p], exact[-i]) for i in range(1, p + 1)):
-                return exact[-p:]
-        return None
-
-    def _book_exact(self, res: IntervalResult, f: StrokeFigures, w: float, transient_w: float | None) -> float:
-        """Books a simulated stroke of weight w (of its liquid only w belongs to the interval); returns the
-        transient's weight still waiting for a settled stroke's costs."""
-        ann = self.sim.annulus
-        lifted = f.lifted_m3
-        if w < 1.0 and ann is not None:  # only part of this stroke belongs to the interval
-            ann.volume_m3 += (1.0 - w) * lifted
-            lifted *= w
-        if transient_w is None:  # the first stroke after a change: its costs wait for the next one
-            self._add(res, f, w, lifted, w * f.displacement_m3, costs=False)
-            transient_w = w
-        else:
-            self._add(res, f, w, lifted, w * f.displacement_m3)
-            if transient_w > 0:
-                self._add_costs(res, f, transient_w)
-                transient_w = 0.0
-        for k in res.solver:
-            res.solver[k] += int(f.summary[k])
-        res.exact_strokes += 1
-        return transient_w
 
     def _pump(self, res: IntervalResult, spm: float, stroke_m: float, period: float, n_total: float,
               exact_max: int) -> None:
@@ -317,31 +276,43 @@ class IntervalRunner:
         self._setpoint = setpoint
         key = (spm, stroke_m, self._restart)
         reused = self._reusable(key, transient_w is not None or self._restart)
-        cycle = reused or []  # the settled strokes the fast-forward repeats in turn
         if reused is not None:
-            exact.extend(reused)
+            exact.append(reused)
             need_exact, transient_w = False, 0.0
-        if self.cycles:  # the budget counts simulated strokes, not reused ones
-            exact_max += len(cycle)
         p_exact = None  # the intake pressure of the last stroke simulated here
-        ff = 0  # strokes fast-forwarded since the cycle was set
         while done < n_total - 1e-9:
             remaining = n_total - done
             if need_exact and len(exact) < max(exact_max, 1) and (remaining >= 1.0 - 1e-9 or not exact):
-                f = self._figures(sim.run_stroke(spm, stroke_m, record=True))
+                r = sim.run_stroke(spm, stroke_m, record=True)
+                f = self._figures(r)
                 p_exact = self._intake_pa() if self.reuse_periodic else None
                 w = min(1.0, remaining)
-                transient_w = self._book_exact(res, f, w, transient_w)
+                lifted = f.lifted_m3
+                if w < 1.0 and ann is not None:  # only part of this stroke belongs to the interval
+                    ann.volume_m3 += (1.0 - w) * lifted
+                    lifted *= w
+                if transient_w is None:  # the first stroke after a change: its costs wait for the next one
+                    self._add(res, f, w, lifted, w * f.displacement_m3, costs=False)
+                    transient_w = w
+                else:
+                    self._add(res, f, w, lifted, w * f.displacement_m3)
+                    if transient_w > 0:
+                        self._add_costs(res, f, transient_w)
+                        transient_w = 0.0
+                for k in res.solver:
+                    res.solver[k] += int(f.summary[k])
+                res.exact_strokes += 1
                 done += w
                 exact.append(f)
-                settled = self._settled(exact) if self._fast_forward else None
-                need_exact = settled is None
-                # budget spent unsettled: v1 repeats the last stroke; cycles, every stroke after the first
-                cycle, ff = settled or (exact[1:] if self.cycles and len(exact) > 1 else exact[-1:]), 0
+                if len(exact) >= 2:
+                    a, b = exact[-2].summary, exact[-1].summary
+                    e1, e2 = exact[-2].stick_slip_j, exact[-1].stick_slip_j
+                    need_exact = not self._fast_forward or not (abs(exact[-1].fillage - exact[-2].fillage) < 0.01
+                                      and abs(b["pprl_n"] / a["pprl_n"] - 1.0) < 0.005
+                                      and abs(e2 - e1) <= 0.1 * max(e1, e2) + 1.0)
                 continue
-            # fast-forward from the settled strokes, in turn
-            f = cycle[ff % len(cycle)]
-            ff += 1
+            # fast-forward from the last exact stroke
+            f = exact[-1]
             w = min(1.0, remaining)
             t_next = min(sim.time_s + w * period, t_end) if w < 1.0 else sim.time_s + period
             if ann is not None:
@@ -355,14 +326,12 @@ class IntervalRunner:
             self._add(res, f, w, take, w * f.displacement_m3)
             res.fast_forward_strokes += w
             done += w
-            # the annulus feeds a cycle its mean fillage: that is what the drift is measured from
-            mean_fill = f.fillage if len(cycle) == 1 else sum(c.fillage for c in cycle) / len(cycle)
-            if abs(fill - mean_fill) > self.task.fast_forward_fillage_tol and len(exact) < exact_max:
+            if (abs(fill - f.fillage) > self.task.fast_forward_fillage_tol and len(exact) < exact_max):
                 sim.replan_upstroke(period)
                 need_exact = True
         if transient_w and exact:  # no settled stroke followed: the transient stroke prices itself
             self._add_costs(res, exact[0], transient_w)
         res.last = exact[-1] if exact else None
         if p_exact is not None and (not need_exact or self._quasi_steady(exact)):
-            self._remember(key, cycle if self.cycles else exact[-1:], p_exact)
+            self._remember(key, exact[-1], p_exact)
         sim.replan_upstroke(period)

@@ -1,7 +1,7 @@
-"""A settled stroke carried to a nearby intake pressure (v2's fast stepping, docs/speed.md).
+"""A converged stroke carried to a nearby intake pressure (v2's fast stepping, docs/speed.md).
 
-At one setpoint and one physics, a settled stroke's figures are smooth functions of the pump's intake pressure
-(the plunger's fluid load and the liquid it finds) while the pump fills. Two settled strokes kept at intake
+At one setpoint and one physics, a converged stroke's figures are smooth functions of the pump's intake
+pressure (the plunger's fluid load and the liquid it finds) while the pump fills. Two strokes kept at intake
 pressures p_a and p_b give each figure's slope; a stroke at a pressure p within the span of that pair beyond
 its nearer end (``EXTRAPOLATE``) is the nearer stroke's figures moved along the slopes, its card unchanged.
 The error of the scheme against simulating every stroke is measured by srenv.tools.stepping_error.
@@ -24,7 +24,7 @@ NONNEGATIVE = ("lifted_m3", "displacement_m3", "fillage", "fillage_est", "damage
 
 @dataclasses.dataclass(frozen=True)
 class Slopes:
-    """d(figure)/d(intake pressure) between two settled strokes kept at p_a and p_b (p_b the later)."""
+    """d(figure)/d(intake pressure) between two converged strokes kept at p_a and p_b (p_b the later)."""
 
     p_a: float
     p_b: float

@@ -1,4 +1,4 @@
-"""Issue 25 (speed) for v2: v2 steps fast by default (earlier intervals' strokes reused, cycles of strokes found),
+"""Issue 25 (speed) for v2: v2 steps fast by default (earlier intervals' strokes reused and carried),
 within its error bound on a steady sample; the reset's config cache and the classifier's per-card cache give what
 the uncached paths give."""
 
@@ -14,7 +14,7 @@ from srenv.envs.sucker_rod_v1 import SuckerRodV1Env, _spec
 from srenv.envs.sucker_rod_v2 import SuckerRodV2Env, default_classifier
 from srenv.task import events as ev
 from srenv.task import reuse
-from srenv.task.interval import IntervalRunner, StrokeFigures
+from srenv.task.interval import StrokeFigures
 from srenv.tools.stepping_error import compare
 
 FULL = np.array([1.0, 1.0], np.float32)
@@ -26,37 +26,22 @@ def _stroke(fillage: float, pprl: float, stick_slip: float) -> StrokeFigures:
                          power_mean_w=0.0, power_peak_w=0.0)
 
 
-def test_a_cycle_of_strokes_settles_only_with_cycles_and_one_stroke_settles_as_in_v1() -> None:
-    runner = IntervalRunner.__new__(IntervalRunner)
-    a, b = _stroke(0.43, 47_000.0, 1165.0), _stroke(0.41, 47_300.0, 1369.0)  # a period-2 pound (test well 4)
-    pound = [a, b, a, b]
-    runner.cycles = False
-    assert runner._settled(pound) is None  # v1: consecutive strokes differ, never settled
-    runner.cycles = True
-    assert runner._settled(pound) == [a, b]
-    assert runner._settled([b, a, b]) is None  # one repeat shown for a, none for b: not yet
-    steady = [a, _stroke(0.432, 47_010.0, 1170.0)]
-    for cycles in (False, True):
-        runner.cycles = cycles
-        assert runner._settled(steady) == steady[-1:]
-
-
 def test_v2_steps_fast_by_default_v1_does_not_and_a_condition_makes_the_kept_strokes_stale() -> None:
     v1, v2 = SuckerRodV1Env(episode_hours=1.0), SuckerRodV2Env(episode_hours=1.0, event_rate_scale=0.0)
     v1.reset(seed=11)
     v2.reset(seed=11)
-    assert not v1.runner.reuse_periodic and not v1.runner.cycles
-    assert v2.runner.reuse_periodic and v2.runner.cycles
+    assert not v1.runner.reuse_periodic and not v1.runner.carry
+    assert v2.runner.reuse_periodic and v2.runner.carry
     v2.step(FULL)
     runner = v2.runner
     key = (1.0, 2.0, False)
-    runner._remember(key, [v2._last], runner._intake_pa())  # kept at this very pump state
-    assert runner._reusable(key, True) == [v2._last]
+    runner._remember(key, v2._last, runner._intake_pa())  # kept at this very pump state
+    assert runner._reusable(key, True) is v2._last
     base = v2.sim.cfg
     ev.apply_condition(v2.sim, base, "heavy_oil", 1.0)
     assert v2.sim.cfg is not base and runner._reusable(key, True) is None
     ev.apply_condition(v2.sim, base, None, 0.0)
-    assert runner._reusable(key, True) is not None
+    assert runner._reusable(key, True) is v2._last
 
 
 def test_v2_stepping_error_on_a_steady_sample() -> None:
