@@ -1,10 +1,10 @@
-"""The stepping's error against simulating every stroke (docs/speed.md's table): v1 as it is, and v1 with
-``fast_stepping=True``.
+"""The stepping's error against simulating every stroke (docs/speed.md's tables): v1 as it is and v1 with
+``fast_stepping=True``; or, with ``--version v2``, v2 as it is (fast stepping on) and v2 with it off.
 
-    python scripts/stepping_error.py --wells 0 1 2 3 --hours 1 [--json out.json]
+    python scripts/stepping_error.py --wells 0 1 2 3 --hours 1 [--version v2] [--json out.json]
 
 Wells are seeds of the benchmark's test scenario; each policy of srenv.tools.stepping_error runs one episode
-per well three ways (every stroke exact, v1, v1 with the option) and the relative errors are printed.
+per well three ways (every stroke exact and the two options) and the relative errors are printed.
 """
 import argparse
 import json
@@ -15,21 +15,24 @@ ap = argparse.ArgumentParser()
 ap.add_argument("--wells", type=int, nargs="+", default=[0, 1, 2, 3])
 ap.add_argument("--hours", type=float, default=1.0)
 ap.add_argument("--policies", nargs="+", default=list(POLICIES), choices=POLICIES)
+ap.add_argument("--version", default="v1", choices=("v1", "v2"))
 ap.add_argument("--json")
 args = ap.parse_args()
+options = ({"v1": {}, "fast_stepping": {"fast_stepping": True}} if args.version == "v1" else
+           {"v2_fast_off": {"fast_stepping": False}, "v2": {}})
 rows = []
 for policy in args.policies:
     for seed in args.wells:
-        r = compare(policy, seed, args.hours)
+        r = compare(policy, seed, args.hours, options=options, version=args.version)
         rows.append(r)
-        for label in ("v1", "fast_stepping"):
+        for label in options:
             e = r[label]["relative_error"]
             worst = max(e, key=e.get)
             print(f"{policy:16s} well {seed:3d} {label:14s}: production {100 * e['production_m3']:7.3f} %, PPRL "
                   f"{100 * e['pprl_max_n']:7.3f} %, return {100 * e['return']:7.3f} %, worst {worst} "
                   f"{100 * e[worst]:.3f} %; exact strokes {r[label]['figures']['exact_strokes']} of "
                   f"{r['reference']['exact_strokes']}", flush=True)
-for label in ("v1", "fast_stepping"):
+for label in options:
     for key in ("production_m3", "pprl_max_n", "return"):
         worst = max(r[label]["relative_error"][key] for r in rows)
         print(f"{label}: largest {key} error over {len(rows)} episodes {100 * worst:.3f} %")

@@ -5,43 +5,11 @@
 
 from __future__ import annotations
 
-import dataclasses
 import typing
 from dataclasses import dataclass, field
-from typing import Any
 
-# check name -> (predicate, phrase used in the error message)
-_CHECKS: dict[str, tuple[typing.Callable[[float], bool], str]] = {
-    "positive": (lambda x: x > 0, "a positive number"),
-    "nonneg": (lambda x: x >= 0, "a non-negative number"),
-    "any": (lambda x: True, "a finite number"),
-    "unit_interval": (lambda x: 0 <= x <= 1, "a number in [0, 1]"),
-    "angle": (lambda x: 0 <= x <= 180, "an angle in [0, 180]"),
-    "azimuth": (lambda x: -360 <= x <= 360, "an angle in [-360, 360]"),
-}
-
-
-def num(default: Any = dataclasses.MISSING, *, unit: str, check: str = "positive", doc: str = "",
-        lo: float | None = None, hi: float | None = None) -> Any:
-    """A numeric config field with its unit, validity check and physical range [lo, hi] (both inclusive).
-
-    Every numeric field has a finite upper bound: a value far outside any physical range (1e308 N, a
-    1e-300 m element) either overflows to NaN or asks for unbounded memory, so it is refused at load time.
-    """
-    meta = {"unit": unit, "check": check, "doc": doc}
-    if lo is not None:
-        meta["lo"] = lo
-    if hi is not None:
-        meta["hi"] = hi
-    return field(default=default, metadata=meta)
-
-
-def choice(default: str, options: tuple[str, ...], doc: str = "") -> Any:
-    return field(default=default, metadata={"options": options, "doc": doc})
-
-
-def opt(default: Any = None, doc: str = "", **kw: Any) -> Any:
-    return field(default=default, metadata={"doc": doc, **kw})
+from .config_fields import _CHECKS, choice, num, opt  # noqa: F401  (_CHECKS re-exported for the loader)
+from .config_unit import GEOMETRIES, ROTATIONS, BeamUnitConfig  # noqa: F401  (re-exported with the sections)
 
 
 # ----------------------------------------------------------------------------------------------- sections
@@ -195,55 +163,6 @@ class PumpConfig:
     casing_pressure_pa: float | None = num(None, unit="Pa", check="nonneg", hi=1.0e9,
                                            doc="casing-head pressure of the fluid-level shot (the same reference as "
                                                "pump.intake_pressure_pa); given with pump.fluid_level_m only")
-
-
-# ------------------------------------------------------------ the unit by its nameplate (surface.beam_unit)
-# API Spec 11E dimensions, rotation, unbalance and counterbalance of a conventional, Mark II or air-balanced
-# unit instead of a catalogue designation; checked and built by srenv.surface_unit.inline_unit
-# (docs/surface_unit.md).
-GEOMETRIES = ("conventional", "mark_ii", "air_balanced")
-ROTATIONS = ("clockwise", "counterclockwise")
-MAX_UNIT_LINK_M = 30.0  # the largest API 11E units (A ~ 5 m, P ~ 5 m); 30 m is no pumping unit
-MAX_UNIT_FORCE_N = 1.0e6  # 225 000 lbf: above any API 11E structure rating (the largest ~ 47 000 lbf)
-
-
-def _link(doc: str) -> float:
-    return num(unit="m", lo=0.01, hi=MAX_UNIT_LINK_M, doc=doc)
-
-
-@dataclass(frozen=True)
-class BeamUnitConfig:
-    """One pumping unit's nameplate, SI. Required: geometry, rotation and the six API dimensions."""
-
-    geometry: str = field(metadata={"options": GEOMETRIES, "doc": (
-        "API geometry: conventional (Class I), mark_ii (Class III, front-mounted, phased cranks), "
-        "air_balanced (Class III, air-cylinder counterbalance)")})
-    rotation: str = field(metadata={"options": ROTATIONS, "doc": (
-        "crank rotation seen with the wellhead to the right (API)")})
-    a_m: float = _link("API A: saddle bearing to the horsehead's arc (front arm)")
-    c_m: float = _link("API C: saddle bearing to the equalizer bearing")
-    i_m: float = _link("API I: horizontal distance saddle bearing to crank shaft")
-    k_m: float = _link("API K: distance saddle bearing to crank shaft")
-    p_m: float = _link("API P: pitman, crank pin to equalizer bearing")
-    r_m: float = _link("API R: crank radius of the hole in use")
-    designation: str = opt("", doc="API designation, e.g. M-228D-213-86: its gearbox rating is used when "
-                           "torque_rating_nm is 0")
-    torque_rating_nm: float = num(0.0, unit="N*m", check="nonneg", hi=1.0e8,
-                                  doc="gearbox torque rating; 0 = from the designation")
-    structural_unbalance_n: float = num(0.0, unit="N", check="any", lo=-MAX_UNIT_FORCE_N, hi=MAX_UNIT_FORCE_N,
-                                        doc="API SU: force at the polished rod holding the beam level with the "
-                                        "pitmans off, + downward (pitman side heavy)")
-    counterbalance_moment_nm: float = num(0.0, unit="N*m", check="nonneg", hi=1.0e8,
-                                          doc="crank-balanced units: max moment M of counterweights and cranks")
-    crank_offset_deg: float = num(0.0, unit="deg", check="any", lo=-180.0, hi=180.0,
-                                  doc="API offset angle tau of the counterweight arm: lead over the pin "
-                                  "(conventional), lag behind the side opposite the pin (mark_ii)")
-    air_pressure_pa: float = num(0.0, unit="Pa", check="nonneg", hi=1.0e8,
-                                 doc="air_balanced: gauge pressure in the counterbalance cylinder")
-    air_piston_area_m2: float = num(0.0, unit="m^2", check="nonneg", hi=10.0,
-                                    doc="air_balanced: effective piston area of the cylinder")
-    air_arm_m: float = num(0.0, unit="m", check="nonneg", hi=MAX_UNIT_LINK_M,
-                           doc="air_balanced: moment arm of the cylinder's force about the saddle bearing")
 
 
 @dataclass(frozen=True)

@@ -30,3 +30,17 @@ def merged_overrides(overrides: Any, kwargs: dict[str, Any]) -> dict[str, Any]:
             raise ConfigError(key, value, "a keyword of the env or a config field as section__field=value")
         merged[key.replace("__", ".")] = value
     return merged
+
+
+APPLIED_CACHE_SIZE = 512  # wells whose overridden config an env keeps (every well of the largest split)
+
+
+def restates(cfg: Any, key: str, value: Any) -> bool:
+    """True when the override ``key = value`` already holds in ``cfg`` (same type and value: the config
+    parsed with it would be equal), so it need not be applied."""
+    cur: Any = cfg
+    for part in key.split("."):
+        if not hasattr(cur, part):
+            return False  # not a field: load_config names it in its error
+        cur = getattr(cur, part)
+    return type(cur) is type(value) and cur == value

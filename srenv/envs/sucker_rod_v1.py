@@ -91,7 +91,7 @@ from ..task import well_family as wf
 from ..task.economics import COST_TERMS, REWARD_TERMS, EconomicReward
 from ..task.interval import IntervalResult, IntervalRunner, StrokeFigures
 from .action_check import checked_action
-from .env_kwargs import merged_overrides
+from .env_kwargs import APPLIED_CACHE_SIZE, merged_overrides, restates
 
 CARD_POINTS = 32
 OBS_BOUND = 10.0
@@ -153,6 +153,7 @@ class SuckerRodV1Env(CardWindow, gym.Env):
                 self.overrides.setdefault(key, value)
         self.split = self.scenario if self.scenario in wf.SPLITS else None
         self._fixed: wf.WellSpec | None = None
+        self._applied: dict[str, tuple[wf.WellSpec, wf.WellSpec]] = {}
         if self.split is None:
             cfg = load_config(self.scenario, self.overrides or None)
             self._fixed = self._spec_from_config(cfg)
@@ -176,10 +177,19 @@ class SuckerRodV1Env(CardWindow, gym.Env):
         return wf.WellSpec(well_id=name, params=None, cfg=cfg, nominal_rate_m3_day=cfg.inflow.max_rate_m3_day)
 
     def _apply(self, spec: wf.WellSpec) -> wf.WellSpec:
-        if not self.overrides:
+        """The well with the env's overrides; the config is parsed again only when an override changes it (the
+        registered episode_hours and interval_s usually restate the well's own), once per well of the split."""
+        if not self.overrides or all(restates(spec.cfg, k, v) for k, v in self.overrides.items()):
             return spec
+        seen = self._applied.get(spec.well_id)
+        if seen is not None and seen[0] is spec:
+            return seen[1]
         cfg = load_config(spec.cfg, self.overrides)
-        return wf.WellSpec(spec.well_id, spec.params, cfg, spec.nominal_rate_m3_day, spec.design)
+        out = wf.WellSpec(spec.well_id, spec.params, cfg, spec.nominal_rate_m3_day, spec.design)
+        self._applied[spec.well_id] = (spec, out)
+        while len(self._applied) > APPLIED_CACHE_SIZE:
+            self._applied.pop(next(iter(self._applied)))
+        return out
 
     def _episode_spec(self, seed: int | None, rng: np.random.Generator) -> wf.WellSpec:
         """The episode's well: number ``seed mod N`` of the split (drawn when no seed), or the fixed well."""
@@ -219,7 +229,7 @@ class SuckerRodV1Env(CardWindow, gym.Env):
             level0 = cfg.inflow.initial_fluid_level_m
         self.sim = Simulator(cfg)
         self.sim.reset(fluid_level_m=level0)
-        self.runner = IntervalRunner(self.sim, reuse_periodic=self.fast_stepping)
+        self.runner = self._interval_runner()
         self.econ = EconomicReward(cfg.economics)
         s = cfg.surface
         self._spm = float(s.spm)
@@ -286,7 +296,11 @@ class SuckerRodV1Env(CardWindow, gym.Env):
             self.render()
         return self._observe(), reward, terminated, truncated, info
 
-    # hooks for later versions (v2's conditions); v1 has none
+    # hooks for later versions (v2's conditions and stepping); v1 has none
+    def _interval_runner(self) -> IntervalRunner:
+        """The runner of the episode's intervals on ``self.sim``."""
+        return IntervalRunner(self.sim, reuse_periodic=self.fast_stepping)
+
     def _before_interval(self) -> None:
         """Called before each interval is run."""
 

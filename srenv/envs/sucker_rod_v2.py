@@ -16,7 +16,8 @@ Constructor
 | ``episode_hours`` | ``12.0`` (spec) | horizon in hours of well time (``task.episode_hours``) |
 | ``interval_s`` | ``300.0`` (spec) | control interval in s of well time (``task.interval_s``) |
 | ``event_rate_scale`` | ``1.0`` | multiplies every condition's rate (0: no conditions, the v1 task on v2's spaces) |
-| ``classifier`` | ``None`` | callable(trace dict of the last stroke) -> 12 label probabilities in :data:`LABELS` order; ``None``: :func:`default_classifier` (``srenv classify``'s model) |
+| ``classifier`` | ``None`` | callable(trace dict of the last stroke) -> 12 label probabilities in :data:`LABELS` order; ``None``: :func:`default_classifier` (``srenv classify``'s model); called once per card |
+| ``fast_stepping`` | ``True`` | v2's stepping (docs/speed.md): an interval reuses the stroke an earlier interval at its setpoint converged to, carried to the pump's intake pressure; ``False``: v1's stepping |
 | ``render_mode`` | ``None`` | ``"rgb_array"`` or ``"human"`` |
 | ``overrides`` / ``**kwargs`` | ``None`` | config overrides, as v1 |
 
@@ -80,13 +81,15 @@ Version history
 ---------------
 * v2: conditions as events with their costs, classifier probabilities and the true condition in the
   observations, the validation split and ``family:`` wells; the native vector env (srenv/envs/vector.py: N wells in threads,
-  equal to N single envs). Fixed before release: a condition switched on mid-episode now acts in the exact
+  equal to N single envs); the speed branch's stepping (``fast_stepping=True`` by default: converged strokes
+  reused across intervals and carried to the intake pressure; its error against every stroke in
+  docs/speed.md). Fixed before release: a condition switched on mid-episode now acts in the exact
   strokes (``Simulator.switch_config`` starts the chamber's spring state: a gas slug's transfer had stayed rigid
   while only the bookkeeping counted the gas), the fast-forward draws what the gas leaves of the displacement,
   and a condition no longer touches the well's annulus (the card set's full column stays out of episodes).
   Planned before release: the realism branch's
   physics (damping, unit geometry per well), the conditions branch's physics of every condition and its
-  classifier, the speed branch's stepping.
+  classifier.
 * v1 / v0: unchanged (see their modules).
 """
 
@@ -101,7 +104,7 @@ from gymnasium import spaces
 
 from ..task import events as ev
 from ..task import well_family as wf
-from ..task.interval import IntervalResult
+from ..task.interval import IntervalResult, IntervalRunner
 from .sucker_rod_v1 import FIELD_OBS_NAMES as V1_FIELD
 from .sucker_rod_v1 import OBS_BOUND, SuckerRodV1Env
 from .sucker_rod_v1 import PRIVILEGED_OBS_NAMES as V1_PRIVILEGED
@@ -153,7 +156,8 @@ def _uniform(_: dict) -> np.ndarray:
 class SuckerRodV2Env(SuckerRodV1Env):
     def __init__(self, scenario: str = "train", observation: str = "field", render_mode: str | None = None,
                  overrides: dict | None = None, episode_hours: float | None = None, interval_s: float | None = None,
-                 event_rate_scale: float = 1.0, classifier: Classifier | None = None, **kwargs: Any) -> None:
+                 event_rate_scale: float = 1.0, classifier: Classifier | None = None, fast_stepping: bool = True,
+                 **kwargs: Any) -> None:
         scenario = str(scenario)
         family = scenario.startswith("family:")
         v2_only = family or scenario == "validation"
@@ -161,7 +165,7 @@ class SuckerRodV2Env(SuckerRodV1Env):
         if not 0.0 <= rate <= 1e3:
             raise ValueError(f"event_rate_scale = {event_rate_scale!r}: expected a number in [0, 1000]")
         super().__init__("train" if v2_only else scenario, observation, render_mode, overrides, episode_hours,
-                         interval_s, **kwargs)
+                         interval_s, fast_stepping, **kwargs)
         self.scenario = scenario
         if family:
             text = scenario.partition(":")[2]
@@ -173,6 +177,7 @@ class SuckerRodV2Env(SuckerRodV1Env):
             self.split = "validation"
         self.event_rate_scale = rate
         self.classifier = classifier or default_classifier() or _uniform
+        self._probs: tuple[Any, np.ndarray] = (None, np.zeros(0))  # (the stroke classified, its probabilities)
         self.obs_names = FIELD_OBS_NAMES if observation == "field" else PRIVILEGED_OBS_NAMES
         self.observation_space = spaces.Box(-OBS_BOUND, OBS_BOUND, (len(self.obs_names),), np.float32)
 
@@ -192,6 +197,10 @@ class SuckerRodV2Env(SuckerRodV1Env):
         self._condition: tuple[str | None, float] = (None, 0.0)
         self._true = ("full", 0.0)
         return spec
+
+    def _interval_runner(self) -> IntervalRunner:
+        # fast stepping (the default): earlier intervals' strokes reused, carried to the intake pressure
+        return IntervalRunner(self.sim, reuse_periodic=self.fast_stepping, carry=self.fast_stepping)
 
     def _before_interval(self) -> None:
         label, sev = self._schedule.active(self._elapsed() / 3600.0)
@@ -226,16 +235,24 @@ class SuckerRodV2Env(SuckerRodV1Env):
     # ------------------------------------------------------------------------------------------ obs / info
     def _observe(self) -> np.ndarray:
         base = super()._observe()
-        probs = np.asarray(self.classifier(self._last.trace), dtype=np.float64).reshape(-1)
-        if probs.shape != (len(LABELS),) or not np.all(np.isfinite(probs)):
-            raise ValueError(f"classifier returned {probs.shape} values: expected {len(LABELS)} finite probabilities")
-        parts = [base, probs.astype(np.float32)]
+        parts = [base, self._card_probabilities().astype(np.float32)]
         if self.observation == "privileged":
             onehot = np.zeros(len(LABELS) + 1, np.float32)
             onehot[LABELS.index(self._true[0])] = 1.0
             onehot[-1] = self._true[1]
             parts.append(onehot)
         return np.clip(np.concatenate(parts), -OBS_BOUND, OBS_BOUND).astype(np.float32)
+
+    def _card_probabilities(self) -> np.ndarray:
+        """The classifier's probabilities for the last stroke's card; an interval that reused a stroke (fast
+        stepping) shows the same card (trace), so its probabilities are not computed again."""
+        if self._probs[0] is not self._last.trace:
+            probs = np.asarray(self.classifier(self._last.trace), dtype=np.float64).reshape(-1)
+            if probs.shape != (len(LABELS),) or not np.all(np.isfinite(probs)):
+                raise ValueError(f"classifier returned {probs.shape} values: expected {len(LABELS)} finite "
+                                 "probabilities")
+            self._probs = (self._last.trace, probs)
+        return self._probs[1]
 
     def _info(self, r: IntervalResult | None, terms: dict, costs: dict) -> dict:
         info = super()._info(r, terms, costs)

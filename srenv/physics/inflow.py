@@ -17,14 +17,13 @@ from .rod import GRAVITY_M_S2
 SECONDS_PER_DAY = 86400.0
 
 
-def level_intake_pressure_pa(casing_pressure_pa: float, density_kg_m3: float, tvd, pump_md_m: float,
-                             level_md_m: float) -> float:
+def level_intake_pressure_pa(casing_pressure_pa: float, density_kg_m3: float, pump_tvd_m: float,
+                             level_tvd_m: float) -> float:
     """The pump's intake pressure under an annulus fluid level: casing pressure + rho_f g (TVD of the pump -
     TVD of the level). The gas column above the level is taken as weightless: its weight adds
     p_c M g h / (R T) - for methane at 300 K 0.6 % of the casing pressure per 100 m (12 kPa over 1000 m at
     200 kPa, the weight of 1.3 m of water), within an acoustic shot's resolution of the level."""
-    column_tvd = float(tvd(pump_md_m) - tvd(level_md_m))
-    return casing_pressure_pa + density_kg_m3 * GRAVITY_M_S2 * column_tvd
+    return casing_pressure_pa + density_kg_m3 * GRAVITY_M_S2 * float(pump_tvd_m - level_tvd_m)
 
 
 class Annulus:
@@ -33,6 +32,7 @@ class Annulus:
         self.fluid = fluid
         self.pump_md_m = pump_md_m
         self._tvd = tvd
+        self._pump_tvd = tvd(pump_md_m)  # asked for at every stroke the env fast-forwards: computed once
         d_c, d_t = cfg.casing_inner_diameter_mm * 1e-3, cfg.tubing_outer_diameter_mm * 1e-3
         self.area_m2 = math.pi / 4 * (d_c * d_c - d_t * d_t)
         self.rate_multiplier = 1.0  # the reservoir's deliverability over time (v1's inflow schedule)
@@ -49,8 +49,8 @@ class Annulus:
 
     def intake_pressure_pa(self) -> float:
         h = min(self.level_m, self.pump_md_m)
-        return level_intake_pressure_pa(self.cfg.casing_pressure_pa, self.fluid.density_kg_m3, self._tvd,
-                                        self.pump_md_m, self.pump_md_m - h)
+        return level_intake_pressure_pa(self.cfg.casing_pressure_pa, self.fluid.density_kg_m3, self._pump_tvd,
+                                        self._tvd(self.pump_md_m - h))
 
     def inflow_m3_s(self) -> float:
         p_wf = self.intake_pressure_pa()

@@ -43,8 +43,8 @@ def intake_at_pump_pa(cfg: WellConfig, survey) -> float:
     p = cfg.pump
     if p.fluid_level_m is None:
         return p.intake_pressure_pa
-    return level_intake_pressure_pa(p.casing_pressure_pa, cfg.fluid.density_kg_m3, survey.tvd_beyond,
-                                    pump_md_m(cfg), p.fluid_level_m)
+    return level_intake_pressure_pa(p.casing_pressure_pa, cfg.fluid.density_kg_m3, survey.tvd_beyond(pump_md_m(cfg)),
+                                    survey.tvd_beyond(p.fluid_level_m))
 
 
 def pump_at_rod_end(cfg: WellConfig, survey) -> WellConfig:

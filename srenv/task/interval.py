@@ -15,6 +15,11 @@ level. When the fast-forwarded fillage drifts from the exact stroke's by more th
 again. A fractional last stroke is counted by its fraction (of its liquid, work and costs), so every figure
 is continuous in the stroke rate. The error of the fast-forward against simulating every stroke is measured
 by ``tests/test_interval.py`` (production and PPRL within 1 %).
+
+Options (off in v1; v2's default, docs/speed.md): ``reuse_periodic`` starts an interval from the stroke an
+earlier interval at the same setpoint converged to, while the intake pressure has barely moved and the physics
+is the same; ``carry`` also carries a kept stroke to a farther intake pressure along the slopes of two kept
+strokes (:mod:`srenv.task.reuse`).
 """
 
 from __future__ import annotations
@@ -27,6 +32,7 @@ from ..analysis import card_features as cf
 from ..analysis.stroke_summary import summarize
 from ..physics.pump import plunger_area_m2
 from ..simulation.simulator import RunResult, Simulator
+from . import reuse
 
 # the fast option (IntervalRunner(reuse_periodic=True)): how far the intake pressure may move the plunger's
 # fluid load, as a fraction of the reused stroke's PPRL, and how many setpoints' strokes are kept
@@ -131,12 +137,15 @@ def stroke_figures(sim: Simulator, r: RunResult, fatigue_life: float, fatigue_ex
 class IntervalRunner:
     """Runs control intervals on one simulator (see the module docstring)."""
 
-    def __init__(self, sim: Simulator, reuse_periodic: bool = False) -> None:
+    def __init__(self, sim: Simulator, reuse_periodic: bool = False, carry: bool = False) -> None:
         self.sim = sim
         # reuse_periodic (off in v1): an interval at the previous interval's setpoint starts from that
         # interval's converged stroke instead of simulating it again (docs/speed.md)
         self.reuse_periodic = reuse_periodic
-        self._periodic: dict[tuple, tuple[StrokeFigures, float]] = {}
+        # carry (v2): a kept stroke is carried to a farther intake pressure along two kept strokes' slopes
+        self.carry = carry
+        self._periodic: dict[tuple, tuple[StrokeFigures, float, object]] = {}
+        self._slopes: dict[tuple, reuse.Slopes] = {}
         cfg = sim.cfg
         self.task = cfg.task
         self.econ = cfg.economics
@@ -222,11 +231,17 @@ class IntervalRunner:
         got = self._periodic.get(key) if self.reuse_periodic and allowed else None
         if got is None:
             return None
-        f, p_in = got
-        area = plunger_area_m2(self.sim.cfg.pump)
-        if abs(self._intake_pa() - p_in) * area > REUSE_LOAD_FRACTION * abs(f.summary["pprl_n"]):
+        f, p_in, cfg = got
+        if cfg is not self.sim.cfg:  # a condition changed the physics since (v2's events): the stroke is stale
             return None
-        return f
+        area = plunger_area_m2(self.sim.cfg.pump)
+        p_now = self._intake_pa()
+        if abs(p_now - p_in) * area <= REUSE_LOAD_FRACTION * abs(f.summary["pprl_n"]):
+            return f
+        s = self._slopes.get(key) if self.carry else None
+        if s is not None and s.reaches(p_now):  # v2: carried along two kept strokes' slopes (srenv/task/reuse.py)
+            return reuse.carried(f, s, p_now - p_in)
+        return None
 
     def _quasi_steady(self, exact: list[StrokeFigures]) -> bool:
         """A pumped-off well's strokes differ stroke to stroke (the pound) while the interval is steady: its last
@@ -234,9 +249,16 @@ class IntervalRunner:
         return len(exact) >= 2 and abs(exact[-1].fillage - exact[-2].fillage) < self.task.fast_forward_fillage_tol
 
     def _remember(self, key: tuple, f: StrokeFigures, p_in: float) -> None:
-        self._periodic.pop(key, None)
-        self._periodic[key] = (f, p_in)
+        old = self._periodic.pop(key, None)
+        if self.carry:  # v2: two strokes kept at one physics and different intake pressures give slopes
+            self._slopes.pop(key, None)
+            if old is not None and old[2] is self.sim.cfg:
+                span = abs(p_in - old[1]) * plunger_area_m2(self.sim.cfg.pump)
+                if span > reuse.MIN_SPAN_LOAD_FRACTION * abs(f.summary["pprl_n"]):
+                    self._slopes[key] = reuse.slopes(old[0], old[1], f, p_in)
+        self._periodic[key] = (f, p_in, self.sim.cfg)
         while len(self._periodic) > REUSE_CACHE_SIZE:
+            self._slopes.pop(next(iter(self._periodic)), None)
             self._periodic.pop(next(iter(self._periodic)))
 
     def _pump(self, res: IntervalResult, spm: float, stroke_m: float, period: float, n_total: float,

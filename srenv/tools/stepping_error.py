@@ -31,13 +31,30 @@ def actions(policy: str, steps: int, seed: int) -> np.ndarray:
     raise ValueError(f"policy = {policy!r}: expected one of {', '.join(POLICIES)}")
 
 
-def episode(env, seed: int, acts: np.ndarray) -> dict:
-    """Sums over one episode of the figures compared (stops early if the episode ends)."""
+def reward_terms(version: str = "v1") -> tuple[str, ...]:
+    """The reward terms a task version reports in its info (v2 adds the conditions' terms)."""
+    from ..envs.sucker_rod_v2 import V2_REWARD_TERMS
     from ..task.economics import REWARD_TERMS
 
+    return REWARD_TERMS + (V2_REWARD_TERMS if version == "v2" else ())
+
+
+def env_class(version: str):
+    from ..envs.sucker_rod_v1 import SuckerRodV1Env
+    from ..envs.sucker_rod_v2 import SuckerRodV2Env
+
+    classes = {"v1": SuckerRodV1Env, "v2": SuckerRodV2Env}
+    if version not in classes:
+        raise ValueError(f"version = {version!r}: expected one of {', '.join(classes)}")
+    return classes[version]
+
+
+def episode(env, seed: int, acts: np.ndarray) -> dict:
+    """Sums over one episode of the figures compared (stops early if the episode ends)."""
     env.reset(seed=seed)
     out = {"production_m3": 0.0, "pprl_max_n": 0.0, "return": 0.0, "exact_strokes": 0, "steps": 0}
-    out.update({k: 0.0 for k in REWARD_TERMS})
+    terms = reward_terms("v2" if isinstance(env.unwrapped, env_class("v2")) else "v1")
+    out.update({k: 0.0 for k in terms})
     for a in acts:
         _, rew, term, trunc, info = env.step(a)
         out["production_m3"] += info["production_m3_day"] * env.unwrapped._result.duration_s / 86400.0
@@ -45,7 +62,7 @@ def episode(env, seed: int, acts: np.ndarray) -> dict:
         out["return"] += rew
         out["exact_strokes"] += info["exact_strokes"]
         out["steps"] += 1
-        for k in REWARD_TERMS:
+        for k in terms:
             out[k] += info[k]
         if term or trunc:
             break
@@ -55,29 +72,28 @@ def episode(env, seed: int, acts: np.ndarray) -> dict:
 def relative_errors(ref: dict, got: dict) -> dict:
     """|got - ref| / |ref| per figure; a reward term smaller than 0.1 % of the episode's summed |terms| is
     compared against that sum instead (a term near zero has no meaningful relative error)."""
-    from ..task.economics import REWARD_TERMS
-
-    scale = 1e-3 * sum(abs(ref[k]) for k in REWARD_TERMS)
-    keys = ("production_m3", "pprl_max_n", "return", *REWARD_TERMS)
+    terms = [k for k in reward_terms("v2") if k in ref]
+    scale = 1e-3 * sum(abs(ref[k]) for k in terms)
+    keys = ("production_m3", "pprl_max_n", "return", *terms)
     return {k: abs(got[k] - ref[k]) / max(abs(ref[k]), scale, 1e-12) for k in keys}
 
 
 def compare(policy: str, seed: int, hours: float, scenario: str = "test", interval_s: float = 300.0,
-            options: dict | None = None) -> dict:
-    """One episode of `hours` on well `seed` of `scenario`: each of ``options`` (a label -> env kwargs; default
-    v1 as it is and v1 with fast_stepping=True) against every stroke simulated exactly."""
-    from ..envs.sucker_rod_v1 import SuckerRodV1Env
+            options: dict | None = None, version: str = "v1") -> dict:
+    """One episode of `hours` on well `seed` of `scenario` of task ``version`` ("v1" or "v2"; v2 draws the same
+    conditions for every run of a seed): each of ``options`` (a label -> env kwargs; default v1 as it is and v1
+    with fast_stepping=True) against every stroke simulated exactly."""
     from ..task.interval import IntervalRunner
 
+    cls = env_class(version)
     options = {"v1": {}, "fast_stepping": {"fast_stepping": True}} if options is None else options
     steps = max(1, math.ceil(hours * 3600.0 / interval_s - 1e-9))
     acts = actions(policy, steps, seed)
-    ref_env = SuckerRodV1Env(scenario=scenario, episode_hours=hours, interval_s=interval_s)
+    ref_env = cls(scenario=scenario, episode_hours=hours, interval_s=interval_s, fast_stepping=False)
     ref = _episode_every_stroke(ref_env, seed, acts, functools.partial(IntervalRunner.run, fast_forward=False))
     out = {"policy": policy, "seed": seed, "hours": hours, "reference": ref}
     for label, kw in options.items():
-        got = episode(SuckerRodV1Env(scenario=scenario, episode_hours=hours, interval_s=interval_s, **kw), seed,
-                      acts)
+        got = episode(cls(scenario=scenario, episode_hours=hours, interval_s=interval_s, **kw), seed, acts)
         out[label] = {"figures": got, "relative_error": relative_errors(ref, got)}
     return out
 

@@ -7,6 +7,7 @@ from __future__ import annotations
 import dataclasses
 
 import numpy as np
+import pytest
 
 from srenv.analysis.condition_card import simulate_card
 from srenv.physics.conditions import LABELS
@@ -76,3 +77,24 @@ def test_kelvin_voigt_damping_calms_the_ringing() -> None:
 
     w = [wiggle(simulate_card(cs.card_config(dataclasses.replace(base, kv_tau_s=t)))) for t in (0.0, 0.02, 0.05)]
     assert w[0] > w[1] > w[2], w
+
+
+@pytest.mark.parametrize("spring", [{"pump.intake_gas_fraction": 0.3}, {"pump.liquid_compressibility_per_pa": 5e-10},
+                                    {"tubing.anchored": False}])
+@pytest.mark.parametrize("condition", [{"pump.travelling_valve_leak_fraction": 1.0},
+                                       {"pump.standing_valve_leak_fraction": 1.0},
+                                       {"pump.tag_bottom_overtravel_m": 0.1}, {"pump.tag_top_overtravel_m": 0.1},
+                                       {"pump.tubing_leak_fraction": 0.5}])
+def test_a_condition_the_chamber_spring_would_drop_is_refused(spring, condition):
+    """With free gas, a compressible chamber liquid or unanchored tubing the plunger meets the chamber's spring law,
+    which does not carry the leak, tagging and tubing-leak laws: the card came out identical to the well without
+    them. The config refuses the pair in one line naming the condition's field instead of dropping it."""
+    from srenv.config import load_config
+    from srenv.errors import ConfigError
+
+    base = load_config("default")
+    load_config(base, spring)  # each alone is a valid well
+    load_config(base, condition)
+    with pytest.raises(ConfigError) as ex:
+        load_config(base, {**spring, **condition})
+    assert ex.value.field == "pump." + next(iter(condition)).split(".")[1] and "spring" in str(ex.value)
