@@ -100,6 +100,7 @@ import numpy as np
 from gymnasium import spaces
 
 from ..task import events as ev
+from ..task import v2_physics
 from ..task import well_family as wf
 from ..task.interval import IntervalResult
 from .sucker_rod_v1 import FIELD_OBS_NAMES as V1_FIELD
@@ -140,10 +141,19 @@ def default_classifier() -> Classifier | None:
 
 
 def physics_overrides(spec: wf.WellSpec) -> dict[str, Any]:
-    """v2's per-well physics on top of the family's config: the one place the realism branch's features are
-    switched on for v2 (e.g. ``pump.fluid_column_mass_kg`` from the well's tapers and tubing, a unit geometry
-    drawn per well). Empty today: v2 runs the family's physics until the lead wires them here."""
-    return {}
+    """v2's per-well physics on top of the family's config, the one place the realism branch's features are
+    switched on for v2 (:mod:`srenv.task.v2_physics`, dotted keys so the family's other damping fields stay):
+
+    * ``surface.motion: beam_unit``: a conventional / Mark II / air-balanced unit (60 / 25 / 15 %) drawn from
+      the well's own seed and scaled so its longest stroke is the well's ``unit_stroke_m``; its crank radius
+      follows the stroke action (``crank_follows_stroke``), the VSD sets the SPM as before; counterbalance and
+      gearbox rating at the installed point. Why: real wells are driven by a four-bar linkage, not a cosine
+      (PPRL +2-3 %, asymmetric up/down stroke, a gearbox that limits speeding up; docs/surface_unit.md).
+    * ``damping.stiffness_proportional_s`` = 2 x 0.08 / omega_1: Kelvin-Voigt damping, the same ratio zeta_1 =
+      0.08 on every well's fundamental (modes k: (2k - 1) x 0.08). Why: real strings damp their high modes
+      (docs/realism.md); a fixed tau = 0.03 s would give a 600-m well zeta_1 = 0.2 (over-damped) and a 2.5-km
+      one 0.05 (docs/task.md, "v2's per-well physics")."""
+    return v2_physics.overrides(spec)
 
 
 def _uniform(_: dict) -> np.ndarray:
