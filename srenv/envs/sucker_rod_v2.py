@@ -189,7 +189,7 @@ class SuckerRodV2Env(SuckerRodV1Env):
     # ------------------------------------------------------------------------------------------ episode
     def _episode_spec(self, seed: int | None, rng: np.random.Generator) -> wf.WellSpec:
         spec = self._fixed if self.split == "family" else super()._episode_spec(seed, rng)
-        over = physics_overrides(spec)
+        over = v2_physics.yield_to(physics_overrides(spec), self.overrides)  # the caller's overrides win
         if over:
             from ..config import load_config
 

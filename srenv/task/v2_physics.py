@@ -105,9 +105,33 @@ def kv_tau_s(spec: wf.WellSpec) -> float:
     return round(2.0 * KV_ZETA_1 / omega_1, 5)
 
 
+# keys that only make sense together: a caller who sets one of them chooses the surface motion
+GROUPS = (("surface.motion", "surface.beam_unit"),)
+
+
+def yield_to(physics: dict[str, Any], caller: dict[str, Any] | None) -> dict[str, Any]:
+    """``physics`` without what the caller's own overrides set (the same key, a field under it or its section,
+    or any key of its :data:`GROUPS`): a user who asks for ``surface.motion: harmonic`` or a damping keeps it."""
+    if not caller:
+        return physics
+
+    def touched(key: str) -> bool:
+        return any(u == key or u.startswith(key + ".") or key.startswith(u + ".") for u in caller)
+
+    out = dict(physics)
+    for key in physics:
+        group = next((g for g in GROUPS if key in g), (key,))
+        if any(touched(k) for k in group):
+            out.pop(key)
+    return out
+
+
 def overrides(spec: wf.WellSpec) -> dict[str, Any]:
     """The dotted-key overrides of v2's per-well physics (dotted: a nested section would replace the whole
-    section and drop the family's ``damping.damping_factor``)."""
+    section and drop the family's ``damping.damping_factor``); none for a well given by its config (a shipped
+    well or YAML path: its file says its unit and damping)."""
+    if spec.params is None:
+        return {}
     return {"surface.motion": "beam_unit",
             "surface.beam_unit": unit_block(spec, draw_geometry(spec.params)),
             "damping.stiffness_proportional_s": kv_tau_s(spec)}

@@ -88,7 +88,7 @@ def test_kv_tau_gives_every_well_the_same_damping_ratio_on_its_fundamental():
     # so tau grows with the depth: the fixed 0.03 s of srenv validate sits inside the family's range
     depth = np.array([s.params.depth_m for s in specs])
     tau = np.array([vp.kv_tau_s(s) for s in specs])
-    assert tau[depth.argmin()] < 0.015 < 0.03 < 0.045 < tau[depth.argmax()]
+    assert tau[depth.argmin()] < 0.015 and tau[depth.argmax()] > 0.045
 
 
 @pytest.mark.parametrize("geometry", GEOMETRIES)
@@ -118,3 +118,18 @@ def test_installed_gearbox_loading_is_where_units_run():
         runs = [sim.run_stroke(record=True) for _ in range(3)]
         loads.append(sim.surface.gearbox_report(runs[1:]).loading_pct)
     assert 55.0 < float(np.median(loads)) < 90.0 and max(loads) < 130.0, loads
+
+
+def test_a_well_given_by_its_config_and_the_callers_overrides_keep_their_physics():
+    shipped = gym.make(ID, scenario="default", episode_hours=0.5).unwrapped
+    shipped.reset(seed=0)  # a well given by its file keeps its own (harmonic, no Kelvin-Voigt) physics
+    assert shipped.cfg.surface.motion == "harmonic" and shipped.cfg.damping.stiffness_proportional_s == 0.0
+    env = gym.make(ID, scenario="train", episode_hours=0.5,
+                   overrides={"surface.motion": "harmonic", "damping.stiffness_proportional_s": 0.0}).unwrapped
+    env.reset(seed=5)
+    assert env.cfg.surface.motion == "harmonic" and env.cfg.surface.beam_unit is None
+    assert env.cfg.damping.stiffness_proportional_s == 0.0
+    env = gym.make(ID, scenario="train", episode_hours=0.5, overrides={"damping.damping_factor": 0.05}).unwrapped
+    env.reset(seed=5)
+    assert env.cfg.surface.motion == "beam_unit" and env.cfg.damping.damping_factor == 0.05
+    assert env.cfg.damping.stiffness_proportional_s == vp.kv_tau_s(wf.build_spec("train", 5))
