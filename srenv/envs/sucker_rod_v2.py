@@ -84,9 +84,10 @@ Version history
   strokes (``Simulator.switch_config`` starts the chamber's spring state: a gas slug's transfer had stayed rigid
   while only the bookkeeping counted the gas), the fast-forward draws what the gas leaves of the displacement,
   and a condition no longer touches the well's annulus (the card set's full column stays out of episodes).
-  Planned before release: the realism branch's
-  physics (damping, unit geometry per well), the conditions branch's physics of every condition and its
-  classifier, the speed branch's stepping.
+  Added before release: the realism branch's physics per well (:func:`physics_overrides`: a conventional /
+  Mark II / air-balanced unit drawn per well and scaled to its unit stroke, its crank following the stroke
+  action; Kelvin-Voigt damping with zeta_1 = 0.08 on every well's fundamental). Planned before release: the
+  conditions branch's physics of every condition and its classifier, the speed branch's stepping.
 * v1 / v0: unchanged (see their modules).
 """
 
