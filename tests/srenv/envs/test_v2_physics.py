@@ -133,3 +133,21 @@ def test_a_well_given_by_its_config_and_the_callers_overrides_keep_their_physics
     env.reset(seed=5)
     assert env.cfg.surface.motion == "beam_unit" and env.cfg.damping.damping_factor == 0.05
     assert env.cfg.damping.stiffness_proportional_s == vp.kv_tau_s(wf.build_spec("train", 5))
+
+
+@pytest.mark.parametrize("observation", ["field", "privileged"])
+def test_v2_with_its_physics_passes_the_gymnasium_and_sb3_checkers(observation):
+    import warnings
+
+    from gymnasium.utils.env_checker import check_env
+    from stable_baselines3.common.env_checker import check_env as sb3_check_env
+
+    def make():
+        return gym.make(ID, scenario="train", observation=observation, episode_hours=0.5).unwrapped
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        env = make()
+        check_env(env, skip_render_check=True)
+        sb3_check_env(make(), warn=True)
+    assert env.cfg.surface.motion == "beam_unit"  # the checkers ran the per-well physics
