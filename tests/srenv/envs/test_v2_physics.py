@@ -151,3 +151,17 @@ def test_v2_with_its_physics_passes_the_gymnasium_and_sb3_checkers(observation):
         check_env(env, skip_render_check=True)
         sb3_check_env(make(), warn=True)
     assert env.cfg.surface.motion == "beam_unit"  # the checkers ran the per-well physics
+
+
+def test_a_crank_that_follows_the_stroke_strokes_the_request_and_keeps_the_counterbalance_effect():
+    base = load_config("mark_ii_fig4")
+    fixed = Simulator(load_config("mark_ii_fig4", {"surface.stroke_length_m": 1.2}))
+    follow = Simulator(load_config("mark_ii_fig4", {"surface.stroke_length_m": 1.2,
+                                                    "surface.beam_unit.crank_follows_stroke": True}))
+    full = fixed.run_stroke(record=True)
+    assert np.ptp(full.trace["polished_rod_position_m"]) == pytest.approx(1.6248, abs=2e-3)  # the hole's, not 1.2
+    runs = [follow.run_stroke(record=True) for _ in range(2)]
+    assert np.ptp(runs[-1].trace["polished_rod_position_m"]) == pytest.approx(1.2, abs=2e-3)
+    report = follow.surface.gearbox_report(runs[-1:])
+    m = base.surface.beam_unit.counterbalance_moment_nm
+    assert report.summary()["counterbalance_moment_nm"] == pytest.approx(m * 1.2 / full.stroke_length_m, rel=1e-6)
