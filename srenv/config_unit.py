@@ -54,3 +54,8 @@ class BeamUnitConfig:
                                     doc="air_balanced: effective piston area of the cylinder")
     air_arm_m: float = num(0.0, unit="m", check="nonneg", hi=MAX_UNIT_LINK_M,
                            doc="air_balanced: moment arm of the cylinder's force about the saddle bearing")
+    crank_follows_stroke: bool = opt(False, doc=(
+        "true: each stroke's crank radius is the one (<= r_m) that gives the requested "
+        "surface.stroke_length_m / control stroke, capped at r_m's stroke (a continuously adjustable crank "
+        "pin, for the env's stroke action), counterbalance_moment_nm (given for r_m) scaled with the stroke as a "
+        "crew rebalances on a hole change; false: the stroke is r_m's whatever is requested"))

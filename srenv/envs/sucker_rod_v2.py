@@ -87,9 +87,10 @@ Version history
   strokes (``Simulator.switch_config`` starts the chamber's spring state: a gas slug's transfer had stayed rigid
   while only the bookkeeping counted the gas), the fast-forward draws what the gas leaves of the displacement,
   and a condition no longer touches the well's annulus (the card set's full column stays out of episodes).
-  Planned before release: the realism branch's
-  physics (damping, unit geometry per well), the conditions branch's physics of every condition and its
-  classifier.
+  Added before release: the realism branch's physics per well (:func:`physics_overrides`: a conventional /
+  Mark II / air-balanced unit drawn per well and scaled to its unit stroke, its crank following the stroke
+  action; Kelvin-Voigt damping with zeta_1 = 0.08 on every well's fundamental). Planned before release: the
+  conditions branch's physics of every condition and its classifier.
 * v1 / v0: unchanged (see their modules).
 """
 
@@ -103,6 +104,7 @@ import numpy as np
 from gymnasium import spaces
 
 from ..task import events as ev
+from ..task import v2_physics
 from ..task import well_family as wf
 from ..task.interval import IntervalResult, IntervalRunner
 from .sucker_rod_v1 import FIELD_OBS_NAMES as V1_FIELD
@@ -143,10 +145,19 @@ def default_classifier() -> Classifier | None:
 
 
 def physics_overrides(spec: wf.WellSpec) -> dict[str, Any]:
-    """v2's per-well physics on top of the family's config: the one place the realism branch's features are
-    switched on for v2 (e.g. ``pump.fluid_column_mass_kg`` from the well's tapers and tubing, a unit geometry
-    drawn per well). Empty today: v2 runs the family's physics until the lead wires them here."""
-    return {}
+    """v2's per-well physics on top of the family's config, the one place the realism branch's features are
+    switched on for v2 (:mod:`srenv.task.v2_physics`, dotted keys so the family's other damping fields stay):
+
+    * ``surface.motion: beam_unit``: a conventional / Mark II / air-balanced unit (60 / 25 / 15 %) drawn from
+      the well's own seed and scaled so its longest stroke is the well's ``unit_stroke_m``; its crank radius
+      follows the stroke action (``crank_follows_stroke``), the VSD sets the SPM as before; counterbalance and
+      gearbox rating at the installed point. Why: real wells are driven by a four-bar linkage, not a cosine
+      (PPRL +2-3 %, asymmetric up/down stroke, a gearbox that limits speeding up; docs/surface_unit.md).
+    * ``damping.stiffness_proportional_s`` = 2 x 0.08 / omega_1: Kelvin-Voigt damping, the same ratio zeta_1 =
+      0.08 on every well's fundamental (modes k: (2k - 1) x 0.08). Why: real strings damp their high modes
+      (docs/realism.md); a fixed tau = 0.03 s would give a 600-m well zeta_1 = 0.2 (over-damped) and a 2.5-km
+      one 0.05 (docs/task.md, "v2's per-well physics")."""
+    return v2_physics.overrides(spec)
 
 
 def _uniform(_: dict) -> np.ndarray:
@@ -184,7 +195,7 @@ class SuckerRodV2Env(SuckerRodV1Env):
     # ------------------------------------------------------------------------------------------ episode
     def _episode_spec(self, seed: int | None, rng: np.random.Generator) -> wf.WellSpec:
         spec = self._fixed if self.split == "family" else super()._episode_spec(seed, rng)
-        over = physics_overrides(spec)
+        over = v2_physics.yield_to(physics_overrides(spec), self.overrides)  # the caller's overrides win
         if over:
             from ..config import load_config
 

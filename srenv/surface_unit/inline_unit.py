@@ -6,6 +6,7 @@ record's ``SurfaceUnit`` onto the same block. docs/surface_unit.md gives the equ
 
 from __future__ import annotations
 
+import dataclasses
 import functools
 import math
 from typing import TYPE_CHECKING, Any
@@ -98,6 +99,26 @@ def inline_unit(u: BeamUnitConfig) -> ConventionalUnit:
         p_m=u.p_m, crank_radii_m=(u.r_m,), rotation=u.rotation, torque_rating_nm=torque,
         structural_unbalance_n=u.structural_unbalance_n, max_stroke_m=stroke, max_load_n=load, kind=u.geometry)
     return ConventionalUnit(geometry)
+
+
+@functools.lru_cache(maxsize=256)
+def unit_for_stroke(u: BeamUnitConfig, stroke_m: float) -> ConventionalUnit:
+    """The unit of ``u`` with its crank radius moved so that its stroke is ``stroke_m`` (<= the stroke of
+    ``u.r_m``; ``crank_follows_stroke``): a shorter crank hole, as a crew sets one, made continuous. The stroke
+    grows monotonically and nearly linearly with R (S ~ 2 R A / C), so a few secant steps on R hit it to 1e-9
+    m. A smaller R only makes the four-bar easier to close (K + R < C + P, K - R > |C - P|)."""
+    full = inline_unit(u)
+    if stroke_m >= full.stroke_m:
+        return full
+    r0, s0 = u.r_m, full.stroke_m
+    r1 = u.r_m * stroke_m / s0
+    s1 = inline_unit.__wrapped__(dataclasses.replace(u, r_m=r1)).stroke_m
+    for _ in range(20):
+        if abs(s1 - stroke_m) < 1e-10:
+            break
+        r0, s0, r1 = r1, s1, r1 + (stroke_m - s1) * (r1 - r0) / (s1 - s0)
+        s1 = inline_unit.__wrapped__(dataclasses.replace(u, r_m=r1)).stroke_m
+    return inline_unit.__wrapped__(dataclasses.replace(u, r_m=r1))
 
 
 def counterbalance(u: BeamUnitConfig) -> tuple[float, float]:

@@ -22,7 +22,7 @@ import numpy as np
 
 from ..errors import ConfigError
 from .beam_unit import ConventionalUnit
-from .inline_unit import counterbalance, inline_unit
+from .inline_unit import counterbalance, inline_unit, unit_for_stroke
 from .measured_motion import MeasuredMotion, load_measured_motion
 from .unit_catalogue import conventional_unit
 
@@ -73,10 +73,23 @@ class SurfaceMotion:
 
     def stroke_length_m(self, requested_m: float) -> float:
         """The conventional unit's stroke is set by its crank hole, a measured card's by the card, not by the
-        request."""
+        request; an inline unit with ``crank_follows_stroke`` takes the request up to its crank's stroke."""
         if self._measured is not None:
             return self._measured.stroke_m
+        if self._follows:
+            return min(float(requested_m), self._unit.stroke_m)
         return self._unit.stroke_m if self._unit is not None else requested_m
+
+    @property
+    def _follows(self) -> bool:
+        return self.kind == "beam_unit" and self.cfg.beam_unit is not None and self.cfg.beam_unit.crank_follows_stroke
+
+    def unit_for(self, stroke_m: float) -> ConventionalUnit | None:
+        """The linkage that runs a stroke of ``stroke_m``: the configured one, or with ``crank_follows_stroke``
+        the same unit on the crank radius of that stroke."""
+        if self._follows:
+            return unit_for_stroke(self.cfg.beam_unit, self.stroke_length_m(stroke_m))
+        return self._unit
 
     def stroke_velocity(self, spm: float, stroke_m: float, n_steps: int) -> np.ndarray:
         """Top velocity (positive down) at the end of each of the n_steps steps of one stroke."""
@@ -91,7 +104,8 @@ class SurfaceMotion:
         if self.kind == "harmonic":
             return -0.5 * stroke_m * omega * np.sin(omega * t)
         if self.kind in LINKAGE_MOTIONS:
-            return -np.asarray(self._unit.torque_factor_m(self._unit.crank_angle_rad(t, spm))) * omega
+            unit = self.unit_for(stroke_m)
+            return -np.asarray(unit.torque_factor_m(unit.crank_angle_rad(t, spm))) * omega
         if self.kind == "measured":
             return self._measured.velocity_down_m_s(t, spm)
         raise ValueError("pull-out motion has no strokes: use duration-based runs")
@@ -134,8 +148,13 @@ class SurfaceMotion:
         else:
             configured, offset_rad = self.cfg.counterbalance_moment_nm, math.radians(self.cfg.counterbalance_offset_deg)
         moment = configured if counterbalance_moment_nm is None else counterbalance_moment_nm
+        # the crank radius of the recorded strokes (one setpoint per call: an interval's or a run's)
+        unit = self.unit_for(results[0].stroke_length_m) if results else self._unit
+        if self._follows and not unit.air_balanced and counterbalance_moment_nm is None:
+            # a crew that changes the crank hole rebalances: the counterbalance effect at the rod stays (M ~ R)
+            moment *= unit.stroke_m / self._unit.stroke_m
         return analyse_runs(
-            self._unit, results,
+            unit, results,
             counterbalance_moment_nm=moment,
             counterbalance_offset_rad=offset_rad,
             motor_efficiency=self.cfg.motor_efficiency,
