@@ -190,6 +190,10 @@ def _as_output(values: FloatArray) -> FloatOrArray:
     return float(values) if values.ndim == 0 else values
 
 
+TF_CACHE_SIZE = 8            # setpoints whose strokes' torque factors a unit keeps
+TF_CACHE_MIN_SAMPLES = 64    # below this an array is a query, not a stroke: computed each time
+
+
 class ConventionalUnit:
     """Kinematics and torque of a beam unit with the pin in crank hole ``crank_hole`` (0 = longest); the name
     is historical: ``geometry.kind`` selects Class I (conventional) or Class III (Mark II, air-balanced).
@@ -206,6 +210,7 @@ class ConventionalUnit:
         self.crank_hole = int(crank_hole)
         self.crank_radius_m = geometry.crank_radii_m[self.crank_hole]
         self._sign = ROTATION_SIGNS[geometry.rotation]
+        self._tf_cache: dict[bytes, FloatArray] = {}  # torque_factor_m of a stroke's crank angles (see there)
         self._lever = LEVER_SIGNS[geometry.kind]
         self._saddle = (self._lever * geometry.i_m, geometry.h_m)
         # Class I: pitman and crank in line (extended) is the bottom; Class III: the top (E is highest)
@@ -294,9 +299,25 @@ class ConventionalUnit:
         return _as_output(self.geometry.a_m * _wrap_pi(delta - self._delta_bottom))
 
     def torque_factor_m(self, theta: npt.ArrayLike) -> FloatOrArray:
-        """API torque factor TF = d(position)/dθ (m/rad, exact); also the velocity factor v = TF·ω."""
-        _, d1, _ = self._beam_rates(self._psi(theta))
-        return _as_output(self.geometry.a_m * self._sign * d1)
+        """API torque factor TF = d(position)/dθ (m/rad, exact); also the velocity factor v = TF·ω.
+
+        A stroke's samples sit at the same crank angles stroke after stroke at one setpoint (the gearbox report
+        asks for them several times a stroke): the last few arrays' factors are kept, keyed by the angles' bytes,
+        so the same arithmetic is not repeated (the answer is bit-identical)."""
+        arr = np.asarray(theta, dtype=float)
+        if arr.ndim != 1 or arr.size < TF_CACHE_MIN_SAMPLES:
+            _, d1, _ = self._beam_rates(self._psi(arr))
+            return _as_output(self.geometry.a_m * self._sign * d1)
+        key = arr.tobytes()
+        tf = self._tf_cache.get(key)
+        if tf is None:
+            _, d1, _ = self._beam_rates(self._psi(arr))
+            tf = self.geometry.a_m * self._sign * d1
+            tf.setflags(write=False)
+            if len(self._tf_cache) >= TF_CACHE_SIZE:
+                self._tf_cache.pop(next(iter(self._tf_cache)))
+            self._tf_cache[key] = tf
+        return tf.copy()
 
     velocity_factor_m = torque_factor_m
 
