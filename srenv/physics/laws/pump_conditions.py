@@ -120,9 +120,19 @@ def adjust(params, ub, plo, phi):
             phi = plo + dp * min(1.0, speed / sv)
         if p.drain > 0.0:
             plo = phi - (phi - plo) * (1.0 - p.drain * 0.5 * (1.0 + xi))
-    force = 0.0  # the contact's push on the plunger, positive down
+    force = contact_force(params, ub)
+    return plo - force, phi - force
+
+
+@njit(cache=True, inline="always")
+def contact_force(params, ub):
+    """Tagging's push on the plunger at position ub (positive down): k x the overlap with the pump's top or
+    bottom end, 0 inside its free travel. It does not depend on what the chamber holds, so the gas spring's
+    interval takes it too (srenv.physics.laws.valve.bounds)."""
+    p = params[0]
+    force = 0.0
     if p.tag_top_set != 0 and ub < p.tag_top_m:
         force = p.tag_k * (p.tag_top_m - ub)
     if p.tag_bottom_set != 0 and ub > p.tag_bottom_m:
         force = -p.tag_k * (ub - p.tag_bottom_m)
-    return plo - force, phi - force
+    return force

@@ -4,6 +4,7 @@ fluid load moves between tubing and rods over a plunger travel (fluid load) / k 
 
 from __future__ import annotations
 
+import itertools
 import math
 
 import numpy as np
@@ -132,3 +133,28 @@ def test_gas_chamber_with_compressible_liquid_closes_the_energy_balance():
     assert peaks[1] < peaks[0] and peaks[2] < peaks[0]
     # free tubing: the barrel's travel is lost stroke, the gas still takes its share of what is left
     assert fills[2] == pytest.approx(fills[0], abs=0.05)
+
+
+@pytest.mark.parametrize("chamber", [["pump.fillage=0.8"], ["pump.liquid_compressibility_per_pa=5e-9"]])
+def test_tagging_adds_its_contact_to_the_chamber_spring(chamber):
+    """Tagging is a contact between the plunger and the pump's end, whatever the chamber holds: with free gas or
+    a compressible liquid its impact load still grows strictly with the overtravel (top: the peak, bottom: the
+    lowest pump load), the balance closes, and the surface card differs from the spring's alone and from the
+    tagging's alone (once refused: the spring mode dropped the contact)."""
+    def run(extra):
+        _, sim, t = _last_stroke([*extra])
+        assert abs(sim.energy_balance()["residual_j"]) < 1e-6
+        return t
+
+    free = run(chamber)
+    for end, pick in (("top", np.max), ("bottom", lambda y: -np.min(y))):
+        impact = [pick(free["pump_load_n"])]
+        for over in (0.05, 0.1, 0.2):
+            impact.append(pick(run([*chamber, f"pump.tag_{end}_overtravel_m={over}"])["pump_load_n"]))
+        assert all(a < b for a, b in itertools.pairwise(impact)), (end, impact)
+    both = run([*chamber, "pump.tag_top_overtravel_m=0.1"])["polished_rod_load_n"]
+    tag_only = run(["pump.tag_top_overtravel_m=0.1"])["polished_rod_load_n"]
+    span = np.ptp(free["polished_rod_load_n"])
+    n = min(len(both), len(tag_only), len(free["polished_rod_load_n"]))
+    assert np.abs(both[:n] - free["polished_rod_load_n"][:n]).max() > 0.05 * span
+    assert np.abs(both[:n] - tag_only[:n]).max() > 0.05 * span
