@@ -19,7 +19,7 @@ from numba import njit
 
 from ..pump import ValveLaw
 from .gas_spring import GAS_FIELDS, gas_active
-from .pump_conditions import COND_FIELDS, adjust, contact_force
+from .pump_conditions import COND_FIELDS, adjust, contact_force, drain_discharge
 
 # void: 0 no fluid-pound plan, 1 planned (liquid level at void_until_m), 2 the plunger is in the void now
 PARAMS = np.dtype([("lo_n", np.float64), ("hi_n", np.float64), ("drop_n", np.float64),
@@ -57,6 +57,8 @@ def bounds(params, ub, lo, hi, ns):
     n = lo.shape[0]
     plo = p.lo_n
     phi = p.hi_n
+    if p.drain > 0.0 and p.gas_mode != 0:  # a tubing leak drains the column the chamber's spring pushes on
+        drain_discharge(params, ub)
     gas_on = gas_active(params)
     if p.void != 0:
         p.void = 2 if ub < p.void_until_m else 1
