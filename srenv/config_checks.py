@@ -69,8 +69,8 @@ def _check_pump(cfg: WellConfig) -> None:
 
 # the pump-condition laws the kernel's chamber spring does not carry: with free gas, a compressible chamber liquid
 # or unanchored tubing the plunger meets the chamber law instead of the valve law these act through, so they
-# would be dropped without a word (measured: the card identical to the same well without them)
-# the valve leaks move the valve interval the chamber's spring replaces; a leak through a closed valve would
+# would be dropped without a word (measured: the card identical to the same well without them). The valve leaks
+# move the valve interval the chamber's spring replaces; a leak through a closed valve would
 # change what the chamber holds (docs/conditions.md), which the spring law does not model yet. The tubing leak
 # drains the column the spring pushes on (laws.pump_conditions.drain_discharge) and tagging's contact adds to
 # the spring (contact_force), but tagging holds the pump's ends fixed, which an unanchored barrel is not (it
