@@ -69,9 +69,14 @@ def _check_pump(cfg: WellConfig) -> None:
 
 # the pump-condition laws the kernel's chamber spring does not carry: with free gas, a compressible chamber liquid
 # or unanchored tubing the plunger meets the chamber law instead of the valve law these act through, so they
-# would be dropped without a word (measured: the card identical to the same well without them)
-_NOT_WITH_A_SPRING = ("travelling_valve_leak_fraction", "standing_valve_leak_fraction", "tag_top_overtravel_m",
-                      "tag_bottom_overtravel_m", "tubing_leak_fraction")
+# would be dropped without a word (measured: the card identical to the same well without them). The valve leaks
+# move the valve interval the chamber's spring replaces; a leak through a closed valve would
+# change what the chamber holds (docs/conditions.md), which the spring law does not model yet. The tubing leak
+# drains the column the spring pushes on (laws.pump_conditions.drain_discharge) and tagging's contact adds to
+# the spring (contact_force), but tagging holds the pump's ends fixed, which an unanchored barrel is not (it
+# travels with the tubing's stretch, and the contact would load the tubing in series)
+_NOT_WITH_A_SPRING = ("travelling_valve_leak_fraction", "standing_valve_leak_fraction")
+_NOT_WITH_FREE_TUBING = ("tag_top_overtravel_m", "tag_bottom_overtravel_m")
 
 
 def _check_chamber_conditions(cfg: WellConfig) -> None:
@@ -86,6 +91,11 @@ def _check_chamber_conditions(cfg: WellConfig) -> None:
         if value > 0:
             raise ConfigError(f"pump.{name}", value, f"0 with {spring}: the chamber's spring law does not carry "
                               "this condition yet (the card would be the same as without it)")
+    for name in _NOT_WITH_FREE_TUBING if not cfg.tubing.anchored else ():
+        value = getattr(p, name)
+        if value > 0:
+            raise ConfigError(f"pump.{name}", value, "0 with unanchored tubing (a spring on the plunger): the "
+                              "tagging law holds the pump's ends fixed, and a free barrel moves with the tubing")
 
 
 def _check_pump_inputs(cfg: WellConfig) -> None:

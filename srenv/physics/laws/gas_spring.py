@@ -73,11 +73,22 @@ def tubing_spring(params, ub):
     """Unanchored tubing: centre = c0 + k_t (u_B - u0) between the valve law's bounds [lo_n, hi_n]."""
     p = params[0]
     c = p.p0 + p.k * (ub - p.u0_m)
-    if c <= p.lo_n:
-        return p.lo_n, 0.0
+    lo = fluid_clamp(params)
+    if c <= lo:
+        return lo, 0.0
     if c >= p.hi_n:
         return p.hi_n, 0.0
     return c, p.k
+
+
+@njit(cache=True, inline="always")
+def fluid_clamp(params):
+    """The tubing spring's fluid-load bound lo_n, less the share of the fluid load a tubing leak has drained
+    (laws.pump_conditions.drain_discharge; the rigid law's P-_eff)."""
+    p = params[0]
+    if p.drain_share > 0.0:
+        return p.hi_n - (p.hi_n - p.lo_n) * (1.0 - p.drain_share)
+    return p.lo_n
 
 
 @njit(cache=True)
@@ -89,8 +100,9 @@ def valves(params, ub):
     p = params[0]
     if p.area_m2 == 0.0:  # unanchored tubing: the plunger slid in its barrel, the spring re-references
         c = p.p0 + p.k * (ub - p.u0_m)
-        if c <= p.lo_n or c >= p.hi_n:
-            p.p0 = min(max(c, p.lo_n), p.hi_n)
+        lo = fluid_clamp(params)
+        if c <= lo or c >= p.hi_n:
+            p.p0 = min(max(c, lo), p.hi_n)
             p.u0_m = ub
         return
     if p.liq_c + p.tub_c > 0.0:

@@ -19,7 +19,8 @@ down: lo = -P-_eq, hi = -P+_eq), so each step stays the same convex box QP:
   P+ + dP clip((s_sv + v) / (s_tv + s_sv), 0, 1) at signed speed v (up positive, fractions of v_peak): the
   stroke's direction switches near its ends after the plunger has moved back 2 % of its travel.
 * **tubing leak**: the column above the pump drains through the hole: the discharge pressure, and with it
-  the fluid load, falls over the upstroke, P-_eff = P+ + dP (1 - f (1 + xi) / 2).
+  the fluid load, falls over the upstroke, P-_eff = P+ + dP (1 - f (1 + xi) / 2). With a chamber spring
+  the same share drains the column the spring pushes on (``drain_discharge``).
 * **tagging**: the plunger meets the pump's top (bottom) end: a one-sided contact spring
   f = k max(0, overlap) on the plunger, taken at the step's start position (explicit; k dt^2 well below the
   plunger node's mass), shifts both ends of the interval. The ends are placed ``tag_*_overtravel_m`` inside
@@ -41,7 +42,10 @@ from numba import njit
 COND_FIELDS = [("cond_on", "i8"), ("leak_tv", "f8"), ("leak_sv", "f8"), ("drain", "f8"), ("ref_top_m", "f8"),
                ("ref_bottom_m", "f8"), ("last_ub_m", "f8"), ("rising", "i8"), ("tag_top_m", "f8"),
                ("tag_bottom_m", "f8"), ("tag_top_set", "i8"), ("tag_bottom_set", "i8"), ("tag_k", "f8"),
-               ("tag_top_over_m", "f8"), ("tag_bottom_over_m", "f8")]
+               ("tag_top_over_m", "f8"), ("tag_bottom_over_m", "f8"),
+               # a tubing leak with a chamber spring (drain_discharge): the share of the fluid load lost now,
+               # and the gas chamber's discharge and above-plunger pressures of the full column
+               ("drain_share", "f8"), ("p_d_full_pa", "f8"), ("p_out_full_pa", "f8")]
 HYSTERESIS = 0.02  # share of the plunger travel it must move back before the stroke's direction switches
 # the fields a run hands to the next (the plunger's travel, direction and the contact ends)
 STATE_FIELDS = ("ref_top_m", "ref_bottom_m", "last_ub_m", "rising", "tag_top_m", "tag_bottom_m",
@@ -84,15 +88,15 @@ def leak_share(speed_fraction: float, leak_fraction: float) -> float:
 
 
 @njit(cache=True, inline="always")
-def adjust(params, ub, plo, phi):
-    """The interval (plo, phi) at plunger position ub with the conditions (module docstring)."""
+def track(params, ub):
+    """The plunger's position xi in its last measured travel (0 at the bottom) and the stroke's direction,
+    switched only near its ends after a small travel back (ringing inside the stroke does not flip it); the
+    last position kept is the extreme since the switch. The same ub twice changes nothing."""
     p = params[0]
     travel = p.ref_bottom_m - p.ref_top_m
     xi = 0.0
     if travel > 1e-9:
         xi = min(max((p.ref_bottom_m - ub) / travel, 0.0), 1.0)
-    # the stroke's direction, switched only near its ends after a small travel back (ringing inside the
-    # stroke does not flip it); the last position kept is the extreme since the switch
     if p.rising != 0:
         if ub < p.last_ub_m:
             p.last_ub_m = ub
@@ -103,6 +107,30 @@ def adjust(params, ub, plo, phi):
             p.last_ub_m = ub
         elif xi < 0.5 and p.last_ub_m - ub > HYSTERESIS * travel:
             p.rising, p.last_ub_m = 1, ub
+    return xi
+
+
+@njit(cache=True, inline="always")
+def drain_discharge(params, ub):
+    """A tubing leak with a chamber spring: the share of the fluid load the drained column has lost, f (1 + xi)
+    / 2 over the upstroke (the interval's formula) and f, the top's, while the plunger falls (the column
+    lifts nothing then; the rigid law need not say, its downstroke bound is P+). The gas chamber (mode 1)
+    meets it as the pressure above the plunger and the discharge pressure lowered by that share of
+    p_d - p_in; the liquid / tubing spring (mode 2) as its fluid-load clamp (gas_spring.fluid_clamp)."""
+    p = params[0]
+    xi = track(params, ub)
+    p.drain_share = p.drain * (0.5 * (1.0 + xi) if p.rising != 0 else 1.0)
+    if p.gas_mode == 1:
+        d = p.drain_share * (p.p_d_full_pa - p.p_in_pa)
+        p.p_d_pa = p.p_d_full_pa - d
+        p.p_out_pa = p.p_out_full_pa - d
+
+
+@njit(cache=True, inline="always")
+def adjust(params, ub, plo, phi):
+    """The interval (plo, phi) at plunger position ub with the conditions (module docstring)."""
+    p = params[0]
+    xi = track(params, ub)
     speed = math.sqrt(4.0 * xi * (1.0 - xi))
     dp = phi - plo  # P- - P+
     if dp > 0.0:
@@ -120,9 +148,19 @@ def adjust(params, ub, plo, phi):
             phi = plo + dp * min(1.0, speed / sv)
         if p.drain > 0.0:
             plo = phi - (phi - plo) * (1.0 - p.drain * 0.5 * (1.0 + xi))
-    force = 0.0  # the contact's push on the plunger, positive down
+    force = contact_force(params, ub)
+    return plo - force, phi - force
+
+
+@njit(cache=True, inline="always")
+def contact_force(params, ub):
+    """Tagging's push on the plunger at position ub (positive down): k x the overlap with the pump's top or
+    bottom end, 0 inside its free travel. It does not depend on what the chamber holds, so the gas spring's
+    interval takes it too (srenv.physics.laws.valve.bounds)."""
+    p = params[0]
+    force = 0.0
     if p.tag_top_set != 0 and ub < p.tag_top_m:
         force = p.tag_k * (p.tag_top_m - ub)
     if p.tag_bottom_set != 0 and ub > p.tag_bottom_m:
         force = -p.tag_k * (ub - p.tag_bottom_m)
-    return plo - force, phi - force
+    return force

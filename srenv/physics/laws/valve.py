@@ -7,7 +7,8 @@ P- while it rises, P+ while it falls, anything between at rest. Two modification
   * velocity weakening (nonmonotone upstroke law P-(v) = P_inf + (P0 - P_inf) exp(-|v|/v0)): j = j1 - j2
     with j2'(v) = -(P0 - P_inf)(1 - exp(v/v0)) for v < 0 (rising), 0 otherwise; sup j2'' = (P0 - P_inf)/v0.
 With enough free gas in the chamber (or unanchored tubing) the gas spring (``gas_spring``) carries the
-load transfer and the interval shrinks to the plunger friction. Valve leaks, a tubing leak and tagging move
+load transfer and the interval shrinks to the plunger friction (shifted by tagging's contact force, which
+does not depend on the chamber). Valve leaks, a tubing leak and tagging move
 the interval with the plunger's position (``pump_conditions``).
 """
 
@@ -18,7 +19,7 @@ from numba import njit
 
 from ..pump import ValveLaw
 from .gas_spring import GAS_FIELDS, gas_active
-from .pump_conditions import COND_FIELDS, adjust
+from .pump_conditions import COND_FIELDS, adjust, contact_force, drain_discharge
 
 # void: 0 no fluid-pound plan, 1 planned (liquid level at void_until_m), 2 the plunger is in the void now
 PARAMS = np.dtype([("lo_n", np.float64), ("hi_n", np.float64), ("drop_n", np.float64),
@@ -56,6 +57,8 @@ def bounds(params, ub, lo, hi, ns):
     n = lo.shape[0]
     plo = p.lo_n
     phi = p.hi_n
+    if p.drain > 0.0 and p.gas_mode != 0:  # a tubing leak drains the column the chamber's spring pushes on
+        drain_discharge(params, ub)
     gas_on = gas_active(params)
     if p.void != 0:
         p.void = 2 if ub < p.void_until_m else 1
@@ -65,6 +68,10 @@ def bounds(params, ub, lo, hi, ns):
     if gas_on:
         plo = -p.gas_friction_n if p.gas_mode == 1 else 0.0
         phi = -plo
+        if p.cond_on != 0:  # tagging: the pump's end pushes on the plunger whatever the chamber holds
+            force = contact_force(params, ub)
+            plo -= force
+            phi -= force
     elif p.cond_on != 0 and p.void != 2:  # leaks, tubing leak, tagging (laws.pump_conditions)
         plo, phi = adjust(params, ub, plo, phi)
     p.gas_on = 1 if gas_on else 0

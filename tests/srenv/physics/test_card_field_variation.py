@@ -79,16 +79,20 @@ def test_kelvin_voigt_damping_calms_the_ringing() -> None:
     assert w[0] > w[1] > w[2], w
 
 
-@pytest.mark.parametrize("spring", [{"pump.intake_gas_fraction": 0.3}, {"pump.liquid_compressibility_per_pa": 5e-10},
-                                    {"tubing.anchored": False}])
-@pytest.mark.parametrize("condition", [{"pump.travelling_valve_leak_fraction": 1.0},
-                                       {"pump.standing_valve_leak_fraction": 1.0},
-                                       {"pump.tag_bottom_overtravel_m": 0.1}, {"pump.tag_top_overtravel_m": 0.1},
-                                       {"pump.tubing_leak_fraction": 0.5}])
+_SPRINGS = [{"pump.intake_gas_fraction": 0.3}, {"pump.liquid_compressibility_per_pa": 5e-10}, {"tubing.anchored": False}]
+_TAGS = [{"pump.tag_bottom_overtravel_m": 0.1}, {"pump.tag_top_overtravel_m": 0.1}]
+_REFUSED = [(s, c) for s in _SPRINGS for c in ({"pump.travelling_valve_leak_fraction": 1.0},
+                                               {"pump.standing_valve_leak_fraction": 1.0})] + [
+    (_SPRINGS[2], t) for t in _TAGS]
+_COMPOSED = [(s, t) for s in _SPRINGS[:2] for t in _TAGS] + [(s, {"pump.tubing_leak_fraction": 0.5}) for s in _SPRINGS]
+
+
+@pytest.mark.parametrize(("spring", "condition"), _REFUSED)
 def test_a_condition_the_chamber_spring_would_drop_is_refused(spring, condition):
     """With free gas, a compressible chamber liquid or unanchored tubing the plunger meets the chamber's spring law,
-    which does not carry the leak, tagging and tubing-leak laws: the card came out identical to the well without
-    them. The config refuses the pair in one line naming the condition's field instead of dropping it."""
+    which does not carry the valve leaks: the card came out identical to the well without them. Tagging adds its
+    contact to the spring, but not with unanchored tubing (the barrel's ends move with it). The
+    config refuses the pair in one line naming the condition's field instead of dropping it."""
     from srenv.config import load_config
     from srenv.errors import ConfigError
 
@@ -98,3 +102,14 @@ def test_a_condition_the_chamber_spring_would_drop_is_refused(spring, condition)
     with pytest.raises(ConfigError) as ex:
         load_config(base, {**spring, **condition})
     assert ex.value.field == "pump." + next(iter(condition)).split(".")[1] and "spring" in str(ex.value)
+
+
+@pytest.mark.parametrize(("spring", "condition"), _COMPOSED)
+def test_a_condition_the_chamber_spring_carries_is_accepted(spring, condition):
+    """Tagging composes with free gas and a compressible liquid, a tubing leak with every chamber spring
+    (their mechanisms: tests/srenv/physics/test_load_transfer.py)."""
+    from srenv.config import load_config
+
+    cfg = load_config(load_config("default"), {**spring, **condition})
+    name = next(iter(condition)).split(".")[1]
+    assert getattr(cfg.pump, name) == condition["pump." + name]

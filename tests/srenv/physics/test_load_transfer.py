@@ -4,6 +4,7 @@ fluid load moves between tubing and rods over a plunger travel (fluid load) / k 
 
 from __future__ import annotations
 
+import itertools
 import math
 
 import numpy as np
@@ -132,3 +133,67 @@ def test_gas_chamber_with_compressible_liquid_closes_the_energy_balance():
     assert peaks[1] < peaks[0] and peaks[2] < peaks[0]
     # free tubing: the barrel's travel is lost stroke, the gas still takes its share of what is left
     assert fills[2] == pytest.approx(fills[0], abs=0.05)
+
+
+@pytest.mark.parametrize("chamber", [["pump.fillage=0.8"], ["pump.liquid_compressibility_per_pa=5e-9"]])
+def test_tagging_adds_its_contact_to_the_chamber_spring(chamber):
+    """Tagging is a contact between the plunger and the pump's end, whatever the chamber holds: with free gas or
+    a compressible liquid its impact load still grows strictly with the overtravel (top: the peak, bottom: the
+    lowest pump load), the balance closes, and the surface card differs from the spring's alone and from the
+    tagging's alone (once refused: the spring mode dropped the contact)."""
+    def run(extra):
+        _, sim, t = _last_stroke([*extra])
+        assert abs(sim.energy_balance()["residual_j"]) < 1e-6
+        return t
+
+    free = run(chamber)
+    for end, pick in (("top", np.max), ("bottom", lambda y: -np.min(y))):
+        impact = [pick(free["pump_load_n"])]
+        for over in (0.05, 0.1, 0.2):
+            impact.append(pick(run([*chamber, f"pump.tag_{end}_overtravel_m={over}"])["pump_load_n"]))
+        assert all(a < b for a, b in itertools.pairwise(impact)), (end, impact)
+    both = run([*chamber, "pump.tag_top_overtravel_m=0.1"])["polished_rod_load_n"]
+    tag_only = run(["pump.tag_top_overtravel_m=0.1"])["polished_rod_load_n"]
+    span = np.ptp(free["polished_rod_load_n"])
+    n = min(len(both), len(tag_only), len(free["polished_rod_load_n"]))
+    assert np.abs(both[:n] - free["polished_rod_load_n"][:n]).max() > 0.05 * span
+    assert np.abs(both[:n] - tag_only[:n]).max() > 0.05 * span
+
+
+def _late_upstroke(trace):
+    """(xi, pump load) over the rising plunger's upper half (xi in the stroke's pump travel, 0 at the bottom),
+    after the load transfer, short of the top."""
+    x, y = trace["pump_position_m"], trace["pump_load_n"]
+    xi = (x - x.min()) / np.ptp(x)
+    sel = np.r_[False, np.diff(x) > 0] & (xi > 0.5) & (xi < 0.9)
+    return xi[sel], y[sel]
+
+
+@pytest.mark.parametrize("chamber", [["pump.fillage=0.8"], ["pump.liquid_compressibility_per_pa=5e-9"],
+                                     ["tubing.anchored=false"]])
+def test_a_tubing_leak_drains_the_column_the_chamber_spring_pushes_on(chamber):
+    """A tubing leak with a chamber spring: the column's pressure on the plunger falls over the upstroke as in
+    the rigid law, P-_eff = P+ + dP (1 - f (1 + xi) / 2). The liquid / tubing spring meets it as its fluid-load
+    clamp: after the transfer the card is the rigid leak's (within 1 % of dP). The gas chamber meets it as the
+    discharge pressure and the pressure above the plunger, lowered by f (1 + xi) / 2 (p_d - p_in): the
+    plunger friction F is not drained, so the load sits F f (1 + xi) above the rigid law's (which drains dP
+    with its 2F). The upstroke load falls strictly with the leak and the balance closes."""
+    cfg, _, rigid = _last_stroke(["pump.tubing_leak_fraction=0.5"])
+    loads, late, last = [], None, None
+    for f in (0.0, 0.3, 0.5):
+        _, sim, t = _last_stroke([*chamber, f"pump.tubing_leak_fraction={f}"])
+        assert abs(sim.energy_balance()["residual_j"]) < 1e-6
+        x, y = t["pump_position_m"], t["pump_load_n"]
+        loads.append(float(np.median(y[1:][np.diff(x) > 0])))
+        late, last = _late_upstroke(t), t["pump_load_n"]
+    assert loads[0] > loads[1] > loads[2], loads
+    n = min(len(last), len(rigid["pump_load_n"]))  # the spring's transfer still shapes the card
+    assert np.abs(last[:n] - rigid["pump_load_n"][:n]).max() > 0.05 * np.ptp(rigid["pump_load_n"])
+    xr, yr = _late_upstroke(rigid)
+    order = np.argsort(xr)
+    xi, y = late
+    expected = np.interp(xi, xr[order], yr[order])
+    if chamber[0].startswith("pump.fillage"):
+        expected = expected + cfg.pump.plunger_friction_n * 0.5 * (1 + xi)
+    dp = np.ptp(rigid["pump_load_n"])
+    assert len(xi) > 50 and np.abs(y - expected).max() < 0.01 * dp, np.abs(y - expected).max() / dp
