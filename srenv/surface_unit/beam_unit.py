@@ -299,21 +299,15 @@ class ConventionalUnit:
         return _as_output(self.geometry.a_m * _wrap_pi(delta - self._delta_bottom))
 
     def torque_factor_m(self, theta: npt.ArrayLike) -> FloatOrArray:
-        """API torque factor TF = d(position)/dθ (m/rad, exact); also the velocity factor v = TF·ω.
-
-        A stroke's samples sit at the same crank angles stroke after stroke at one setpoint (the gearbox report
-        asks for them several times a stroke): the last few arrays' factors are kept, keyed by the angles' bytes,
-        so the same arithmetic is not repeated (the answer is bit-identical)."""
+        """API torque factor TF = d(position)/dθ (m/rad, exact); also the velocity factor v = TF·ω. A stroke's
+        crank angles recur stroke after stroke at one setpoint: their factors are kept (bit-identical)."""
         arr = np.asarray(theta, dtype=float)
-        if arr.ndim != 1 or arr.size < TF_CACHE_MIN_SAMPLES:
-            _, d1, _ = self._beam_rates(self._psi(arr))
-            return _as_output(self.geometry.a_m * self._sign * d1)
-        key = arr.tobytes()
-        tf = self._tf_cache.get(key)
+        key = arr.tobytes() if arr.ndim == 1 and arr.size >= TF_CACHE_MIN_SAMPLES else None
+        tf = self._tf_cache.get(key) if key is not None else None
         if tf is None:
-            _, d1, _ = self._beam_rates(self._psi(arr))
-            tf = self.geometry.a_m * self._sign * d1
-            tf.setflags(write=False)
+            tf = self.geometry.a_m * self._sign * self._beam_rates(self._psi(arr))[1]
+            if key is None:
+                return _as_output(tf)
             if len(self._tf_cache) >= TF_CACHE_SIZE:
                 self._tf_cache.pop(next(iter(self._tf_cache)))
             self._tf_cache[key] = tf
