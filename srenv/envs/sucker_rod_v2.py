@@ -83,7 +83,8 @@ Version history
   observations, the validation split and ``family:`` wells; the native vector env (srenv/envs/vector.py: N wells in threads,
   equal to N single envs); the speed branch's stepping (``fast_stepping=True`` by default: converged strokes
   reused across intervals and carried to the intake pressure; its error against every stroke in
-  docs/speed.md). Fixed before release: a condition switched on mid-episode now acts in the exact
+  docs/speed.md; its fast-forward draws a stroke's liquid at the upstroke's end as an exact stroke does).
+  Fixed before release: a condition switched on mid-episode now acts in the exact
   strokes (``Simulator.switch_config`` starts the chamber's spring state: a gas slug's transfer had stayed rigid
   while only the bookkeeping counted the gas), the fast-forward draws what the gas leaves of the displacement,
   and a condition no longer touches the well's annulus (the card set's full column stays out of episodes).
@@ -211,7 +212,7 @@ class SuckerRodV2Env(SuckerRodV1Env):
 
     def _interval_runner(self) -> IntervalRunner:
         # fast stepping (the default): earlier intervals' strokes reused, carried to the intake pressure
-        return IntervalRunner(self.sim, reuse_periodic=self.fast_stepping, carry=self.fast_stepping)
+        return IntervalRunner(self.sim, reuse_periodic=self.fast_stepping, carry=self.fast_stepping, draw_at_top=True)
 
     def _before_interval(self) -> None:
         label, sev = self._schedule.active(self._elapsed() / 3600.0)

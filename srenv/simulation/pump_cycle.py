@@ -45,10 +45,7 @@ class PumpCycle:
         fixes the liquid level in the barrel; above it the plunger meets no liquid (fluid pound). Returns
         that level (positive down, the valve law's void_until_m)."""
         self.annulus.accumulate(time_s)
-        # the standing valve is open while the plunger rises: the last upstroke's measured duration (the plunger
-        # rests at both ends, so it is shorter than half the period), half the period before there is one
-        rising_s = getattr(self, "_rising_s", None)
-        rising_s = 0.5 * period_s if rising_s is None or rising_s > period_s else rising_s
+        rising_s = self.upstroke_s(period_s)  # the standing valve is open while the plunger rises
         available_m3 = self.annulus.volume_m3 + self.annulus.inflow_m3_s() * rising_s
         self._liquid_stroke_m = available_m3 / plunger_area_m2(self.cfg.pump)
         return u_bottom_m - self._liquid_stroke_m
@@ -179,13 +176,27 @@ class PumpCycle:
         if self.annulus is not None:
             self.annulus.give_back(volume_m3)
 
-    def fast_forward(self, until_s: float, displaced_m3: float) -> float:
-        """A stroke not simulated (the interval runner's fast-forward): the annulus fills to `until_s`, the pump
-        draws up to `displaced_m3` from it and the clock moves to `until_s`; returns the volume drawn (all of
-        `displaced_m3` without an annulus). The rod state is not touched."""
-        taken = self.annulus.draw(displaced_m3, until_s) if self.annulus is not None else displaced_m3
+    def fast_forward(self, until_s: float, displaced_m3: float, draw_at_s: float | None = None) -> float:
+        """A stroke not simulated (the interval runner's fast-forward): the pump draws up to `displaced_m3` from
+        the annulus filled to `draw_at_s` (default `until_s`), the annulus fills on to `until_s` and the clock
+        moves there; returns the volume drawn (all of `displaced_m3` without an annulus). The rod state is not
+        touched. Drawing at the upstroke's end, as an exact stroke does, leaves the downstroke's inflow in the
+        annulus at the bottom, where the next exact stroke expects it."""
+        if self.annulus is None:
+            taken = displaced_m3
+        elif draw_at_s is not None and draw_at_s < until_s:
+            taken = self.annulus.draw(displaced_m3, draw_at_s)
+            self.annulus.accumulate(until_s)
+        else:
+            taken = self.annulus.draw(displaced_m3, until_s)
         self.time_s = until_s
         return taken
+
+    def upstroke_s(self, period_s: float) -> float:
+        """How long the standing valve stays open in a stroke of `period_s`: the last measured upstroke (the
+        plunger rests at both ends, so it is shorter than half the period), half the period before there is one."""
+        rising_s = getattr(self, "_rising_s", None)
+        return 0.5 * period_s if rising_s is None or rising_s > period_s else rising_s
 
     def replan_upstroke(self, period_s: float) -> None:
         """Re-plan the coming upstroke's liquid (fluid pound) after the annulus changed outside a stroke."""

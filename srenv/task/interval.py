@@ -137,8 +137,13 @@ def stroke_figures(sim: Simulator, r: RunResult, fatigue_life: float, fatigue_ex
 class IntervalRunner:
     """Runs control intervals on one simulator (see the module docstring)."""
 
-    def __init__(self, sim: Simulator, reuse_periodic: bool = False, carry: bool = False) -> None:
+    def __init__(self, sim: Simulator, reuse_periodic: bool = False, carry: bool = False,
+                 draw_at_top: bool = False) -> None:
         self.sim = sim
+        # draw_at_top (v2): a fast-forwarded stroke draws its liquid at the upstroke's end as an exact stroke does
+        # (v1 draws at the stroke's end: the annulus is then empty at the bottom where an exact stroke finds the
+        # downstroke's inflow, and the exact strokes after a fast-forward pound on that; docs/speed.md)
+        self.draw_at_top = draw_at_top
         # reuse_periodic (off in v1): an interval at the previous interval's setpoint starts from that
         # interval's converged stroke instead of simulating it again (docs/speed.md)
         self.reuse_periodic = reuse_periodic
@@ -317,7 +322,8 @@ class IntervalRunner:
             t_next = min(sim.time_s + w * period, t_end) if w < 1.0 else sim.time_s + period
             # what the pump can draw: its displacement less the free gas's share (1 without gas)
             cap = w * f.displacement_m3 * sim.gas_liquid_fraction(max(f.summary["pump_stroke_m"], 0.0))
-            take = sim.fast_forward(t_next, cap)
+            draw_at = sim.time_s + sim.upstroke_s(period) if self.draw_at_top else None
+            take = sim.fast_forward(t_next, cap, draw_at)
             fill = take / (w * f.displacement_m3) if f.displacement_m3 > 0 else 1.0
             self._add(res, f, w, take, w * f.displacement_m3)
             res.fast_forward_strokes += w

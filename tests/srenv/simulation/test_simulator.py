@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import copy
 import math
 
 import numpy as np
@@ -238,3 +239,25 @@ def test_switch_config_to_gas_acts_like_a_well_built_with_gas():
     assert np.abs(got.trace["pump_load_n"][:n] - ref.trace["pump_load_n"][:n]).max() < 0.05 * span
     with pytest.raises(ValueError, match="rod string"):
         switched.switch_config(load_config(base, {"rod.tapers.0.diameter_mm": base.rod.tapers[0].diameter_mm + 1.0}))
+
+
+def test_fast_forward_can_draw_at_the_upstrokes_end_like_an_exact_stroke():
+    """v2's fast-forward draws a stroke's liquid when the upstroke ends, as an exact stroke does: the downstroke's
+    inflow is then in the annulus at the bottom (v1's draws at the stroke's end and leaves it empty)."""
+    sim = Simulator(load_config("default"))
+    sim.run_strokes(2)
+    period = 60.0 / sim.surface.default_spm(sim.cfg.surface.spm)
+    up = sim.upstroke_s(period)
+    assert 0.0 < up < period
+    states = []
+    for draw_at in (None, sim.time_s + up):
+        s = copy.deepcopy(sim)
+        s.annulus.accumulate(s.time_s)
+        s.annulus.volume_m3 = 0.0  # a pumped-off well: what the pump draws is what flowed in
+        q = s.annulus.inflow_m3_s()
+        t0 = s.time_s
+        taken = s.fast_forward(t0 + period, 1.0, draw_at)  # a displacement larger than any inflow
+        states.append((taken, s.annulus.volume_m3, q))
+    (taken_end, left_end, q), (taken_top, left_top, _) = states
+    assert left_end == 0.0 and taken_end == pytest.approx(q * period, rel=1e-3)
+    assert taken_top == pytest.approx(q * up, rel=1e-3) and left_top == pytest.approx(q * (period - up), rel=1e-3)
