@@ -92,7 +92,7 @@ def test_quick_config_tunes_alarm_pump_off_on_training_wells():
     assert len(alarm["evaluated"]) == 1 + sum(len(v) for v in space.values())
     for key, values in space.items():
         assert {e[key] for e in alarm["evaluated"]} >= set(values)
-    assert alarm["score"] == pytest.approx(max(e["score"] for e in alarm["evaluated"]))
+    assert alarm["score"] == pytest.approx(max(e["score"] for e in alarm["evaluated"])) >= first["score"]
     assert set(alarm["params"]) == set(po["params"]) | {"load_drop", "alarm_prob", "gas_slowdown"}
 
 
