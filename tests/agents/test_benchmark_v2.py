@@ -92,7 +92,10 @@ def test_quick_config_tunes_alarm_pump_off_on_training_wells():
     assert len(alarm["evaluated"]) == 1 + sum(len(v) for v in space.values())
     for key, values in space.items():
         assert {e[key] for e in alarm["evaluated"]} >= set(values)
-    assert alarm["score"] == pytest.approx(max(e["score"] for e in alarm["evaluated"])) >= first["score"]
+    assert alarm["score"] == pytest.approx(max(e["score"] for e in alarm["evaluated"]))
+    # on training seed 0 the classifier's false tubing-leak reading shuts the well in at alarm_prob 0.6
+    # (docs/agents.md, "The v2 benchmark"): the tuner switches that alarm off and gains
+    assert alarm["params"]["alarm_prob"] == 1.0 and alarm["score"] > first["score"]
     assert set(alarm["params"]) == set(po["params"]) | {"load_drop", "alarm_prob", "gas_slowdown"}
 
 
