@@ -91,6 +91,13 @@ BASELINE_PARAMS: dict[str, dict[str, Number]] = {
                    "u_min": UNIT_INTERVAL},
 }
 
+BASELINE_PARAMS["alarm_pump_off"] = {  # pump-off's set point and the alarms' (agents/policies/alarms.py)
+    **BASELINE_PARAMS["pump_off"],
+    "load_drop": Number("load_drop", float, "", lo=0.0, hi=0.999, why="a fraction of the load range below 1"),
+    "alarm_prob": Number("alarm_prob", float, "", lo=1.0 / 12.0, hi=1.0, why="above the classifier's uniform 1/12"),
+    "gas_slowdown": Number("gas_slowdown", float, "", lo=0.0, hi=2.0, lo_open=False),
+}
+
 
 def field(kind: str, name: str, value: Any, where: str = "") -> Any:
     """Check one declared field of a file of ``kind``; ``where`` prefixes the field name in the message."""

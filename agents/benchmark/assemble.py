@@ -10,7 +10,7 @@ from typing import Any
 
 import numpy as np
 
-from ..policies.factory import BASELINE_NAMES
+from ..policies.factory import benchmark_baselines
 from .report import _average_episodes, iqm
 from .runs import _algo_of
 
@@ -63,7 +63,7 @@ def policy_records(cfg: dict[str, Any], tuned: dict[str, Any], agent_specs: dict
     """(policies, training) of the report; copies each run's shipped model into ``models_dir``."""
     runs = cfg["agents"]["runs"]
     policies: dict[str, dict[str, Any]] = {n: {"kind": "baseline", "params": tuned[n]["params"],
-                                               "episodes": by_entry[(n, -1)]} for n in BASELINE_NAMES}
+                                               "episodes": by_entry[(n, -1)]} for n in benchmark_baselines(tuned)}
     training: dict[str, Any] = {"selection": cfg["agents"]["selection"], "runs": {}}
     for a, specs in agent_specs.items():
         per_seed = [by_entry[(a, k)] for k in range(len(specs))]
@@ -98,7 +98,7 @@ def figure_traces(policies: dict[str, Any], agent_specs: dict[str, Any], by_entr
                   val_scores: dict[str, list[float]], fig_seed: int, interval_s: float) -> dict[str, Any]:
     """The figure's episode of the best agent (its shipped model) and the best tuned baseline; the traces
     are taken out of every episode record (they are for the figure only)."""
-    bases = [n for n in BASELINE_NAMES if n != "oracle"]
+    bases = [n for n, p in policies.items() if p["kind"] == "baseline" and n != "oracle"]
     best_b = max(bases, key=lambda n: np.mean([e["reward"] for e in policies[n]["episodes"]]))
     shown = []
     if agent_specs:

@@ -16,7 +16,7 @@ from srenv.shipped import shipped_dir
 
 from ..envs import ENV_ID_V1
 from ..inputs import FIELDS, seeds
-from ..policies.factory import BASELINE_NAMES
+from ..policies.factory import BASELINE_NAMES, OPTIONAL_BASELINES, SEARCHED_BASELINES
 from ..policies.residual import RESIDUAL_BASES, check_scales
 from ..training.tuning import refuse_test_split
 
@@ -68,8 +68,10 @@ def load_benchmark_config(path: str | Path, quick: bool = False) -> dict[str, An
     sets = _check_splits(cfg)
     bl = cfg.setdefault("baselines", {})
     for name in bl:
-        if name not in BASELINE_NAMES:
-            raise BenchmarkConfigError(f"benchmark config: baselines.{name}: expected one of {BASELINE_NAMES}")
+        if name not in (*BASELINE_NAMES, *OPTIONAL_BASELINES):
+            raise BenchmarkConfigError(f"benchmark config: baselines.{name}: expected one of "
+                                       f"{(*BASELINE_NAMES, *OPTIONAL_BASELINES)}")
+    _check_inits(bl)
     ag = cfg.setdefault("agents", {})
     sel = ag.setdefault("selection", "mean")
     if sel not in ("mean", "best_on_validation"):
@@ -105,6 +107,26 @@ def _check_splits(cfg: dict[str, Any]) -> dict[str, set[int]]:
             raise BenchmarkConfigError(f"benchmark config: {a}.seeds and {b}.seeds share "
                                        f"{sorted(sets[a] & sets[b])[:5]}: expected disjoint seed sets")
     return sets
+
+
+def _check_inits(bl: dict[str, Any]) -> None:
+    """A search's ``init`` value that names a baseline starts from that baseline's tuned value: it must be one
+    tuned before (``best_constant``, then :data:`SEARCHED_BASELINES` in order) that has the parameter."""
+    done = ["best_constant"]
+    for name in SEARCHED_BASELINES:
+        spec = bl.get(name) or {}
+        init = spec.get("init") or {}
+        if not isinstance(init, dict):
+            raise BenchmarkConfigError(f"benchmark config: baselines.{name}.init = {init!r}: expected a mapping")
+        for k, v in init.items():
+            if not isinstance(v, str):
+                continue
+            src = bl.get(v) or {}
+            has = v == "best_constant" or k in {**(src.get("init") or {}), **(src.get("space") or {})}
+            if v not in done or not has:
+                raise BenchmarkConfigError(f"benchmark config: baselines.{name}.init.{k} = {v!r}: expected a "
+                                           f"number or a baseline tuned before it with a {k} ({', '.join(done)})")
+        done.append(name)
 
 
 def _check_run(algo: str, run: Any) -> None:

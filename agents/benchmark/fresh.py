@@ -9,8 +9,10 @@ tuned, selected or evaluated on - with no training and no tuning, and writes the
   the W), episode k played from ``reset(seed=k)``.
 - Policies: the shipped report's (:func:`agents.evaluation.shipped.shipped_report`) tuned baselines ``installed``,
   ``best_constant``, ``pump_off``, ``fillage_pi`` and the agents listed in the config's ``evaluate_only.agents``;
-  on v2 also ``alarm_pump_off`` (pump-off's tuned parameters with the config's alarm parameters) and, when the
-  config lists it, ``causal_oracle`` (the reference of the normalised score) and the clairvoyant ``oracle``.
+  ``alarm_pump_off`` with the report's tuned parameters when the report has it (v2's benchmark tunes it), else,
+  on v2, pump-off's tuned parameters with the config's fixed ``evaluate_only.alarm_params`` (a report made
+  before it was tuned, such as the shipped v1 one); and, when the config lists it, ``causal_oracle`` (the
+  reference of the normalised score) and the clairvoyant ``oracle``.
 - The shipped agents are v1 agents. On v2 they see v1's part of v2's field observation (its first 77 entries
   are v1's: :class:`agents.evaluation.v1_view.V1ObsView`), so they run unchanged; the conditions and the
   classifier's output are then unseen by them.
@@ -61,7 +63,9 @@ def _specs(cfg: dict[str, Any], rep: dict[str, Any], root: Path) -> dict[str, li
     specs = {n: policy_specs(rep, n, root) for n in SHIPPED_BASELINES}
     for a in ev.get("agents", DEFAULT_AGENTS):
         specs[str(a)] = policy_specs(rep, str(a), root)
-    if cfg["env_id"] != rep["env_id"]:  # v2: the field controller with alarms, on pump-off's tuned set point
+    if "alarm_pump_off" in rep["policies"]:  # a report whose benchmark tuned it (v2's): its tuned parameters
+        specs["alarm_pump_off"] = policy_specs(rep, "alarm_pump_off", root)
+    elif cfg["env_id"] != rep["env_id"]:  # an older report without it: pump-off's tuned set point + fixed alarms
         alarms = {**rep["policies"]["pump_off"]["params"], **(ev.get("alarm_params") or {})}
         specs["alarm_pump_off"] = [{"kind": "baseline", "name": "alarm_pump_off", "params": alarms}]
     for name in ("causal_oracle", "oracle"):  # null: not run

@@ -277,7 +277,8 @@ PROTOCOL = """## Protocol
   until the card's fillage estimate falls below a threshold, idle a set time, restart (threshold, idle
   time, pumping speed and stroke tuned by coordinate search); `fillage_pi` - VSD speed PI on the
   fillage estimate, output over the whole speed range so it can go intermittent below the VSD minimum
-  (set-point, gains, stroke tuned).
+  (set-point, gains, stroke tuned). v2 adds `alarm_pump_off` (`agents/policies/alarms.py`): pump-off with a field
+  controller's alarms (shut in on a parted-rod or tubing-leak signature, slow on gas), tuned from pump-off's set point.
 - **Oracle.** A perfect-model planner (`OraclePolicy`, mode `plan`): at the episode's start it
   deep-copies the true environment - the hidden well, its annulus state, the inflow schedule and the
   random stream - and simulates whole episodes on copies: every constant action of a grid over the

@@ -4,7 +4,8 @@ The protocol (one YAML under ``configs/benchmark/``; :func:`load_benchmark_confi
 
 1. **Tune** the baselines on the tuning episodes - ``reset(seed=S)`` on the TRAINING split for the
    config's tuning seeds (:mod:`agents.training.tuning`; the test split is refused): ``best_constant`` (grid over
-   the whole action box + pattern search), then ``pump_off`` and ``fillage_pi`` (coordinate search);
+   the whole action box + pattern search), then ``pump_off`` and ``fillage_pi`` (coordinate search), then
+   ``alarm_pump_off`` when the config lists it (v2: from pump-off's tuned set point, its alarms searched);
    ``installed`` has nothing to tune; ``oracle`` is a perfect-model lookahead (its candidates include the
    tuned constant).
 2. **Train** each algorithm (the config's ``agents.runs``: PPO, SAC) on every listed training seed from its training

@@ -16,7 +16,7 @@ import numpy as np
 from ..envs import make_env
 from ..evaluation.rollout import Runner, episode_jobs
 from ..policies.ensemble import ensemble_spec
-from ..policies.factory import BASELINE_NAMES
+from ..policies.factory import SEARCHED_BASELINES, benchmark_baselines
 from ..training.distill import distill_job
 from ..training.tuning import Evaluator, TuningSet, coordinate_search, search_best_constant
 from .runs import (
@@ -54,8 +54,10 @@ def tune_baselines(cfg: dict[str, Any], runner: Runner, log: Any) -> tuple[dict[
     tuned: dict[str, Any] = {"installed": {"params": {}}}
     bc = bl.get("best_constant", {})
     n_eps = len(tset.seeds)
+    # the optional ones (alarm_pump_off) only when the config lists them: v1's benchmark is unchanged
+    searched = [n for n in SEARCHED_BASELINES if n in benchmark_baselines(bl)]
     n_cand = (bc.get("n_spm", 9) * bc.get("n_stroke", 5) + 4 * bc.get("refine_iters", 6)
-              + sum(len(v) * bl.get(b, {}).get("rounds", 2) for b in ("pump_off", "fillage_pi")
+              + sum(len(v) * bl.get(b, {}).get("rounds", 2) for b in searched
                     for v in bl.get(b, {}).get("space", {}).values()))
     bar = _Progress(n_cand * n_eps, "tuning")
     ev.progress = bar
@@ -63,10 +65,9 @@ def tune_baselines(cfg: dict[str, Any], runner: Runner, log: Any) -> tuple[dict[
     tuned["best_constant"] = search_best_constant(ev, bc.get("n_spm", 9), bc.get("n_stroke", 5),
                                                   bc.get("refine_iters", 6), bc.get("refine_step"))
     best_a = tuned["best_constant"]["params"]
-    for name in ("pump_off", "fillage_pi"):
+    for name in searched:
         spec = bl.get(name, {})
-        init = {k: (best_a["a_spm" if k == "a_spm" else "a_stroke"] if v == "best_constant" else v)
-                for k, v in spec.get("init", {}).items()}
+        init = {k: _init_value(tuned, k, v) for k, v in spec.get("init", {}).items()}
         tuned[name] = coordinate_search(ev, name, init, spec.get("space", {}), spec.get("rounds", 2))
     bar.close()
     oc = dict(bl.get("oracle", {}))
@@ -80,6 +81,16 @@ def tune_baselines(cfg: dict[str, Any], runner: Runner, log: Any) -> tuple[dict[
     log(f"tuning: {ev.episodes_run} episodes in {time.perf_counter() - t0:.0f} s; " + "; ".join(
         f"{n} {json.dumps(t['params'])}" for n, t in tuned.items() if n != "installed"))
     return tuned, {"scenario": tset.scenario, "seeds": tset.seeds, "well_ids": wells}
+
+
+def _init_value(tuned: dict[str, Any], key: str, value: Any) -> Any:
+    """A search's start value: a number as given, or a baseline's name for its tuned value of ``key``
+    (``best_constant``'s ``a_stroke`` for any key but ``a_spm``, as v1's configs use it)."""
+    if value == "best_constant":
+        return tuned["best_constant"]["params"]["a_spm" if key == "a_spm" else "a_stroke"]
+    if isinstance(value, str):
+        return tuned[value]["params"][key]  # the config check made sure it was tuned before and has the key
+    return value
 
 
 def _well_ids(tset: TuningSet) -> list[str]:
@@ -166,7 +177,7 @@ def run_test_episodes(cfg: dict[str, Any], runner: Runner, tuned: dict[str, Any]
     test_seeds = cfg["test"]["seeds"]
     test_kwargs = {**cfg["env_kwargs"], "scenario": "test"}
     entries: list[tuple[str, int, dict[str, Any]]] = [
-        (n, -1, {"kind": "baseline", "name": n, "params": tuned[n]["params"]}) for n in BASELINE_NAMES]
+        (n, -1, {"kind": "baseline", "name": n, "params": tuned[n]["params"]}) for n in benchmark_baselines(tuned)]
     for a, specs in agent_specs.items():
         entries += [(a, k, _policy_part(sp)) for k, sp in enumerate(specs)]
     tjobs = []

@@ -14,8 +14,9 @@ partly with gas, and pounding the gas wastes strokes). It reads only the field o
 
 Actions: a shut-in alarm (parted rods or tubing leak) idles the well for the rest of the episode; the gas alarm
 runs at ``a_spm - gas_slowdown`` while it holds; otherwise :class:`agents.policies.field.PumpOffPolicy`.
-Every threshold is a parameter, tuned like pump-off's on the training wells only
-(:func:`agents.training.tuning.refuse_test_split` refuses the test, validation and fresh ``family:`` wells).
+Every threshold is a parameter, tuned like pump-off's on the training wells only (``baselines.alarm_pump_off`` of
+``configs/benchmark/v2.yaml``: from pump-off's tuned set point; :func:`agents.training.tuning.refuse_test_split`
+refuses the test, validation and fresh ``family:`` wells).
 
 ``state`` per row: (idle intervals left, pumped last, shut in, reference load range).
 """

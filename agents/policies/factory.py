@@ -3,13 +3,25 @@ controllers itself, so it sits between them and this factory)."""
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Iterable, Sequence
 from typing import Any
 
 from .field import FIELD_BASELINES, make_field_baseline
 from .oracle import OraclePolicy
 
 BASELINE_NAMES = (*FIELD_BASELINES, "oracle")
+# tuned and tested by a benchmark only when its config lists them (v2's field controller with alarms), so the
+# v1 benchmark's policies and report stay as they were
+OPTIONAL_BASELINES = ("alarm_pump_off",)
+# the coordinate searches, in the order they run: an init value may name a baseline tuned before (its value)
+SEARCHED_BASELINES = ("pump_off", "fillage_pi", *OPTIONAL_BASELINES)
+
+
+def benchmark_baselines(configured: Iterable[str]) -> tuple[str, ...]:
+    """The baselines a benchmark tunes, tests and reports: all of :data:`BASELINE_NAMES` and the optional ones
+    ``configured`` (its ``baselines:`` block, or the tuned parameters' names) lists, before the oracle."""
+    names = set(configured)
+    return (*FIELD_BASELINES, *(n for n in OPTIONAL_BASELINES if n in names), "oracle")
 
 
 def make_baseline(name: str, params: dict[str, Any], obs_names: Sequence[str]) -> Any:

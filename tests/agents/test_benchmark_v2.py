@@ -13,6 +13,7 @@ import srenv  # noqa: F401
 from agents.benchmark.config import load_benchmark_config
 from agents.benchmark.fresh import fresh_wells
 from agents.benchmark.rliable_stats import normalised_scores, rliable_section
+from agents.benchmark.stages import tune_baselines
 from agents.evaluation.shipped import shipped_report
 from agents.evaluation.v1_view import V1ObsView
 from agents.policies.alarms import AlarmPumpOffPolicy
@@ -48,12 +49,103 @@ def test_alarm_pump_off_shuts_in_on_a_parted_rod_signature_and_slows_on_gas():
 
 
 def test_tuning_refuses_held_out_wells():
+    alarm_cfg = load_benchmark_config(REPO / "configs/benchmark/v2.yaml", quick=True)
+    assert "alarm_pump_off" in alarm_cfg["baselines"]
     for scenario in ("test", "validation", "family:123"):
         with pytest.raises(ValueError, match="refused"):
             refuse_test_split(scenario, "tune")
         with pytest.raises(ValueError, match="refused"):
             TuningSet([0], scenario, "srenv/SuckerRod-v2")
+        # the benchmark's tuning stage, alarm_pump_off included, refuses before any episode (no runner needed)
+        with pytest.raises(ValueError, match="refused"):
+            tune_baselines({**alarm_cfg, "tuning": {"scenario": scenario, "seeds": [0]}}, None, print)
     refuse_test_split("train", "tune")
+
+
+def _tiny_v2_quick(episode_hours=1.0):
+    """v2.yaml's quick config (its alarm_pump_off block as shipped) on one short tuning episode, coarse searches."""
+    cfg = load_benchmark_config(REPO / "configs/benchmark/v2.yaml", quick=True)
+    cfg["env_kwargs"] = {**cfg["env_kwargs"], "episode_hours": episode_hours}
+    cfg["tuning"]["seeds"] = [0]
+    bl = cfg["baselines"]
+    bl["best_constant"] = {"n_spm": 2, "n_stroke": 2, "refine_iters": 0}
+    bl["pump_off"]["space"] = {"threshold": [0.5, 0.99]}
+    bl["fillage_pi"]["space"] = {}
+    return cfg
+
+
+def test_quick_config_tunes_alarm_pump_off_on_training_wells():
+    from agents.evaluation.rollout import Runner
+
+    cfg = _tiny_v2_quick()
+    space = cfg["baselines"]["alarm_pump_off"]["space"]
+    assert set(space) <= {"load_drop", "alarm_prob", "gas_slowdown"} and cfg["baselines"]["alarm_pump_off"]["rounds"] == 1
+    with Runner(1) as runner:
+        tuned, split = tune_baselines(cfg, runner, lambda m: None)
+    assert all(w.startswith("train-") for w in split["well_ids"]) and split["scenario"] == "train"
+    alarm, po = tuned["alarm_pump_off"], tuned["pump_off"]
+    # it starts from pump-off's TUNED set point (the config names pump_off), with the alarms' init values
+    first = alarm["evaluated"][0]
+    assert {k: first[k] for k in po["params"]} == po["params"]
+    assert (first["load_drop"], first["alarm_prob"], first["gas_slowdown"]) == (0.5, 0.6, 0.3)
+    # the search ran over the space: the init and every value of every searched parameter, scored
+    assert len(alarm["evaluated"]) == 1 + sum(len(v) for v in space.values())
+    for key, values in space.items():
+        assert {e[key] for e in alarm["evaluated"]} >= set(values)
+    assert alarm["score"] == pytest.approx(max(e["score"] for e in alarm["evaluated"]))
+    # on training seed 0 the classifier's false tubing-leak reading shuts the well in at alarm_prob 0.6
+    # (docs/agents.md, "The v2 benchmark"): the tuner switches that alarm off and gains
+    assert alarm["params"]["alarm_prob"] == 1.0 and alarm["score"] > first["score"]
+    assert set(alarm["params"]) == set(po["params"]) | {"load_drop", "alarm_prob", "gas_slowdown"}
+
+
+def test_alarm_init_must_name_a_baseline_tuned_before(tmp_path):
+    import yaml
+
+    raw = yaml.safe_load((REPO / "configs/benchmark/v2_quick.yaml").read_text())
+    raw["baselines"]["alarm_pump_off"]["init"]["threshold"] = "oracle"
+    p = tmp_path / "bad.yaml"
+    p.write_text(yaml.safe_dump(raw))
+    with pytest.raises(ValueError, match="baselines.alarm_pump_off.init.threshold = 'oracle'"):
+        load_benchmark_config(p)
+    raw["baselines"]["alarm_pump_off"]["init"]["threshold"] = "pump_off"
+    raw["baselines"]["pump_off"]["init"]["a_spm"] = "alarm_pump_off"  # tuned after pump_off: refused
+    p.write_text(yaml.safe_dump(raw))
+    with pytest.raises(ValueError, match="baselines.pump_off.init.a_spm"):
+        load_benchmark_config(p)
+
+
+def _fake_episodes(offset, n=6):
+    return [{"well_id": f"test-{k % 3}", "seed": 100000 + k, "reward": float(k * 10 + offset), "cost": 0.0,
+             "reward_rate_usd_h": float(k + offset), "steps": 4} for k in range(n)]
+
+
+def test_report_has_the_tuned_alarm_controller_in_every_table():
+    from agents.benchmark.assemble import policy_records
+    from agents.benchmark.report import build_report, markdown_tables
+    from agents.policies.factory import benchmark_baselines
+
+    cfg = load_benchmark_config(REPO / "configs/benchmark/v2.yaml", quick=True)
+    v1 = load_benchmark_config(REPO / "configs/benchmark/v1.yaml", quick=True)
+    assert "alarm_pump_off" in benchmark_baselines(cfg["baselines"])
+    assert "alarm_pump_off" not in benchmark_baselines(v1["baselines"])  # v1's benchmark is unchanged
+    names = benchmark_baselines(cfg["baselines"])
+    tuned = {n: {"params": {"k": i}} for i, n in enumerate(names)}
+    by_entry = {(n, -1): _fake_episodes(i if n != "oracle" else 50) for i, n in enumerate(names)}
+    policies, _ = policy_records({**cfg, "agents": {"selection": "mean", "runs": {}}}, tuned, {}, {}, by_entry, {},
+                                 REPO / "models")
+    assert policies["alarm_pump_off"] == {"kind": "baseline", "params": tuned["alarm_pump_off"]["params"],
+                                          "episodes": by_entry[("alarm_pump_off", -1)]}
+    policies["agent"] = {"kind": "agent", "episodes": _fake_episodes(3)}
+    splits = {"tuning": {}, "validation": {}, "test": {}}
+    rep = build_report(cfg, policies, splits, tuned, {}, {"total": 0.0})
+    assert "alarm_pump_off" in rep["summary"] and "alarm_pump_off" in rep["paired"]["agent"]
+    # agent - alarm_pump_off = 3 - alarm's offset on every episode
+    off = names.index("alarm_pump_off")
+    assert rep["paired"]["agent"]["alarm_pump_off"]["mean_diff_reward"] == pytest.approx(3 - off)
+    assert "| alarm_pump_off | baseline |" in markdown_tables(rep)
+    rl = rliable_section(rep, reps=50, seed=0)
+    assert "alarm_pump_off" in rl["iqm"] and "alarm_pump_off" in rl["probability_of_improvement"]["agent"]
 
 
 def test_causal_oracle_model_has_no_future():
@@ -147,3 +239,24 @@ def test_evaluate_only_writes_the_report_schema_and_replay_reproduces_it(tmp_pat
         assert math.isfinite(e["reward"]) and e["cost"] >= 0
     res = replay(out / "benchmark.json", ["pump_off", "ppo_residual_distilled_ensemble"], episodes=1, tol=1e-6)
     assert res["reproduced"], res
+
+
+def test_evaluate_only_takes_the_tuned_alarm_params_from_the_report_else_the_fixed_ones():
+    from agents.benchmark.fresh import _specs
+
+    cfg = load_benchmark_config(REPO / "configs/benchmark/v2.yaml")
+    cfg["evaluate_only"] = {**cfg["evaluate_only"], "agents": [], "references": {}}
+    rep = json.loads(shipped_report().read_text())  # the shipped v1 report: no tuned alarm controller
+    assert "alarm_pump_off" not in rep["policies"]
+    fixed = _specs(cfg, rep, REPO)["alarm_pump_off"][0]["params"]
+    assert fixed == {**rep["policies"]["pump_off"]["params"], **cfg["evaluate_only"]["alarm_params"]}
+    tuned = {"threshold": 0.9, "idle_time_s": 900.0, "a_spm": 0.4, "a_stroke": 1.0, "load_drop": 0.7,
+             "alarm_prob": 0.8, "gas_slowdown": 0.0}
+    rep["policies"]["alarm_pump_off"] = {"kind": "baseline", "params": tuned, "episodes": []}
+    assert _specs(cfg, rep, REPO)["alarm_pump_off"] == [{"kind": "baseline", "name": "alarm_pump_off",
+                                                         "params": tuned}]
+    rep["env_id"] = cfg["env_id"]  # a v2 report of this benchmark: the same
+    assert _specs(cfg, rep, REPO)["alarm_pump_off"][0]["params"] == tuned
+    rep["policies"]["alarm_pump_off"]["params"] = {**tuned, "alarm_prob": 0.05}  # checked as any report field
+    with pytest.raises(ValueError, match="alarm_prob"):
+        _specs(cfg, rep, REPO)
