@@ -174,6 +174,11 @@ def kv_harmonic_cap(cfg: WellConfig, period_s: float) -> int:
     return max(4, int(w_max * period_s / (2 * math.pi)))
 
 
+def periodic_gradient(x: np.ndarray) -> np.ndarray:
+    """The per-sample change of one periodic stroke's samples (central differences across the wrap)."""
+    return np.gradient(np.r_[x[-1], x, x[0]])[1:-1]
+
+
 def _march_per_direction(cfg: WellConfig, xs: np.ndarray, n0: np.ndarray, period: float, harmonics: int,
                          segment_length_m: float | None, friction: bool):
     """The march with the string's damping; with damping per stroke direction (damping.upstroke_factor,
@@ -188,7 +193,7 @@ def _march_per_direction(cfg: WellConfig, xs: np.ndarray, n0: np.ndarray, period
     up = march(cfg, -xs, n0, period, harmonics, segment_length_m, friction, damping_scale=d.upstroke_factor, **kw)
     down = march(cfg, -xs, n0, period, harmonics, segment_length_m, friction, damping_scale=d.downstroke_factor,
                  **kw)
-    rising = np.gradient(np.r_[xs[-1], xs, xs[0]])[1:-1] > 0  # the polished rod's velocity, periodic
+    rising = periodic_gradient(xs) > 0  # the polished rod rises
     return tuple(np.where(rising, a, b) for a, b in zip(up, down))
 
 
@@ -211,7 +216,7 @@ def diagnose_card(cfg: WellConfig, t_s: np.ndarray, position_m: np.ndarray, load
     p_pump = float(tubing_pressure_pa(cfg.fluid, survey.tvd(cfg.rod_length_m)))
     f_sb = cfg.surface.stuffing_box_friction_n
     if f_sb > 0:  # the stuffing box's share of the measured load: opposite to the polished rod's velocity
-        vx = np.gradient(np.r_[xs[-1], xs, xs[0]])[1:-1]
+        vx = periodic_gradient(xs)
         fs = fs - f_sb * np.sign(vx)
     ub, nb, vb = _march_per_direction(cfg, xs, fs + p_top * sg_top.top_area_m2, period, harmonics,
                                       segment_length_m, friction)

@@ -196,12 +196,7 @@ class SuckerRodV2Env(SuckerRodV1Env):
     # ------------------------------------------------------------------------------------------ episode
     def _episode_spec(self, seed: int | None, rng: np.random.Generator) -> wf.WellSpec:
         spec = self._fixed if self.split == "family" else super()._episode_spec(seed, rng)
-        over = v2_physics.yield_to(physics_overrides(spec), self.overrides)  # the caller's overrides win
-        if over:
-            from ..config import load_config
-
-            spec = wf.WellSpec(spec.well_id, spec.params, load_config(spec.cfg, over), spec.nominal_rate_m3_day,
-                               spec.design)
+        spec = self._with_physics(spec)
         # the conditions from their own stream, seeded by the episode's: v1's draws keep their meaning
         erng = np.random.default_rng(int(rng.integers(2**63)))
         self._schedule = ev.draw_schedule(erng, spec.cfg.task.episode_hours, self.event_rate_scale)
@@ -213,6 +208,20 @@ class SuckerRodV2Env(SuckerRodV1Env):
     def _interval_runner(self) -> IntervalRunner:
         # fast stepping (the default): earlier intervals' strokes reused, carried to the intake pressure
         return IntervalRunner(self.sim, reuse_periodic=self.fast_stepping, carry=self.fast_stepping, draw_at_top=True)
+
+    def _with_physics(self, spec: wf.WellSpec) -> wf.WellSpec:
+        """The well with v2's per-well physics (the caller's overrides win), built once per well: a well's unit
+        and damping are its own, the same in every episode."""
+        cache = self.__dict__.setdefault("_physics_specs", {})
+        if spec.well_id not in cache:
+            over = v2_physics.yield_to(physics_overrides(spec), self.overrides)
+            if over:
+                from ..config import load_config
+
+                spec = wf.WellSpec(spec.well_id, spec.params, load_config(spec.cfg, over), spec.nominal_rate_m3_day,
+                                   spec.design)
+            cache[spec.well_id] = spec
+        return cache[spec.well_id]
 
     def _before_interval(self) -> None:
         label, sev = self._schedule.active(self._elapsed() / 3600.0)

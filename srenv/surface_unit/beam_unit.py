@@ -308,8 +308,8 @@ class ConventionalUnit:
             tf = self.geometry.a_m * self._sign * self._beam_rates(self._psi(arr))[1]
             if key is None:
                 return _as_output(tf)
-            if len(self._tf_cache) >= TF_CACHE_SIZE:
-                self._tf_cache.pop(next(iter(self._tf_cache)))
+            if len(self._tf_cache) >= TF_CACHE_SIZE:  # units are shared (lru-cached) across threads: no iterating
+                self._tf_cache.clear()
             self._tf_cache[key] = tf
         return tf.copy()
 

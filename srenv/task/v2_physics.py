@@ -9,7 +9,8 @@ nameplate of that geometry (:data:`REFERENCE_UNITS`) scaled geometrically: every
 ``unit_stroke_m / S_ref``. The stroke is A times the beam's swing, which a uniform scaling leaves unchanged,
 so the scaled unit's longest stroke is the well's unit stroke exactly. The crank follows the stroke action
 (``surface.beam_unit.crank_follows_stroke``: the crank radius of each requested stroke). Counterbalance and
-gearbox rating are set as the family sets the structure rating (at the installed point, 1.25 x Mills).
+gearbox rating are set at the installed point (the counterbalance that minimises the peak torque on Mills'
+rectangular card, the rating :data:`GEARBOX_MARGIN` times that peak).
 
 **Damping.** tau = 2 zeta_1 / omega_1 with omega_1 the string's fundamental (quarter-wave, ``n0_spm``) and
 zeta_1 = :data:`KV_ZETA_1`: every well's mode k gets the damping ratio (2k - 1) zeta_1, the ratio that
