@@ -35,8 +35,10 @@ COMPRESSIBLE_SHARE = 0.5      # cards whose chamber liquid is compressible (grad
 OIL_COMPRESSIBILITY_PER_PA = (1.0e-9, 3.0e-9)  # live oil, log-uniform; water 4.5e-10
 WATER_COMPRESSIBILITY_PER_PA = 4.5e-10
 UNANCHORED_SHARE = 0.5        # of the compressible cards: tubing free to stretch under the fluid load
-# the kernel combines the liquid spring (compressibility, unanchored tubing) with these conditions only; with
-# the leak, tagging and tubing-leak laws it replaces them (measured: those cards become the full card)
+# the labels the liquid spring (compressibility, unanchored tubing) is drawn with: when this set was drawn the
+# kernel dropped the leak, tagging and tubing-leak laws under a spring (their cards became the full card); the
+# config now refuses the valve leaks with a spring and tagging with free tubing, and tagging and the tubing leak
+# compose with it (config_checks._check_chamber_conditions) - not drawn here yet, so run 3's set stays the same
 SPRING_LABELS = ("full", "fluid_pound", "gas_interference", "parted_rods", "heavy_oil", "flowing")
 WELL_COLUMNS = ("depth_m", "plunger_diameter_mm", "spm", "stroke_length_m", "damping_factor",
                 "max_inclination_deg", "friction_coefficient", "fluid_density_kg_m3", "conventional_unit",
