@@ -47,6 +47,9 @@ class FieldRecord:
     time_reversed: bool = False                        # the stored card ran in reverse time
     config: dict | None = None                         # srenv's own record: the well YAML (its model)
     notes: list[str] = field(default_factory=list)     # what the reader filled in or found doubtful
+    card_type: str | None = None                       # the vendor's card type (Startup, Shutdown, ...)
+    # the vendor's own prediction of the record's full-pump surface card (its "ideal card"): PPRL, MPRL (N)
+    reference_prediction: dict | None = None
 
     @property
     def period_s(self) -> float:
@@ -220,6 +223,8 @@ def read_dynacard_json(path: str | Path, reverse: bool = False, auto_orient: boo
             d, "dynaoutputData", "record", required=False).get("DampingCoefficient")),
         unit=_unit(eq.get("SurfaceUnit"), "equipmentData.SurfaceUnit"))
     rec.notes += _depth_notes(rec)
+    rec.card_type = _card_type(d.get("CardDetails"))
+    rec.reference_prediction = _ideal_card(d.get("Performance"), float(np.ptp(rec.position_m)), notes)
     dh = d.get("downholeCard")
     if isinstance(dh, dict) and dh.get("Position") and dh.get("Load"):
         xp, fp = _series(dh, "Position", "downholeCard"), _series(dh, "Load", "downholeCard")
@@ -229,6 +234,38 @@ def read_dynacard_json(path: str | Path, reverse: bool = False, auto_orient: boo
             rec.pump_position_m = fu.to_si(xp[::-1] if back else xp, "in")
             rec.pump_load_n = fu.to_si(fp[::-1] if back else fp, "lbf")
     return rec
+
+
+def _card_type(details) -> str | None:
+    """The vendor's card type (a short word: Startup, Shutdown, ...), or None."""
+    v = details.get("CardType") if isinstance(details, dict) else None
+    return v.strip() if isinstance(v, str) and 0 < len(v.strip()) <= 40 and v.strip().isprintable() else None
+
+
+IDEAL = "Performance.IdealCardSimulation_SurfaceCard_"
+
+
+def _ideal_card(perf, stroke_m: float, notes: list[str]) -> dict | None:
+    """The vendor's predicted full-pump surface card's extremes, where the record carries them. They are in SI
+    (N, m) unlike the record's cards; the unit is checked on the record itself: the ideal card's position
+    range must be the measured stroke (within 10 %), else the figures are left out and a note says why."""
+    if not isinstance(perf, dict):
+        return None
+    keys = ("Load_max", "Load_min", "Position_max", "Position_min")
+    vals = [perf.get("IdealCardSimulation_SurfaceCard_" + k) for k in keys]
+    if all(v is None for v in vals):
+        return None
+    try:
+        f_max, f_min, x_max, x_min = (float(v) for v in vals)
+    except (TypeError, ValueError):
+        notes.append(f"{IDEAL}*: not four numbers; the vendor's predicted card is left out")
+        return None
+    ok = all(math.isfinite(v) for v in (f_max, f_min, x_max, x_min)) and -1e7 < f_min < f_max < 1e7
+    if not ok or abs((x_max - x_min) - stroke_m) > 0.1 * stroke_m:
+        notes.append(f"{IDEAL}*: stroke {x_max - x_min:g} against the measured {stroke_m:.3f} m, or loads out of "
+                     "order; not read as SI, the vendor's predicted card is left out")
+        return None
+    return {"pprl_n": f_max, "mprl_n": f_min, "stroke_m": x_max - x_min}
 
 
 def _coefficients(v) -> list[float]:

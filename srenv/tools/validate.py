@@ -114,6 +114,14 @@ def compare(rec, sim, result, pump_card, convention: str) -> dict:
                      "measured_share_above_h20": meas_s[1], "predicted_share_above_h20": pred_s[1],
                      "ratio_above_h20": pred_s[1] / meas_s[1] if meas_s[1] > 0 else None},
     }
+    ref = getattr(rec, "reference_prediction", None)
+    # the vendor's own prediction from the same description, scored the same way: what a commercial
+    # wave-equation tool reaches on this well (docs/realism.md)
+    out["record_prediction"] = None if ref is None else {
+        "pprl_error_pct": 100.0 * (ref["pprl_n"] / pprl - 1.0), "mprl_error_pct": 100.0 * (ref["mprl_n"] / mprl - 1.0),
+        "pprl_n": ref["pprl_n"], "mprl_n": ref["mprl_n"],
+        "source": "the record's Performance.IdealCardSimulation_SurfaceCard_Load_max/min (the vendor's full-pump "
+                  "prediction)"}
     if rec.pump_load_n is not None:
         fp = load_in_convention(pump_card.pump_load_n, convention, sim.p_pump_pa, sim.area_bottom_m2)
         rng = float(np.ptp(rec.pump_load_n))
@@ -160,6 +168,7 @@ def validate(rec, params: list[str], strokes: int, convention: str, overrides: d
     out["unit_kinematics"] = unit_kinematics_check(rec)
     out.update({"record": rec.source, "record_notes": list(getattr(rec, "notes", [])),
                 "card_time_reversed": bool(getattr(rec, "time_reversed", False)),
+                "record_card_type": getattr(rec, "card_type", None),
                 "pump_state": state,
                 "diagnosis": {k: diag[k] for k in ("fillage", "card_class", "fluid_load_n", "intake_pressure_pa")},
                 "fit": fitted, "model": {"damping_factor": cfg.get("damping", {}).get("damping_factor"),

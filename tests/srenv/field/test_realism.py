@@ -399,3 +399,29 @@ def test_record_without_rod_weights_takes_the_api_table_and_says_so(tmp_path):
     assert not given.notes
     w, how = rod_weight_lb_ft(1.5)  # a sinker bar: the steel body, 3.40 lb/ft per square inch
     assert w == pytest.approx(3.40 * math.pi / 4 * 1.5 ** 2) and "steel" in how
+
+
+def test_vendor_prediction_is_read_checked_and_scored_like_srenv(tmp_path, figures):
+    """The record's own wave-equation prediction (the vendor's "ideal card", stored in N and m) is read only when
+    its stroke matches the measured one, and scored by the same PPRL/MPRL errors as srenv's prediction."""
+    d = json.loads((DATA / "7699227.json").read_text())
+    perf = d["Performance"]
+    lbf = 4.4482216152605
+    loads = np.asarray(d["cardData"]["Load"], float) * lbf
+    v = figures["7699227"]["record_prediction"]
+    assert v["pprl_error_pct"] == pytest.approx(100 * (perf["IdealCardSimulation_SurfaceCard_Load_max"]
+                                                       / loads.max() - 1), rel=1e-9)
+    assert v["mprl_error_pct"] == pytest.approx(100 * (perf["IdealCardSimulation_SurfaceCard_Load_min"]
+                                                       / loads.min() - 1), rel=1e-9)
+    assert figures["7699227"]["record_card_type"] == "Startup"
+    # 11708328 stores no prediction (its vendor analysis failed): null, not a made-up figure
+    assert figures["11708328"]["record_prediction"] is None and figures["11708328"]["record_card_type"] == "Shutdown"
+    # a prediction in other units (a stroke of 120 "m") is left out with a note, never scored
+    perf["IdealCardSimulation_SurfaceCard_Position_max"] = 120.0
+    bad = tmp_path / "inches.json"
+    bad.write_text(json.dumps(d))
+    rec = read_dynacard_json(bad, auto_orient=True)
+    assert rec.reference_prediction is None and any("IdealCardSimulation" in n for n in rec.notes)
+    perf["IdealCardSimulation_SurfaceCard_Load_max"] = "n/a"
+    bad.write_text(json.dumps(d))
+    assert read_dynacard_json(bad, auto_orient=True).reference_prediction is None
