@@ -91,6 +91,9 @@ def load_benchmark_config(path: str | Path, quick: bool = False) -> dict[str, An
     return cfg
 
 
+TEST_SCENARIOS = ("test", "validation")
+
+
 def _check_splits(cfg: dict[str, Any]) -> dict[str, set[int]]:
     """The tuning, validation and test seeds, resolved in ``cfg`` and checked disjoint; their sets."""
     for part in ("tuning", "test"):
@@ -99,6 +102,12 @@ def _check_splits(cfg: dict[str, Any]) -> dict[str, set[int]]:
         cfg[part]["seeds"] = _seeds(cfg[part]["seeds"], f"{part}.seeds")
     cfg["tuning"].setdefault("scenario", "train")
     refuse_test_split(cfg["tuning"]["scenario"], "tune")
+    # the scenario the test stage plays: the held-out test split, or (the quick pipeline check, which must not
+    # spend a look at the test split) v2's validation split
+    cfg["test"].setdefault("scenario", "test")
+    if cfg["test"]["scenario"] not in TEST_SCENARIOS:
+        raise BenchmarkConfigError(f"benchmark config: test.scenario: {cfg['test']['scenario']!r}: expected one of "
+                                   f"{', '.join(TEST_SCENARIOS)}")
     val = cfg.setdefault("validation", {"seeds": []})
     val["seeds"] = _seeds(val["seeds"], "validation.seeds") if val.get("seeds") else []
     sets = {"tuning": set(cfg["tuning"]["seeds"]), "validation": set(val["seeds"]), "test": set(cfg["test"]["seeds"])}

@@ -221,7 +221,7 @@ def write_markdown(report: dict[str, Any], path: Path, figure: str | None) -> No
         f"{m['cpus_usable']} usable cores ({m['node']}). Data: `benchmark.json` next to this file; "
         "`python -m agents replay benchmark.json --policy NAME` re-runs its test episodes from it.",
         "",
-        (f"- Test: {len(report['test']['seeds'])} episodes, `reset(seed=S)` on `scenario=\"test\"`, S = "
+        (f"- Test: {len(report['test']['seeds'])} episodes, `reset(seed=S)` on `scenario=\"{report['test'].get('scenario', 'test')}\"`, S = "
         f"{_seed_text(report['test']['seeds'])}; {len(set(report['test']['well_ids']))} test wells."),
         (f"- Tuning (baselines): {len(report['tuning']['seeds'])} episodes on training wells, seeds "
         f"{_seed_text(report['tuning']['seeds'])}. Validation (agent seed choice, if used): "

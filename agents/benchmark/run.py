@@ -86,12 +86,12 @@ def run_benchmark(cfg: dict[str, Any], out_dir: str | Path, quick: bool = False,
     finally:
         shutil.rmtree(workdir, ignore_errors=True)
     policies, training = policy_records(cfg, tuned, agent_specs, teachers, by_entry, val_scores, models)
-    test_kwargs = {**cfg["env_kwargs"], "scenario": "test"}
+    test_kwargs = {**cfg["env_kwargs"], "scenario": cfg["test"].get("scenario", "test")}
     traces = figure_traces(policies, agent_specs, by_entry, val_scores, fig_seed,
                            _interval_s(cfg["env_id"], test_kwargs, fig_seed))
     splits = {"tuning": tuning_split,
               "validation": {"scenario": "train", "seeds": cfg["validation"]["seeds"], "well_ids": val_wells},
-              "test": {"scenario": "test", "seeds": test_seeds,
+              "test": {"scenario": test_kwargs["scenario"], "seeds": test_seeds,
                        "well_ids": sorted({e["well_id"] for e in policies["installed"]["episodes"]})}}
     wall["total"] = time.perf_counter() - t_start
     return _write_report(cfg, out, quick, policies, splits, tuned, training, wall, traces)

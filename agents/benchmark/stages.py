@@ -175,7 +175,7 @@ def run_test_episodes(cfg: dict[str, Any], runner: Runner, tuned: dict[str, Any]
     """Every policy on the same test episodes: records by (policy name, model index; -1 for a baseline), the
     episode ``fig_seed`` with its trace for the figure."""
     test_seeds = cfg["test"]["seeds"]
-    test_kwargs = {**cfg["env_kwargs"], "scenario": "test"}
+    test_kwargs = {**cfg["env_kwargs"], "scenario": cfg["test"].get("scenario", "test")}
     entries: list[tuple[str, int, dict[str, Any]]] = [
         (n, -1, {"kind": "baseline", "name": n, "params": tuned[n]["params"]}) for n in benchmark_baselines(tuned)]
     for a, specs in agent_specs.items():

@@ -138,7 +138,10 @@ def _scenario(rep: dict[str, Any], k: int) -> str:
         if not (isinstance(w, int) and w >= 0):
             raise ReplayError(f"fresh.family_seeds[{k}] = {w!r}: expected a non-negative integer")
         return f"family:{w}"
-    return "test"
+    sc = (rep.get("test") or {}).get("scenario", "test")  # a quick run plays v2's validation split
+    if sc not in ("test", "validation"):
+        raise ReplayError(f"test.scenario = {sc!r}: expected 'test' or 'validation'")
+    return sc
 
 
 def replay(report: str | Path, names: list[str] | None = None, episodes: int = 3,

@@ -208,6 +208,28 @@ def test_v2_configs_load():
     assert load_benchmark_config(REPO / "configs/benchmark/v2_quick.yaml")["test"]["seeds"] == [100000, 100001, 100002]
 
 
+def test_quick_runs_play_the_validation_split_not_the_test_split(tmp_path):
+    """A pipeline check spends no look at the test split: both quick configs test on v2's validation wells,
+    the full run on the test split; any other scenario is refused before work."""
+    import yaml
+
+    from agents.benchmark.config import BenchmarkConfigError
+    from agents.evaluation.replay import _scenario
+
+    assert load_benchmark_config(REPO / "configs/benchmark/v2.yaml")["test"]["scenario"] == "test"
+    for cfg in (load_benchmark_config(REPO / "configs/benchmark/v2.yaml", quick=True),
+                load_benchmark_config(REPO / "configs/benchmark/v2_quick.yaml")):
+        assert cfg["test"]["scenario"] == "validation"
+    assert _scenario({"test": {"scenario": "validation"}}, 0) == "validation"
+    assert _scenario({"test": {}}, 0) == "test"
+    raw = yaml.safe_load((REPO / "configs/benchmark/v2_quick.yaml").read_text())
+    raw["test"]["scenario"] = "train"
+    bad = tmp_path / "bad.yaml"
+    bad.write_text(yaml.safe_dump(raw))
+    with pytest.raises(BenchmarkConfigError, match="test.scenario"):
+        load_benchmark_config(bad)
+
+
 def test_causal_oracle_plays_and_weighs_the_baselines():
     from agents.evaluation.rollout import run_episode
     from agents.policies.causal_oracle import CausalOraclePolicy
