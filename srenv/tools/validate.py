@@ -102,10 +102,15 @@ def compare(rec, sim, result, pump_card, convention: str) -> dict:
     period = result.duration_s
     pred = resample_stroke(tr["t_s"], f, period, len(rec.load_n))
     meas_s, pred_s = harmonic_shares(rec.load_n), harmonic_shares(pred)
+    diff = card_difference(rec.position_m, rec.load_n, x - x.min(), f)  # predicted - measured on common positions
     out = {
         "pprl_error_pct": 100.0 * (float(f.max()) / pprl - 1.0),
         "mprl_error_pct": 100.0 * (float(f.min()) / mprl - 1.0),
         "card_rms_pct_of_pprl": 100.0 * card_rms(rec.position_m, rec.load_n, x - x.min(), f) / pprl,
+        # the card difference split into a level (a constant: a load cell's zero or a string's weight moves the
+        # whole card) and a shape (what is left about that level): docs/realism.md
+        "card_offset_n": float(diff.mean()),
+        "card_shape_rms_pct_of_pprl": 100.0 * float(diff.std()) / pprl,
         "pump_card_rms_pct_of_range": None,
         "measured_pprl_n": pprl, "measured_mprl_n": mprl,
         "predicted_pprl_n": float(f.max()), "predicted_mprl_n": float(f.min()),
