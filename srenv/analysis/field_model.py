@@ -150,6 +150,33 @@ def unit_from_record(rec: FieldRecord):
         return None
 
 
+# a polished-rod position whose samples are one harmonic of time to within this share of the stroke was not
+# measured: every beam unit's four-bar puts 2-8 % of the first harmonic's amplitude in the second
+SYNTHETIC_POSITION_RMS = 0.002
+
+
+def position_is_synthesised(position_m: np.ndarray) -> bool:
+    """True when the card's position samples (one stroke, equal times) are a pure first harmonic of time: a
+    controller that measures load only and writes x = S (1 - cos ωt)/2 (docs/realism.md, 11708328)."""
+    x = np.asarray(position_m, dtype=float)
+    c = np.fft.rfft(x - x.mean())
+    c[2:] = 0.0
+    fit = np.fft.irfft(c, len(x)) + x.mean()
+    return bool(np.sqrt(np.mean((fit - x) ** 2)) < SYNTHETIC_POSITION_RMS * np.ptp(x))
+
+
+def unit_position_for_card(rec: FieldRecord) -> np.ndarray | None:
+    """The polished-rod position of the record's own unit (its API dimensions and rotation) at each card sample,
+    at constant crank speed from the card's bottom sample, scaled to the card's stroke; None without a unit."""
+    cu = unit_from_record(rec)
+    if cu is None:
+        return None
+    n = len(rec.position_m)
+    k0 = int(np.argmin(rec.position_m))
+    p = np.asarray(cu.position_m(cu.theta_bottom + 2 * np.pi * (np.arange(n) - k0) / n), dtype=float)
+    return (p - p[k0]) * (float(np.ptp(rec.position_m)) / cu.stroke_m)
+
+
 def unit_kinematics_check(rec: FieldRecord) -> dict | None:
     """The record's unit at constant crank speed against its measured polished-rod position: stroke error and
     the RMS position difference (best time alignment over the card's samples), in % of the measured stroke."""

@@ -39,6 +39,27 @@ def _write_motion_csv(rec, path: str) -> None:
                comments="", fmt="%.12g")
 
 
+def _card_motion(rec):
+    """The record as the prediction sees it. A vendor record whose position channel is a pure harmonic of time
+    was not measured (a load-only controller writes a cosine): the polished rod then moves as the record's own
+    unit at constant crank speed, scaled to its stroke, and the measured loads are placed on that motion by
+    time (docs/realism.md). Any other record is itself."""
+    from dataclasses import replace
+
+    from ..analysis.field_model import position_is_synthesised, unit_position_for_card
+
+    if rec.config is not None or not position_is_synthesised(rec.position_m):
+        return rec
+    x = unit_position_for_card(rec)
+    if x is None:
+        return replace(rec, notes=[*rec.notes, "cardData.Position is a pure harmonic of time (synthesised, not "
+                                   "measured) and the record has no unit to take the motion from: used as given"])
+    return replace(rec, position_m=x, notes=[*rec.notes, (
+        "cardData.Position is a pure harmonic of time (a synthesised position channel, not a measurement): the "
+        "polished rod moves as the record's unit (API dimensions, rotation) at constant crank speed, scaled to "
+        "the card's stroke, with the measured loads placed on it by time; the diagnosis reads the stored card")])
+
+
 def _diagnose(cfg_dict: dict, rec) -> tuple[object, dict]:
     from ..analysis.diagnose import diagnose_card, summary
     from ..config import config_from_dict
@@ -148,9 +169,10 @@ def validate(rec, params: list[str], strokes: int, convention: str, overrides: d
     from ..analysis.field_model import well_config
     from ..config import apply_overrides
 
+    card = _card_motion(rec)  # the record whose positions drive the model and place the measured loads
     with tempfile.TemporaryDirectory(prefix="srenv-validate-") as work:
         csv = os.path.join(work, "motion.csv")
-        _write_motion_csv(rec, csv)
+        _write_motion_csv(card, csv)
         if rec.config is not None:  # srenv's own record: its well YAML is the model, driven by the card
             pump = rec.config.get("pump") or {}
             state = {"intake_pressure_pa": pump.get("intake_pressure_pa"), "fillage": pump.get("fillage"),
@@ -163,22 +185,24 @@ def validate(rec, params: list[str], strokes: int, convention: str, overrides: d
                                               state["plunger_friction_n"]), dict(overrides or {}))
         fitted = None
         if params:
-            fitted = _fit(cfg, rec, params, strokes, work)
+            fitted = _fit(cfg, card, params, strokes, work)
             cfg = apply_overrides(cfg, fitted["params"])
         sim, result = _simulate(cfg, strokes)
-        pump_card, diag = _diagnose(cfg, rec)
-        out = compare(rec, sim, result, pump_card, convention)
-    from ..analysis.field_model import unit_kinematics_check
+        pump_card, diag = _diagnose(cfg, rec)  # the stored card, as the vendor diagnosed it
+        out = compare(card, sim, result, pump_card, convention)
+    from ..analysis.field_model import position_is_synthesised, unit_kinematics_check
 
     out["unit_kinematics"] = unit_kinematics_check(rec)
-    out.update({"record": rec.source, "record_notes": list(getattr(rec, "notes", [])),
+    out.update({"record": rec.source, "record_notes": list(getattr(card, "notes", [])),
+                "position_synthesised": rec.config is None and position_is_synthesised(rec.position_m),
+                "motion_source": "card" if card.position_m is rec.position_m else "record unit",
                 "card_time_reversed": bool(getattr(rec, "time_reversed", False)),
                 "record_card_type": getattr(rec, "card_type", None),
                 "pump_state": state,
                 "diagnosis": {k: diag[k] for k in ("fillage", "card_class", "fluid_load_n", "intake_pressure_pa")},
                 "fit": fitted, "model": {"damping_factor": cfg.get("damping", {}).get("damping_factor"),
                                          "fillage": cfg.get("pump", {}).get("fillage")}})
-    return out, (rec, result, pump_card)
+    return out, (card, result, pump_card)
 
 
 def read_record(path: str, config: str | None, reverse: bool):

@@ -208,15 +208,17 @@ def test_validate_figures_held_today(figures, well):
     (38-39x with the previous damping)."""
     d = figures[well]
     assert abs(d["pprl_error_pct"]) <= 5.0
-    assert abs(d["mprl_error_pct"]) <= 12.0
+    assert abs(d["mprl_error_pct"]) <= 13.5
     assert d["card_rms_pct_of_pprl"] <= 9.0
     assert d["spectrum"]["ratio_above_h20"] <= 3.0
     if well == "11708328":  # srenv's diagnosis against the vendor's pump card, in its effective convention
         assert d["pump_card_rms_pct_of_range"] <= 3.0
-        # the gradual load transfer (the liquid's compressibility, from the water cut) takes 11708328's
-        # harmonics 4-20 from 2.34x to 2.20x the measured share and its card from 7.4 to 7.1 % of PPRL
-        assert d["spectrum"]["ratio_h4_20"] <= 2.25 and d["card_rms_pct_of_pprl"] <= 7.2
+        # its position channel is a synthesised cosine: driven by its own unit's four-bar, the card meets the
+        # goal (7.1 -> 5.75 % of PPRL) while MPRL (-11.6 -> -13.0 %) and harmonics 4-20 (2.2x -> 3.1x) move off
+        assert d["position_synthesised"] and d["motion_source"] == "record unit"
+        assert d["card_rms_pct_of_pprl"] <= 6.0 and d["spectrum"]["ratio_h4_20"] <= 3.2
     else:
+        assert not d["position_synthesised"] and d["motion_source"] == "card"
         assert d["spectrum"]["ratio_h4_20"] <= 1.3
         # 7699227's diagnosed pump card against the vendor's: shifted (+0.9 kN, the deviated string's weight
         # explains a constant 1.3 kN) and short (its downstroke 1.2 kN further above; docs/realism.md)
@@ -224,9 +226,9 @@ def test_validate_figures_held_today(figures, well):
         assert off["downstroke"] - off["upstroke"] > 1000.0 and 0.0 < off["upstroke"] < 1500.0
 
 
-@pytest.mark.xfail(strict=True, reason="issue 27's goal, not reached yet: MPRL 11.6 % low on 11708328 and 7.7 % "
-                   "high on 7699227, 11708328's harmonics 4-20 2.2x the measured share, the cards 7-9 % of PPRL "
-                   "RMS, 7699227's diagnosed pump card 8.5 % of range (docs/realism.md, 'What is still off')")
+@pytest.mark.xfail(strict=True, reason="issue 27's goal, not reached yet: MPRL 13.0 % low on 11708328 and 7.7 % "
+                   "high on 7699227, 11708328's harmonics 4-20 3.1x the measured share, 7699227's card 8.7 % of "
+                   "PPRL RMS (a constant 3.3 kN) and its diagnosed pump card 8.5 % of range (docs/realism.md)")
 @pytest.mark.parametrize("well", WELLS)
 def test_validate_meets_the_issue_goal(figures, well):
     d = figures[well]
@@ -431,7 +433,7 @@ def test_vendor_prediction_is_read_checked_and_scored_like_srenv(tmp_path, figur
 def test_card_difference_splits_into_level_and_shape(figures, well):
     """card RMS² = offset² + shape RMS² (the same difference, resampled on position); 7699227's prediction sits a
     constant 3.3 kN above its measured card (docs/realism.md: a load cell's zero or the string's weight) and its
-    shape is within 6 % of PPRL; 11708328's error is its shape (7.0 %, held here)."""
+    shape is within 6 % of PPRL; 11708328's error is mostly its shape (5.7 %, held here)."""
     d = figures[well]
     pprl = d["measured_pprl_n"]
     total = math.hypot(100 * d["card_offset_n"] / pprl, d["card_shape_rms_pct_of_pprl"])
@@ -439,4 +441,25 @@ def test_card_difference_splits_into_level_and_shape(figures, well):
     if well == "7699227":
         assert 2500 < d["card_offset_n"] < 4000 and d["card_shape_rms_pct_of_pprl"] < 6.0
     else:
-        assert abs(d["card_offset_n"]) < 1000 and d["card_shape_rms_pct_of_pprl"] < 7.2
+        assert abs(d["card_offset_n"]) < 1000 and d["card_shape_rms_pct_of_pprl"] < 6.0
+
+
+def test_a_synthesised_position_channel_is_recognised_and_replaced_by_the_records_unit():
+    """A load-only controller writes x = S (1 - cos wt)/2: such a card is recognised (any phase), a four-bar's
+    motion (measured on 7699227, or computed) is not; the motion that replaces it is the record's unit at
+    constant crank speed, bottom on the card's bottom sample, scaled to the card's stroke."""
+    from srenv.analysis.field_model import position_is_synthesised, unit_from_record, unit_position_for_card
+
+    n = 200
+    for phase in (0.0, 0.7, 2.0):
+        assert position_is_synthesised(0.7 * (1 - np.cos(2 * np.pi * np.arange(n) / n + phase)))
+    real = read_dynacard_json(DATA / "7699227.json", auto_orient=True)
+    assert not position_is_synthesised(real.position_m)
+    cu = unit_from_record(real)
+    assert not position_is_synthesised(np.asarray(cu.position_m(cu.theta_bottom + 2 * np.pi * np.arange(n) / n)))
+    rec = read_dynacard_json(DATA / "11708328.json", auto_orient=True)
+    assert position_is_synthesised(rec.position_m)
+    x = unit_position_for_card(rec)
+    k0 = int(np.argmin(rec.position_m))
+    assert x[k0] == 0.0 and x.min() >= -1e-12 and np.ptp(x) == pytest.approx(np.ptp(rec.position_m), rel=2e-3)
+    assert not position_is_synthesised(x)   # the four-bar's second harmonic is back
