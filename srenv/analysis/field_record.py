@@ -47,6 +47,7 @@ class FieldRecord:
     time_reversed: bool = False                        # the stored card ran in reverse time
     config: dict | None = None                         # srenv's own record: the well YAML (its model)
     notes: list[str] = field(default_factory=list)     # what the reader filled in or found doubtful
+    motion_from_unit: bool = False                     # positions are the record's unit's (validate), not stored
     card_type: str | None = None                       # the vendor's card type (Startup, Shutdown, ...)
     # the vendor's own prediction of the record's full-pump surface card (its "ideal card"): PPRL, MPRL (N)
     reference_prediction: dict | None = None

@@ -52,9 +52,9 @@ def _card_motion(rec):
         return rec
     x = unit_position_for_card(rec)
     if x is None:
-        return replace(rec, notes=[*rec.notes, "cardData.Position is a pure harmonic of time (synthesised, not "
-                                   "measured) and the record has no unit to take the motion from: used as given"])
-    return replace(rec, position_m=x, notes=[*rec.notes, (
+        return replace(rec, notes=[*rec.notes, ("cardData.Position is a pure harmonic of time (synthesised, not "
+                                   "measured) and the record has no unit to take the motion from: used as given")])
+    return replace(rec, position_m=x, motion_from_unit=True, notes=[*rec.notes, (
         "cardData.Position is a pure harmonic of time (a synthesised position channel, not a measurement): the "
         "polished rod moves as the record's unit (API dimensions, rotation) at constant crank speed, scaled to "
         "the card's stroke, with the measured loads placed on it by time; the diagnosis reads the stored card")])
@@ -195,7 +195,7 @@ def validate(rec, params: list[str], strokes: int, convention: str, overrides: d
     out["unit_kinematics"] = unit_kinematics_check(rec)
     out.update({"record": rec.source, "record_notes": list(getattr(card, "notes", [])),
                 "position_synthesised": rec.config is None and position_is_synthesised(rec.position_m),
-                "motion_source": "card" if card.position_m is rec.position_m else "record unit",
+                "motion_source": "record unit" if getattr(card, "motion_from_unit", False) else "card",
                 "card_time_reversed": bool(getattr(rec, "time_reversed", False)),
                 "record_card_type": getattr(rec, "card_type", None),
                 "pump_state": state,
@@ -226,7 +226,7 @@ def cmd_validate(args) -> int:
     if args.plot:
         from .validate_plot import save_validation_plot
 
-        atomic_write(args.plot, lambda tmp: save_validation_plot(*parts, tmp))
+        atomic_write(args.plot, lambda tmp: save_validation_plot(*parts, tmp, args.load_convention))
     print(line)
     return 0
 

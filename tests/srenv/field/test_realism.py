@@ -463,3 +463,22 @@ def test_a_synthesised_position_channel_is_recognised_and_replaced_by_the_record
     k0 = int(np.argmin(rec.position_m))
     assert x[k0] == 0.0 and x.min() >= -1e-12 and np.ptp(x) == pytest.approx(np.ptp(rec.position_m), rel=2e-3)
     assert not position_is_synthesised(x)   # the four-bar's second harmonic is back
+
+
+def test_validate_plot_shows_both_pump_cards_in_the_compared_convention():
+    """The pump-card panel draws srenv's diagnosis in the convention the figures compare (it drew true loads
+    beside the vendor's effective ones, a p A gap the figures do not have)."""
+    from srenv.analysis.diagnose import load_in_convention
+    from srenv.tools.validate import validate
+    from srenv.tools.validate_plot import pump_card_lines
+
+    rec = read_dynacard_json(DATA / "11708328.json", auto_orient=True)
+    out, (card, _, pump_card) = validate(rec, [], 2, "effective")
+    assert card.motion_from_unit and out["motion_source"] == "record unit"
+    for conv in ("effective", "true"):
+        ours, ref = pump_card_lines(card, pump_card, conv)
+        want = load_in_convention(pump_card.pump_load_n, conv, pump_card.rod_end_pressure_pa,
+                                  pump_card.rod_end_area_m2)
+        assert np.array_equal(ours[1], want) and conv in ours[2]
+        assert np.array_equal(ref[1], rec.pump_load_n)
+    assert pump_card.rod_end_pressure_pa * pump_card.rod_end_area_m2 > 1000.0  # the gap was real: > 1 kN
