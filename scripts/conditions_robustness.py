@@ -1,17 +1,26 @@
-"""Classifiers on wells outside the card set's family (the shipped well configs), every condition at a few
-severities, with realism's Kelvin-Voigt damping (damping.stiffness_proportional_s) off and on: a simulated
-check of how a model holds under a shift of the wells, used to choose between models (docs/conditions.md).
+"""Classifiers on simulated wells the card sets did not draw: a check of how a model holds under a shift of the
+wells, used to choose between models (docs/conditions.md, runs 3 and 4). Two checks:
 
-    python scripts/conditions_robustness.py [--models M.npz ...] [--wells NAME ...] [--severities 0.4 0.8]
-        [--taus 0 0.02]
+* ``out_of_family``: the shipped well configs, every condition at a few severities, with realism's Kelvin-Voigt
+  damping (damping.stiffness_proportional_s) off and on (226 cards with the defaults);
+* ``v2_family``: wells of the family drawn from a stream of their own (``draw_params(k, stream=CHECK_STREAM)``,
+  outside v2's train / validation / test / family wells and every card set), each with v2's per-well physics as
+  v2 applies it (``v2_physics.overrides``: its beam unit and Kelvin-Voigt damping), at the four corners of its
+  operating range, the full pump and every other condition at one severity (run 4's pre-registered check).
 
-Prints one JSON line per model: cards right, of how many, and what each well's full card was called.
-A combination a well's config refuses (e.g. free gas on a well with the nonmonotone plunger law) is skipped.
+    python scripts/conditions_robustness.py [--models M.npz ...] [--checks out_of_family v2_family]
+        [--wells NAME ...] [--severities 0.4 0.8] [--taus 0 0.02] [--v2-wells 12] [--v2-severity 0.6]
+        [--out REPORT.json]
+
+Prints one JSON line per model: per check the cards right, of how many, what each full card was called; the
+score (the mean of the checks' accuracies, run 4's rule). A combination a well's config refuses (e.g. free gas
+on a well with the nonmonotone plunger law) is skipped, for every model alike.
 """
 
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import json
 
 from srenv.analysis.card_classifier import DEFAULT_MODEL, CardClassifier
@@ -22,10 +31,14 @@ from srenv.physics.conditions import LABELS
 
 WELLS = ("conventional_fig4", "default", "paper_fig3_vertical", "paper_fig4_deviated", "paper_fig6_nonmonotone",
          "paper_fig7_pullout")
+CHECK_STREAM = 0xC1A5  # the v2-family check's wells: a stream no split, family well or card set draws from
+CORNERS = (("spm_min", "stroke_min"), ("spm_min", "stroke_max"), ("spm_max", "stroke_min"),
+           ("spm_max", "stroke_max"))
+FAILED = (ConfigError, NumericFailure, SolverFailure, ValueError)
 
 
 def cards(wells, severities, taus):
-    """(well, tau, label, card) of every combination the configs accept (full once per well and tau)."""
+    """(well@tau, label, card) of every combination the configs accept (full once per well and tau)."""
     for name in wells:
         well = load_config(name)
         for tau in taus:
@@ -33,32 +46,96 @@ def cards(wells, severities, taus):
                 for sev in ([0.0] if label == "full" else severities):
                     try:
                         cfg = condition_config(well, label, sev, {"damping.stiffness_proportional_s": tau})
-                        yield name, tau, label, simulate_card(cfg)
-                    except (ConfigError, NumericFailure, SolverFailure, ValueError):
+                        yield f"{name}@{tau}", label, simulate_card(cfg)
+                    except FAILED:
                         continue
+
+
+def v2_check_well(k: int):
+    """Check well ``k`` with v2's per-well physics (its unit's geometry is in the config)."""
+    from srenv.task import v2_physics
+    from srenv.task import well_family as wf
+
+    spec = wf.spec_from_params(wf.draw_params(k, stream=CHECK_STREAM), f"clscheck-{k}")
+    return load_config(spec.cfg, v2_physics.overrides(spec))
+
+
+def v2_cards(n_wells: int, severity: float):
+    """(well/corner, label, card) of the v2-family check: every corner of every well, every condition."""
+    for k in range(n_wells):
+        cfg = v2_check_well(k)
+        c = cfg.control
+        for spm_end, stroke_end in CORNERS:
+            spm = c.spm_min if spm_end == "spm_min" else c.spm_max
+            stroke = c.stroke_min_m if stroke_end == "stroke_min" else c.stroke_max_m
+            well = dataclasses.replace(cfg, surface=dataclasses.replace(cfg.surface, spm=spm, stroke_length_m=stroke))
+            for label in LABELS:
+                try:
+                    card = simulate_card(condition_config(well, label, 0.0 if label == "full" else severity))
+                except FAILED:
+                    continue
+                yield f"clscheck-{k}/{spm_end}/{stroke_end}", label, card
+
+
+def score(clfs: dict, stream) -> dict:
+    """Per model: cards right, of how many, what each full card was called, right per label."""
+    out = {m: {"right": 0, "of": 0, "full_called": {}, "right_by_label": dict.fromkeys(LABELS, 0),
+               "of_by_label": dict.fromkeys(LABELS, 0)} for m in clfs}
+    for where, label, card in stream:
+        for m, clf in clfs.items():
+            got = clf.classify(card.polished_rod_position_m, card.polished_rod_load_n)[0]
+            r = out[m]
+            r["of"] += 1
+            r["right"] += got == label
+            r["of_by_label"][label] += 1
+            r["right_by_label"][label] += got == label
+            if label == "full":
+                r["full_called"][where] = got
+    for r in out.values():
+        r["accuracy"] = round(r["right"] / max(r["of"], 1), 3)
+    return out
+
+
+def healthy_by_corner(full_called: dict) -> dict:
+    """v2-family check: the full cards called ``full``, per corner (right / of)."""
+    out = {}
+    for spm_end, stroke_end in CORNERS:
+        got = [v for k, v in full_called.items() if k.endswith(f"/{spm_end}/{stroke_end}")]
+        out[f"{spm_end}/{stroke_end}"] = f"{sum(v == 'full' for v in got)}/{len(got)}"
+    return out
 
 
 def main() -> None:
     ap = argparse.ArgumentParser()
     ap.add_argument("--models", nargs="+", default=[str(DEFAULT_MODEL)])
+    ap.add_argument("--checks", nargs="+", choices=("out_of_family", "v2_family"),
+                    default=["out_of_family", "v2_family"])
     ap.add_argument("--wells", nargs="+", default=list(WELLS))
     ap.add_argument("--severities", type=float, nargs="+", default=[0.4, 0.8])
     ap.add_argument("--taus", type=float, nargs="+", default=[0.0, 0.02])
+    ap.add_argument("--v2-wells", type=int, default=12)
+    ap.add_argument("--v2-severity", type=float, default=0.6)
+    ap.add_argument("--out", help="also write the lines as one JSON report")
     a = ap.parse_args()
     clfs = {m: CardClassifier.load(m) for m in a.models}
-    right = dict.fromkeys(clfs, 0)
-    full = {m: {} for m in clfs}
-    n = 0
-    for name, tau, label, card in cards(a.wells, a.severities, a.taus):
-        n += 1
-        for m, clf in clfs.items():
-            got = clf.classify(card.polished_rod_position_m, card.polished_rod_load_n)[0]
-            right[m] += got == label
-            if label == "full":
-                full[m][f"{name}@{tau}"] = got
+    checks = {}
+    if "out_of_family" in a.checks:
+        checks["out_of_family"] = score(clfs, cards(a.wells, a.severities, a.taus))
+    if "v2_family" in a.checks:
+        checks["v2_family"] = score(clfs, v2_cards(a.v2_wells, a.v2_severity))
+        for r in checks["v2_family"].values():
+            r["healthy_full_by_corner"] = healthy_by_corner(r["full_called"])
+    rows = []
     for m in clfs:
-        print(json.dumps({"model": m, "right": right[m], "of": n, "accuracy": round(right[m] / max(n, 1), 3),
-                          "full_called": full[m]}))
+        row = {"model": m, **{k: v[m] for k, v in checks.items()},
+               "score": round(sum(v[m]["right"] / max(v[m]["of"], 1) for v in checks.values()) / len(checks), 4)}
+        rows.append(row)
+        print(json.dumps(row))
+    if a.out:
+        with open(a.out, "w") as f:
+            json.dump({"checks": list(checks), "v2_wells": a.v2_wells, "v2_severity": a.v2_severity,
+                       "severities": a.severities, "taus": a.taus, "models": rows}, f, indent=1)
+            f.write("\n")
 
 
 if __name__ == "__main__":

@@ -15,6 +15,9 @@ from ..physics.conditions import LABELS
 from .card_shape import N_FEATURES, features
 
 DEFAULT_MODEL = Path(__file__).resolve().parents[1] / "models" / "classifier.npz"
+# run 2's weights, pinned: srenv/SuckerRod-v2's observation carries its probabilities, so v2 keeps its numbers
+# whatever model ``srenv classify`` ships (docs/conditions.md, run 4)
+V2_MODEL = DEFAULT_MODEL.with_name("classifier_run2.npz")
 MAX_LAYERS = 8
 MAX_WIDTH = 4096
 

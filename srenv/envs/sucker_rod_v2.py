@@ -16,7 +16,7 @@ Constructor
 | ``episode_hours`` | ``12.0`` (spec) | horizon in hours of well time (``task.episode_hours``) |
 | ``interval_s`` | ``300.0`` (spec) | control interval in s of well time (``task.interval_s``) |
 | ``event_rate_scale`` | ``1.0`` | multiplies every condition's rate (0: no conditions, the v1 task on v2's spaces) |
-| ``classifier`` | ``None`` | callable(trace dict of the last stroke) -> 12 label probabilities in :data:`LABELS` order; ``None``: :func:`default_classifier` (``srenv classify``'s model); called once per card |
+| ``classifier`` | ``None`` | callable(trace dict of the last stroke) -> 12 label probabilities in :data:`LABELS` order; ``None``: :func:`default_classifier` (run 2's model, pinned); called once per card |
 | ``fast_stepping`` | ``True`` | v2's stepping (docs/speed.md): an interval reuses the stroke an earlier interval at its setpoint converged to, carried to the pump's intake pressure; ``False``: v1's stepping |
 | ``render_mode`` | ``None`` | ``"rgb_array"`` or ``"human"`` |
 | ``overrides`` / ``**kwargs`` | ``None`` | config overrides, as v1 |
@@ -52,7 +52,7 @@ Observation space
 -----------------
 Flat float32 ``Box(-10, 10)``; names in ``FIELD_OBS_NAMES`` / ``PRIVILEGED_OBS_NAMES``. Field (89): v1's field
 observation (77: the last stroke's surface card and the controller's figures) + the classifier's probabilities
-of the 12 labels for the last card (``prob_<label>``; ``srenv classify``'s model via :func:`default_classifier`,
+of the 12 labels for the last card (``prob_<label>``; run 2's model, pinned, via :func:`default_classifier`,
 uniform 1/12 for a card it cannot read). Privileged (113): v1's privileged (88) + the 12 probabilities + the
 true condition of the last interval one-hot (``true_<label>``; ``full`` / ``fluid_pound`` by the true fillage
 when no event is active) + its severity.
@@ -124,15 +124,16 @@ Classifier = Callable[[dict], np.ndarray]
 
 @functools.lru_cache(maxsize=1)
 def default_classifier() -> Classifier | None:
-    """``srenv classify``'s card classifier (:mod:`srenv.analysis.card_classifier`, its shipped model, trained
-    on simulated cards only) as a callable: the last stroke's trace -> 12 probabilities in :data:`LABELS` order;
+    """The card classifier v2 was released with (:mod:`srenv.analysis.card_classifier`, run 2's model, pinned
+    as ``srenv/models/classifier_run2.npz`` so v2 keeps its numbers when ``srenv classify`` ships a newer one;
+    trained on simulated cards only) as a callable: the last stroke's trace -> 12 probabilities in :data:`LABELS` order;
     a card it cannot read gives the uniform vector. ``None`` (the uniform vector) when no model is shipped."""
-    from ..analysis.card_classifier import DEFAULT_MODEL, CardClassifier
+    from ..analysis.card_classifier import V2_MODEL, CardClassifier
     from ..analysis.card_shape import BadCard, features
 
-    if not DEFAULT_MODEL.is_file():
+    if not V2_MODEL.is_file():
         return None
-    clf = CardClassifier.load(DEFAULT_MODEL)
+    clf = CardClassifier.load(V2_MODEL)
     order = [clf.labels.index(k) for k in LABELS]
 
     def classify(trace: dict) -> np.ndarray:

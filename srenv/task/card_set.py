@@ -43,6 +43,10 @@ SPRING_LABELS = ("full", "fluid_pound", "gas_interference", "parted_rods", "heav
 WELL_COLUMNS = ("depth_m", "plunger_diameter_mm", "spm", "stroke_length_m", "damping_factor",
                 "max_inclination_deg", "friction_coefficient", "fluid_density_kg_m3", "conventional_unit",
                 "kv_tau_s", "fluid_column_mass_kg", "liquid_compressibility_per_pa", "tubing_anchored")
+# --surface: "family" (sets 1-3: harmonic or the nearest catalogue unit, the operating point uniform) or "v2"
+# (run 4's set: the well's own v2 unit, srenv.task.v2_physics, and the operating corners populated)
+SURFACES = ("family", "v2")
+CORNER_SHARE = 0.25  # v2 surface: each of SPM and stroke at its minimum, and at its maximum, with this share
 ARRAYS = ("polished_rod_position_m", "polished_rod_load_n", "pump_position_m", "pump_load_n")
 
 
@@ -65,9 +69,16 @@ class Draw:
     column_mass: bool = False
     oil_compressibility_per_pa: float = 0.0  # 0: incompressible liquid
     unanchored: bool = False
+    surface: str = "family"  # "v2": driven by the well's v2 unit (its geometry drawn from the well's seed)
 
 
-def draw(seed: int, index: int, attempt: int, labels: tuple[str, ...]) -> Draw:
+def _corner_weighted(rng) -> float:
+    """A fraction of the control range: 0 or 1 with CORNER_SHARE each, else uniform."""
+    u, v = float(rng.uniform()), float(rng.uniform())
+    return 0.0 if u < CORNER_SHARE else (1.0 if u < 2 * CORNER_SHARE else v)
+
+
+def draw(seed: int, index: int, attempt: int, labels: tuple[str, ...], surface: str = "family") -> Draw:
     rng = np.random.default_rng(np.random.SeedSequence([seed, index, attempt]))
     well_seed = WELL_SEED0 + seed * 1_000_003 + index // CARDS_PER_WELL + attempt * 100_000_007
     label = labels[int(rng.integers(len(labels)))]
@@ -82,8 +93,12 @@ def draw(seed: int, index: int, attempt: int, labels: tuple[str, ...]) -> Draw:
     c_oil = float(math.exp(rng.uniform(math.log(c_lo), math.log(c_hi))))
     compressible = bool(rng.uniform() < COMPRESSIBLE_SHARE) and label in SPRING_LABELS
     unanchored = bool(rng.uniform() < UNANCHORED_SHARE) and compressible
+    if surface == "v2":  # drawn after every older field: a "family" set's cards are what they were
+        base = (_corner_weighted(rng), _corner_weighted(rng), base[2], False)
+    elif surface != "family":
+        raise ValueError(f"surface = {surface!r}: expected one of {', '.join(SURFACES)}")
     return Draw(well_seed, label, severity, *base, kv_tau_s=tau, column_mass=column_mass,
-                oil_compressibility_per_pa=c_oil if compressible else 0.0, unanchored=unanchored)
+                oil_compressibility_per_pa=c_oil if compressible else 0.0, unanchored=unanchored, surface=surface)
 
 
 def field_overrides(d: Draw, well) -> dict[str, object]:
@@ -131,7 +146,8 @@ def card_config(d: Draw):
     from ..analysis.condition_card import condition_config
     from .well_family import draw_params, spec_from_params
 
-    well = spec_from_params(draw_params(d.well_seed), f"card{d.well_seed}").cfg
+    spec = spec_from_params(draw_params(d.well_seed), f"card{d.well_seed}")
+    well = spec.cfg
     c = well.control
     spm = round(c.spm_min + d.spm * (c.spm_max - c.spm_min), 3)
     stroke = round(c.stroke_min_m + d.stroke_length_m * (c.stroke_max_m - c.stroke_min_m), 4)
@@ -139,7 +155,25 @@ def card_config(d: Draw):
     well = dataclasses.replace(well, surface=_surface(well.surface, spm, stroke, d.conventional),
                                damping=dataclasses.replace(well.damping, model="dimensionless",
                                                            damping_factor=round(d.damping_factor, 6)))
-    return condition_config(well, d.label, d.severity, field_overrides(d, well))
+    return condition_config(well, d.label, d.severity, {**field_overrides(d, well), **_unit_overrides(d, spec)})
+
+
+def _unit_overrides(d: Draw, spec) -> dict[str, object]:
+    """v2 surface: the well's own v2 unit (v2_physics' geometry draw and sizing; its crank follows the drawn
+    stroke), run at the drawn SPM and stroke."""
+    if d.surface != "v2":
+        return {}
+    from . import v2_physics
+
+    return {"surface.motion": "beam_unit",
+            "surface.beam_unit": v2_physics.unit_block(spec, v2_physics.draw_geometry(spec.params))}
+
+
+def unit_geometry(cfg) -> str:
+    """What drives a card: harmonic, catalogue (a catalogue conventional unit) or the v2 unit's geometry."""
+    if cfg.surface.motion == "beam_unit" and cfg.surface.beam_unit is not None:
+        return cfg.surface.beam_unit.geometry
+    return "catalogue" if cfg.surface.motion == "conventional" else "harmonic"
 
 
 def resample(t: np.ndarray, y: np.ndarray, n: int = N_POINTS) -> np.ndarray:
@@ -147,13 +181,13 @@ def resample(t: np.ndarray, y: np.ndarray, n: int = N_POINTS) -> np.ndarray:
     return np.interp(tt, t, y)
 
 
-def make_card(seed: int, index: int, labels: tuple[str, ...]) -> dict:
+def make_card(seed: int, index: int, labels: tuple[str, ...], surface: str = "family") -> dict:
     """Card ``index`` of set ``seed``: arrays, label, severity, the well's numbers."""
     from ..analysis.condition_card import simulate_card
     from ..errors import ConfigError, NumericFailure, SolverFailure
 
     for attempt in range(MAX_ATTEMPTS):
-        d = draw(seed, index, attempt, labels)
+        d = draw(seed, index, attempt, labels, surface)
         try:
             cfg = card_config(d)
             card = simulate_card(cfg)
@@ -172,7 +206,8 @@ def make_card(seed: int, index: int, labels: tuple[str, ...]) -> dict:
                 "liquid_compressibility_per_pa": cfg.pump.liquid_compressibility_per_pa,
                 "tubing_anchored": float(cfg.tubing.anchored)}
         return {"arrays": arrays, "label": d.label, "severity": d.severity, "well_seed": d.well_seed,
-                "fillage": card.fillage, "period_s": float(card.t_s[-1]), "well": well}
+                "fillage": card.fillage, "period_s": float(card.t_s[-1]), "well": well,
+                "surface": surface, "unit_geometry": unit_geometry(cfg)}
     raise RuntimeError(f"card {index} of set {seed}: no simulation succeeded in {MAX_ATTEMPTS} draws")
 
 
@@ -188,6 +223,8 @@ def columns(cards: list[dict]) -> dict[str, np.ndarray]:
     out["period_s"] = np.array([c["period_s"] for c in cards], dtype=np.float64)
     for k in WELL_COLUMNS:
         out[k] = np.array([c["well"][k] for c in cards], dtype=np.float64)
+    if any(c.get("surface", "family") != "family" for c in cards):  # a column of --surface v2 sets only
+        out["unit_geometry"] = np.array([c["unit_geometry"] for c in cards])
     return out
 
 

@@ -1,4 +1,4 @@
-"""``srenv cards --n N --out DIR [--conditions ...] [--seed S] [--workers W]``: a labelled synthetic card set.
+"""``srenv cards --n N --out DIR [--conditions ...] [--seed S] [--workers W] [--surface family|v2]``: a labelled synthetic card set.
 
 Writes ``DIR/cards.npz`` (columns in docs/cards_dataset.md; the same seed gives the same bytes whatever
 the number of workers) and ``DIR/dataset_card.json`` (the schema, the labels, the split counts). Cards are
@@ -37,6 +37,10 @@ def add_parser(sub) -> None:
     c.add_argument("--conditions", type=_label_list, help="comma-separated labels (default: all twelve)")
     add_number(c, "cards", "--seed", default=0, help="set seed (same seed, same files)")
     add_number(c, "cards", "--workers", default=None, help="worker processes (default: the CPUs available)")
+    c.add_argument("--surface", choices=("family", "v2"), default="family",
+                   help="family (default; sets 1-3): harmonic or the nearest catalogue unit, operating point "
+                        "uniform; v2: each well's own v2 unit (conventional / Mark II / air-balanced), the "
+                        "operating corners populated (docs/cards_dataset.md)")
     c.add_argument("--no-progress", action="store_true", help="no progress bar")
     c.set_defaults(func=main)
 
@@ -66,17 +70,18 @@ def _worker_init() -> None:
     signal.signal(signal.SIGTERM, signal.SIG_DFL)
 
 
-def _one(job: tuple[int, int, tuple[str, ...]]) -> dict:
+def _one(job: tuple) -> dict:
     from ..task.card_set import make_card
 
     return make_card(*job)
 
 
-def simulate_set(n: int, seed: int, labels: tuple[str, ...], workers: int, progress: bool) -> list[dict]:
+def simulate_set(n: int, seed: int, labels: tuple[str, ...], workers: int, progress: bool,
+                 surface: str = "family") -> list[dict]:
     """Cards 0..n-1 of set ``seed``, in order (each card depends on (seed, index) only)."""
     from tqdm import tqdm
 
-    jobs = [(seed, i, labels) for i in range(n)]
+    jobs = [(seed, i, labels, surface) for i in range(n)]
     bar = tqdm(total=n, desc="cards", unit="card", file=sys.stderr, disable=not progress)
     try:
         if workers <= 1:
@@ -100,7 +105,7 @@ def simulate_set(n: int, seed: int, labels: tuple[str, ...], workers: int, progr
         bar.close()
 
 
-def dataset_card(cols: dict, seed: int, labels: tuple[str, ...]) -> dict:
+def dataset_card(cols: dict, seed: int, labels: tuple[str, ...], surface: str = "family") -> dict:
     import numpy as np
 
     from ..task.card_set import ARRAYS, N_POINTS, SPLITS, WELL_COLUMNS
@@ -111,7 +116,7 @@ def dataset_card(cols: dict, seed: int, labels: tuple[str, ...]) -> dict:
             "arrays": list(ARRAYS), "well_columns": list(WELL_COLUMNS),
             "splits": {s: int(np.sum(cols["split"] == s)) for s in SPLITS},
             "cards_per_label": {names[k]: int(np.sum(cols["label"] == k)) for k in range(len(names))},
-            "doc": "docs/cards_dataset.md"}
+            "doc": "docs/cards_dataset.md", **({"surface": surface} if surface != "family" else {})}
 
 
 def main(args: argparse.Namespace) -> int:
@@ -123,11 +128,12 @@ def main(args: argparse.Namespace) -> int:
     labels = args.conditions or LABELS
     workers = args.workers or max(1, len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity")
                                   else (os.cpu_count() or 1))
-    cards = simulate_set(args.n, args.seed, labels, min(workers, args.n), not args.no_progress)
+    surface = getattr(args, "surface", "family")
+    cards = simulate_set(args.n, args.seed, labels, min(workers, args.n), not args.no_progress, surface)
     cols = columns(cards)
     out.mkdir(exist_ok=True)
     atomic_write(out / "cards.npz", lambda tmp: write_npz(tmp, cols))
-    meta = dataset_card(cols, args.seed, labels)
+    meta = dataset_card(cols, args.seed, labels, surface)
     atomic_write(out / "dataset_card.json",
                  lambda tmp: Path(tmp).write_text(json.dumps(meta, indent=1, sort_keys=True) + "\n"))
     print(json.dumps({"out": str(out), "n_cards": meta["n_cards"], "splits": meta["splits"]}))
