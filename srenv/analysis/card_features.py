@@ -103,7 +103,7 @@ def impact_speed_m_s(pump_position_m: np.ndarray, pump_velocity_m_s: np.ndarray,
     f = np.asarray(pump_load_n, float)
     if len(f) < 3:
         return 0.0
-    hi, lo = float(np.percentile(f, 90)), float(np.percentile(f, 10))
+    hi, lo = (float(q) for q in np.percentile(f, (90, 10)))  # one call: the same two order statistics
     if hi - lo <= 1.0:
         return 0.0
     mid = 0.5 * (hi + lo)
