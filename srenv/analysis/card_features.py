@@ -69,7 +69,7 @@ def _rest_runs(v: np.ndarray) -> list[tuple[int, int]]:
     rest = np.abs(v) <= REST_TOL_M_S
     if not rest.any():
         return []
-    d = np.diff(np.r_[0, rest.astype(np.int8), 0])
+    d = np.diff(np.concatenate(([0], rest.astype(np.int8), [0])))
     starts, ends = np.flatnonzero(d == 1), np.flatnonzero(d == -1)
     return [(int(s), int(e)) for s, e in zip(starts, ends) if e - s >= 2]
 

@@ -249,8 +249,8 @@ class Simulator(PumpCycle):
 
     def mechanical_energy_j(self) -> float:
         """Kinetic + strain energy of the whole string (top node included)."""
-        u = np.r_[self.uav[0], self.u]
-        v = np.r_[self.uav[1], self.v]
+        u = np.concatenate((self.uav[:1], self.u))  # np.r_ costs ~40 µs a call (twice a stroke)
+        v = np.concatenate((self.uav[1:2], self.v))
         (kd, ko), (md, mo) = self._k, self._m
         ku = kd * u
         ku[:-1] += ko * u[1:]
