@@ -231,8 +231,7 @@ def _parse_override_value(text: str) -> Any:
 
 
 def apply_overrides(data: dict, overrides: dict[str, Any] | list[str] | None, owned: bool = False) -> dict:
-    """Apply ``{"a.b.c": value}`` or ``["a.b.c=value", ...]`` to a raw config mapping (a copy; ``owned``: the
-    caller hands ``data`` over, e.g. a fresh ``to_dict``, and it is changed in place)."""
+    """Apply ``{"a.b.c": value}`` or ``["a.b.c=value", ...]`` to a raw config mapping (a copy unless ``owned``)."""
     import copy
 
     if not owned:
@@ -343,7 +342,7 @@ def load_config(path_or_name: str | Path | WellConfig = "default",
     if isinstance(path_or_name, WellConfig):
         if not overrides:
             return path_or_name
-        # to_dict builds fresh containers: the overrides go into them without another deep copy
+        # to_dict's containers are fresh: owned, no deep copy
         return config_from_dict(apply_overrides(to_dict(path_or_name), overrides, owned=True))
     return config_from_dict(apply_overrides(read_raw(path_or_name), overrides))
 
