@@ -230,11 +230,12 @@ def _parse_override_value(text: str) -> Any:
         return text
 
 
-def apply_overrides(data: dict, overrides: dict[str, Any] | list[str] | None) -> dict:
-    """Apply ``{"a.b.c": value}`` or ``["a.b.c=value", ...]`` to a raw config mapping (copy)."""
+def apply_overrides(data: dict, overrides: dict[str, Any] | list[str] | None, owned: bool = False) -> dict:
+    """Apply ``{"a.b.c": value}`` or ``["a.b.c=value", ...]`` to a raw config mapping (a copy unless ``owned``)."""
     import copy
 
-    data = copy.deepcopy(data)
+    if not owned:
+        data = copy.deepcopy(data)
     if overrides is None or (isinstance(overrides, (dict, list)) and not overrides):
         return data
     if not isinstance(overrides, (dict, list)):
@@ -289,9 +290,11 @@ def read_raw(path_or_name: str | Path) -> dict:
 
 
 def _material_defaults(data: dict) -> dict:
-    """Fill a fiberglass / sinker-bar taper's unset E, density and strength from MATERIAL_DEFAULTS."""
+    """Fill a fiberglass / sinker-bar taper's unset E, density and strength from MATERIAL_DEFAULTS, in a copy; a
+    mapping with no such taper is returned as it is (the parse does not change it: no copy needed)."""
     tapers = (data.get("rod") or {}).get("tapers") if isinstance(data.get("rod"), dict) else None
-    if not isinstance(tapers, list):
+    if not isinstance(tapers, list) or not any(isinstance(t, dict) and t.get("material") in MATERIAL_DEFAULTS
+                                               for t in tapers):
         return data
     import copy
 
@@ -339,7 +342,8 @@ def load_config(path_or_name: str | Path | WellConfig = "default",
     if isinstance(path_or_name, WellConfig):
         if not overrides:
             return path_or_name
-        return config_from_dict(apply_overrides(to_dict(path_or_name), overrides))
+        # to_dict's containers are fresh: owned, no deep copy
+        return config_from_dict(apply_overrides(to_dict(path_or_name), overrides, owned=True))
     return config_from_dict(apply_overrides(read_raw(path_or_name), overrides))
 
 

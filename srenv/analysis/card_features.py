@@ -69,7 +69,7 @@ def _rest_runs(v: np.ndarray) -> list[tuple[int, int]]:
     rest = np.abs(v) <= REST_TOL_M_S
     if not rest.any():
         return []
-    d = np.diff(np.r_[0, rest.astype(np.int8), 0])
+    d = np.diff(np.concatenate(([0], rest.astype(np.int8), [0])))
     starts, ends = np.flatnonzero(d == 1), np.flatnonzero(d == -1)
     return [(int(s), int(e)) for s, e in zip(starts, ends) if e - s >= 2]
 
@@ -103,7 +103,7 @@ def impact_speed_m_s(pump_position_m: np.ndarray, pump_velocity_m_s: np.ndarray,
     f = np.asarray(pump_load_n, float)
     if len(f) < 3:
         return 0.0
-    hi, lo = float(np.percentile(f, 90)), float(np.percentile(f, 10))
+    hi, lo = (float(q) for q in np.percentile(f, (90, 10)))  # one call: the same two order statistics
     if hi - lo <= 1.0:
         return 0.0
     mid = 0.5 * (hi + lo)

@@ -6,6 +6,8 @@ interval), so ``dalpha/ds`` is piecewise constant. An empty station table is a v
 
 from __future__ import annotations
 
+import math
+from bisect import bisect_right
 from dataclasses import dataclass
 
 import numpy as np
@@ -58,11 +60,26 @@ class Survey:
         cos = np.cos(self.inclination(grid))
         z = np.r_[0.0, np.cumsum(0.5 * (cos[1:] + cos[:-1]) * np.diff(grid))]
         object.__setattr__(self, "_tvd_table", (grid, z))
+        object.__setattr__(self, "_tvd_lists", (grid.tolist(), z.tolist()))
 
     def tvd(self, s_m: np.ndarray | float) -> np.ndarray:
         """True vertical depth at measured depth s_m."""
         grid, z = self._tvd_table
         return np.interp(s_m, grid, z)
+
+    def tvd_at(self, s_m: float) -> float:
+        """:meth:`tvd` of one depth without numpy's per-call cost (the annulus asks at every stroke the env
+        fast-forwards): the same arithmetic as ``np.interp`` (the interval's slope times the offset from its
+        left end, the ends held), so the same bits (tests/srenv/physics/test_pump_inputs.py)."""
+        grid, z = self._tvd_lists
+        x = float(s_m)
+        j = bisect_right(grid, x) - 1
+        if math.isnan(x):
+            return x
+        if j < 0 or j >= len(grid) - 1 or grid[j] == x:
+            return z[min(max(j, 0), len(grid) - 1)]
+        slope = (z[j + 1] - z[j]) / (grid[j + 1] - grid[j])
+        return slope * (x - grid[j]) + z[j]
 
     def tvd_beyond(self, s_m: float) -> float:
         """True vertical depth at s_m, also below the last station (a pump set deeper than the survey or the

@@ -34,6 +34,7 @@ if TYPE_CHECKING:  # annotations only: the surface unit sits below the config th
 
 # motions driven by a beam unit's linkage (catalogue or nameplate): they have a gearbox
 LINKAGE_MOTIONS = ("conventional", "beam_unit")
+STROKE_CACHE_SIZE = 16  # setpoints whose stroke motion a surface keeps (SurfaceMotion.stroke_motion)
 
 
 class SurfaceMotion:
@@ -56,6 +57,9 @@ class SurfaceMotion:
                 raise ConfigError("surface.beam_unit", None, "the unit's nameplate with surface.motion 'beam_unit'")
             self._unit = unit if unit is not None else inline_unit(cfg.beam_unit)
         self._measured: MeasuredMotion | None = None
+        # a stroke's top velocity and start state recur stroke after stroke at one setpoint: kept per
+        # (SPM, stroke, steps) (the same arrays, computed once; the unit's linkage costs ~0.2 ms a stroke)
+        self._strokes: dict[tuple, tuple[np.ndarray, tuple[float, float]]] = {}
         if self.kind == "measured":
             self._measured = load_measured_motion(cfg.measured_card_csv, cfg.measured_spm)
 
@@ -90,6 +94,18 @@ class SurfaceMotion:
         if self._follows:
             return unit_for_stroke(self.cfg.beam_unit, self.stroke_length_m(stroke_m))
         return self._unit
+
+    def stroke_motion(self, spm: float, stroke_m: float, n_steps: int) -> tuple[np.ndarray, tuple[float, float]]:
+        """(:meth:`stroke_velocity`, :meth:`stroke_start_state`) of one stroke, kept for the last setpoints (a
+        fresh copy of the velocity each call: the caller owns it)."""
+        key = (float(spm), float(stroke_m), int(n_steps))
+        got = self._strokes.get(key)
+        if got is None:
+            got = (self.stroke_velocity(spm, stroke_m, n_steps), self.stroke_start_state(spm, stroke_m))
+            if len(self._strokes) >= STROKE_CACHE_SIZE:
+                self._strokes.clear()
+            self._strokes[key] = got
+        return got[0].copy(), got[1]
 
     def stroke_velocity(self, spm: float, stroke_m: float, n_steps: int) -> np.ndarray:
         """Top velocity (positive down) at the end of each of the n_steps steps of one stroke."""

@@ -1,0 +1,167 @@
+"""Where an env step's CPU time goes, on the acceptance's protocol (docs/speed.md, issue 25).
+
+    python scripts/step_profile.py [--action -0.6] [--env srenv/SuckerRod-v2]
+    python scripts/step_profile.py --trees /tmp/before . --repeats 3     # interleaved, each tree its own process
+
+The protocol of ``acceptance/speed``: ``scenario="train"``, a constant action [a, 1], a warm-up episode (seed 3,
+one step), then seeds 11 and 12, 12 steps each, in CPU time (``time.process_time``). Prints one JSON line: the
+resets' and the steps' CPU ms, the compiled kernel's share of each (``kernel.run`` timed around), the steps'
+Python per step and ``python_per_kernel`` (the steps' Python over their kernel time: the figure that survives a
+loaded machine, both sides slowing alike), and with ``--functions`` the self time of the step's main Python
+parts (wrapped with a timer: their own time, the wrapped callees' taken out; the wrappers add ~1 µs a call).
+"""
+
+from __future__ import annotations
+
+import argparse
+import functools
+import importlib
+import json
+import os
+import statistics
+import subprocess
+import sys
+import time
+import warnings
+from collections import defaultdict
+
+PARTS = (  # (module, qualified name): the step's Python, timed by self time with --functions
+    ("srenv.simulation.simulator", "Simulator.run_stroke"),
+    ("srenv.task.interval", "stroke_figures"),
+    ("srenv.analysis.stroke_summary", "summarize"),
+    ("srenv.surface_unit.surface", "SurfaceMotion.gearbox_report"),
+    ("srenv.surface_unit.gearbox", "analyse_runs"),
+    ("srenv.surface_unit.gearbox", "optimal_counterbalance_nm"),
+    ("srenv.task.interval", "IntervalRunner.run"),
+    ("srenv.simulation.pump_cycle", "PumpCycle.fast_forward"),
+    ("srenv.envs.sucker_rod_v1", "SuckerRodV1Env.reset"),
+    ("srenv.config", "load_config"),
+    ("srenv.envs.sucker_rod_v2", "SuckerRodV2Env._card_probabilities"),
+    ("srenv.envs.sucker_rod_v2", "SuckerRodV2Env._observe"),
+    ("srenv.envs.sucker_rod_v1", "SuckerRodV1Env.step"),
+)
+
+
+class SelfTimer:
+    """Wraps functions with a CPU-time accumulator that keeps each one's own time (wrapped callees out)."""
+
+    def __init__(self) -> None:
+        self.ms: dict[str, float] = defaultdict(float)
+        self.calls: dict[str, int] = defaultdict(int)
+        self._stack: list[float] = []
+
+    def wrap(self, module: str, qualname: str) -> None:
+        mod = importlib.import_module(module)
+        *path, name = qualname.split(".")
+        owner = functools.reduce(getattr, path, mod)
+        fn = getattr(owner, name, None)
+        if fn is None:
+            return
+        stack, ms, calls = self._stack, self.ms, self.calls
+
+        @functools.wraps(fn)
+        def timed(*a, **k):
+            t0 = time.process_time()
+            stack.append(0.0)
+            try:
+                return fn(*a, **k)
+            finally:
+                dt = time.process_time() - t0
+                ms[qualname] += 1e3 * (dt - stack.pop())
+                calls[qualname] += 1
+                if stack:
+                    stack[-1] += dt
+
+        setattr(owner, name, timed)
+        if not path:  # a module function imported by name elsewhere
+            for m in list(sys.modules.values()):
+                if m is not None and getattr(m, name, None) is fn:
+                    setattr(m, name, timed)
+
+
+def profile(env_id: str, action: float, functions: bool) -> dict:
+    warnings.filterwarnings("ignore")
+    import gymnasium as gym
+    import numpy as np
+
+    import srenv  # noqa: F401  (registers the envs)
+    from srenv.numerics import kernel
+
+    spent = [0.0]
+    run = kernel.run
+
+    def timed_run(*a):
+        t0 = time.process_time()
+        try:
+            return run(*a)
+        finally:
+            spent[0] += time.process_time() - t0
+
+    kernel.run = timed_run
+    timer = SelfTimer()
+    if functions:
+        for module, qualname in PARTS:
+            timer.wrap(module, qualname)
+    a = np.array([action, 1.0], np.float32)
+    env = gym.make(env_id, scenario="train")
+    env.reset(seed=3)
+    env.step(a)
+    timer.ms.clear()
+    timer.calls.clear()
+    reset = steps = k_reset = k_steps = 0.0
+    for seed in (11, 12):
+        k0, t0 = spent[0], time.process_time()
+        env.reset(seed=seed)
+        reset += time.process_time() - t0
+        k_reset += spent[0] - k0
+        for _ in range(12):
+            k0, t0 = spent[0], time.process_time()
+            env.step(a)
+            steps += time.process_time() - t0
+            k_steps += spent[0] - k0
+    out = {"env": env_id, "action": action, "env_steps_per_cpu_s": 24 / (reset + steps),
+           "reset_ms": 1e3 * reset, "reset_kernel_ms": 1e3 * k_reset, "steps_ms": 1e3 * steps,
+           "steps_kernel_ms": 1e3 * k_steps, "steps_python_ms_per_step": 1e3 * (steps - k_steps) / 24,
+           "python_per_kernel": (steps - k_steps) / k_steps}
+    if functions:
+        out["self_ms"] = {k: [round(v, 2), timer.calls[k]] for k, v in sorted(timer.ms.items(), key=lambda kv: -kv[1])}
+    return out
+
+
+def interleaved(trees: list[str], repeats: int, argv: list[str]) -> dict:
+    """Each tree in its own process, alternating, ``repeats`` rounds; medians and per-round ratios to the first."""
+    rows: dict[str, list[dict]] = {t: [] for t in trees}
+    for _ in range(repeats):
+        for tree in trees:
+            env = dict(os.environ, PYTHONPATH=os.path.abspath(tree))
+            p = subprocess.run([sys.executable, os.path.abspath(__file__), *argv], capture_output=True, text=True,
+                               env=env, cwd=os.path.abspath(tree), check=True)
+            rows[tree].append(json.loads(p.stdout.strip().splitlines()[-1]))
+    keys = ("env_steps_per_cpu_s", "steps_python_ms_per_step", "python_per_kernel", "reset_ms")
+    summary = {t: {k: statistics.median(r[k] for r in rs) for k in keys} for t, rs in rows.items()}
+    base = rows[trees[0]]
+    for t in trees[1:]:
+        summary[t]["python_per_kernel_ratio_to_first"] = [round(r["python_per_kernel"] / b["python_per_kernel"], 3)
+                                                          for r, b in zip(rows[t], base)]
+        summary[t]["rate_ratio_to_first"] = [round(r["env_steps_per_cpu_s"] / b["env_steps_per_cpu_s"], 3)
+                                             for r, b in zip(rows[t], base)]
+    return summary
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--env", default="srenv/SuckerRod-v2")
+    ap.add_argument("--action", type=float, default=1.0, help="the stroke-rate action (1: full speed, -0.6: VSD min)")
+    ap.add_argument("--functions", action="store_true", help="self time of the step's main Python parts")
+    ap.add_argument("--trees", nargs="+", help="project trees to compare, interleaved (the first is the base)")
+    ap.add_argument("--repeats", type=int, default=3)
+    args = ap.parse_args()
+    if args.trees:
+        child = ["--env", args.env, "--action", str(args.action)]
+        print(json.dumps(interleaved(args.trees, args.repeats, child), indent=1))
+        return
+    print(json.dumps(profile(args.env, args.action, args.functions)))
+
+
+if __name__ == "__main__":
+    main()
