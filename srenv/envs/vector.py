@@ -7,6 +7,10 @@ compiled kernel, which releases the GIL (``nogil=True``), so the wells' strokes 
 features) takes turns. The results are those of N single envs stepped one by one (tests/test_speed.py): each env
 owns its simulator and random stream, and a thread steps one env at a time.
 
+``processes=P`` (P >= 2) moves the envs into P worker processes instead, a contiguous block of wells each
+(:mod:`srenv.envs.vector_procs`): the whole step - kernel and Python - then runs on P cores, and the results are
+still those of the single envs (the same per-env step functions run in the workers).
+
 Autoreset is gymnasium's NEXT_STEP mode (``metadata["autoreset_mode"]``): the step after an episode ends resets
 that env (its action is ignored, reward 0). ``reset(seed=s)`` seeds env i with s + i (gymnasium's convention).
 Another task version uses it with one line: ``vector_entry(SuckerRodV2Env)``. :class:`SB3VecEnv` adapts it to
@@ -24,6 +28,8 @@ import numpy as np
 from gymnasium.vector import AutoresetMode, VectorEnv
 from gymnasium.vector.utils import batch_space
 
+from .vector_steps import env_op, next_step, same_step
+
 
 def default_threads() -> int:
     try:
@@ -37,31 +43,68 @@ class KernelVectorEnv(VectorEnv):
 
     metadata: ClassVar[dict[str, Any]] = {"autoreset_mode": AutoresetMode.NEXT_STEP, "render_modes": []}
 
-    def __init__(self, env_cls: type, num_envs: int, threads: int | None = None, **env_kwargs: Any) -> None:
-        if int(num_envs) < 1:
+    def __init__(self, env_cls: type, num_envs: int, threads: int | None = None, processes: int | None = None,
+                 **env_kwargs: Any) -> None:
+        if isinstance(num_envs, bool) or not isinstance(num_envs, (int, np.integer)) or int(num_envs) < 1:
             raise ValueError(f"num_envs = {num_envs!r}: expected an integer >= 1")
+        if processes is not None and (isinstance(processes, bool) or not isinstance(processes, (int, np.integer))
+                                      or int(processes) < 1):
+            raise ValueError(f"processes = {processes!r}: expected an integer >= 1 (or None: threads)")
         env_kwargs.pop("max_episode_steps", None)  # gymnasium passes the spec's; the envs truncate themselves
-        self.envs = [env_cls(**env_kwargs) for _ in range(int(num_envs))]
-        self.num_envs = len(self.envs)
-        first = self.envs[0]
-        self.single_observation_space = first.observation_space
-        self.single_action_space = first.action_space
-        self.observation_space = batch_space(first.observation_space, self.num_envs)
-        self.action_space = batch_space(first.action_space, self.num_envs)
-        self.threads = max(1, min(int(threads or default_threads()), self.num_envs))
+        self.num_envs = int(num_envs)
+        self.processes = min(int(processes or 1), self.num_envs)
+        self._procs = None
+        if self.processes > 1:
+            from .vector_procs import ProcessShards
+
+            self.envs = []  # the envs live in the workers
+            self._procs = ProcessShards(env_cls, self.num_envs, self.processes, env_kwargs)
+            obs_space, act_space = self._procs.spaces
+            self.threads = 1
+        else:
+            self.envs = [env_cls(**env_kwargs) for _ in range(self.num_envs)]
+            obs_space, act_space = self.envs[0].observation_space, self.envs[0].action_space
+            self.threads = max(1, min(int(threads or default_threads()), self.num_envs))
+        self.single_observation_space = obs_space
+        self.single_action_space = act_space
+        self.observation_space = batch_space(obs_space, self.num_envs)
+        self.action_space = batch_space(act_space, self.num_envs)
         self._pool = ThreadPoolExecutor(self.threads) if self.threads > 1 else None
         self._done = np.zeros(self.num_envs, dtype=bool)
         self.render_mode = None
 
     def map(self, fn: Callable[[int], Any]) -> list:
-        """fn(i) for every env, on the pool (each call touches env i only)."""
+        """fn(i) for every env, on the pool (each call touches env i only); in-process envs only."""
         idx = range(self.num_envs)
         return list(self._pool.map(fn, idx)) if self._pool is not None else [fn(i) for i in idx]
 
+    # the three operations both backends provide (the SB3 adapter uses them too)
+    def reset_envs(self, seeds: list, options: dict | None = None) -> list:
+        """[(obs, info)] of every env reset with its seed."""
+        if self._procs is not None:
+            return self._procs.run("reset", [(s, options) for s in seeds])
+        return self.map(lambda i: self.envs[i].reset(seed=seeds[i], options=options))
+
+    def step_envs(self, actions: np.ndarray, same: bool = False) -> list:
+        """Every env's step: NEXT_STEP autoreset (``done`` flags kept here), or SB3's same-step reset."""
+        if self._procs is not None:
+            if same:
+                return self._procs.run("same", list(actions))
+            return self._procs.run("next", list(zip(self._done.tolist(), actions)))
+        if same:
+            return self.map(lambda i: same_step(self.envs[i], actions[i]))
+        return self.map(lambda i: next_step(self.envs[i], bool(self._done[i]), actions[i]))
+
+    def env_call(self, what: str, name: str, indices: list, *args: Any, **kwargs: Any) -> list:
+        """get (an attribute), set (``args[0]``), call (a method with args) or isinstance on envs ``indices``."""
+        if self._procs is not None:
+            return self._procs.call(what, name, list(indices), args, kwargs)
+        return [env_op(self.envs[i], what, name, args, kwargs) for i in indices]
+
     def reset(self, *, seed: int | list | None = None, options: dict | None = None) -> tuple[np.ndarray, dict]:
-        seeds = seed if isinstance(seed, (list, tuple)) else [
+        seeds = list(seed) if isinstance(seed, (list, tuple)) else [
             None if seed is None else int(seed) + i for i in range(self.num_envs)]
-        res = self.map(lambda i: self.envs[i].reset(seed=seeds[i], options=options))
+        res = self.reset_envs(seeds, options)
         self._done[:] = False
         infos: dict = {}
         for i, (_, info) in enumerate(res):
@@ -69,15 +112,7 @@ class KernelVectorEnv(VectorEnv):
         return np.stack([o for o, _ in res]), infos
 
     def step(self, actions: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, dict]:
-        actions = np.asarray(actions)
-
-        def one(i: int) -> tuple:
-            if self._done[i]:  # NEXT_STEP autoreset: this step only resets env i
-                obs, info = self.envs[i].reset()
-                return obs, 0.0, False, False, info
-            return self.envs[i].step(actions[i])
-
-        res = self.map(one)
+        res = self.step_envs(np.asarray(actions))
         infos: dict = {}
         for i, r in enumerate(res):
             infos = self._add_info(infos, r[4], i)
@@ -88,6 +123,9 @@ class KernelVectorEnv(VectorEnv):
                 infos)
 
     def close_extras(self, **kwargs: Any) -> None:
+        if self._procs is not None:
+            self._procs.close()
+            self._procs = None
         if self._pool is not None:
             self._pool.shutdown()
             self._pool = None
@@ -97,23 +135,26 @@ class KernelVectorEnv(VectorEnv):
 
 def vector_entry(env_cls: type) -> Callable[..., KernelVectorEnv]:
     """A gymnasium ``vector_entry_point`` for ``env_cls``."""
-    def make(num_envs: int = 1, threads: int | None = None, **env_kwargs: Any) -> KernelVectorEnv:
-        return KernelVectorEnv(env_cls, num_envs, threads=threads, **env_kwargs)
+    def make(num_envs: int = 1, threads: int | None = None, processes: int | None = None,
+             **env_kwargs: Any) -> KernelVectorEnv:
+        return KernelVectorEnv(env_cls, num_envs, threads=threads, processes=processes, **env_kwargs)
     return make
 
 
-def make_v1(num_envs: int = 1, threads: int | None = None, **env_kwargs: Any) -> KernelVectorEnv:
+def make_v1(num_envs: int = 1, threads: int | None = None, processes: int | None = None,
+            **env_kwargs: Any) -> KernelVectorEnv:
     """srenv/SuckerRod-v1's vector entry point."""
     from .sucker_rod_v1 import SuckerRodV1Env
 
-    return KernelVectorEnv(SuckerRodV1Env, num_envs, threads=threads, **env_kwargs)
+    return KernelVectorEnv(SuckerRodV1Env, num_envs, threads=threads, processes=processes, **env_kwargs)
 
 
-def make_v2(num_envs: int = 1, threads: int | None = None, **env_kwargs: Any) -> KernelVectorEnv:
+def make_v2(num_envs: int = 1, threads: int | None = None, processes: int | None = None,
+            **env_kwargs: Any) -> KernelVectorEnv:
     """srenv/SuckerRod-v2's vector entry point (its events and classifier run per well, in the same threads)."""
     from .sucker_rod_v2 import SuckerRodV2Env
 
-    return KernelVectorEnv(SuckerRodV2Env, num_envs, threads=threads, **env_kwargs)
+    return KernelVectorEnv(SuckerRodV2Env, num_envs, threads=threads, processes=processes, **env_kwargs)
 
 
 def sb3_vec_env(venv: KernelVectorEnv):
@@ -131,8 +172,7 @@ def sb3_vec_env(venv: KernelVectorEnv):
             super().__init__(v.num_envs, v.single_observation_space, v.single_action_space)
 
         def reset(self) -> np.ndarray:
-            envs = self.venv.envs
-            obs = self.venv.map(lambda i: envs[i].reset(seed=self._seeds[i])[0])
+            obs = [o for o, _ in self.venv.reset_envs(self._seeds)]
             self._seeds = [None] * self.num_envs
             return np.stack(obs)
 
@@ -140,19 +180,7 @@ def sb3_vec_env(venv: KernelVectorEnv):
             self._actions = np.asarray(actions)
 
         def step_wait(self):
-            envs = self.venv.envs
-
-            def one(i: int) -> tuple:
-                obs, rew, term, trunc, info = envs[i].step(self._actions[i])
-                info = dict(info)
-                done = term or trunc
-                if done:
-                    info["TimeLimit.truncated"] = trunc and not term
-                    info["terminal_observation"] = obs
-                    obs = envs[i].reset()[0]
-                return obs, rew, done, info
-
-            res = self.venv.map(one)
+            res = self.venv.step_envs(self._actions, same=True)
             return (np.stack([r[0] for r in res]), np.array([r[1] for r in res], dtype=np.float32),
                     np.array([r[2] for r in res], dtype=bool), [r[3] for r in res])
 
@@ -164,17 +192,16 @@ def sb3_vec_env(venv: KernelVectorEnv):
             self.venv.close()
 
         def get_attr(self, attr_name: str, indices=None) -> list:
-            return [getattr(self.venv.envs[i], attr_name) for i in self._get_indices(indices)]
+            return self.venv.env_call("get", attr_name, self._get_indices(indices))
 
         def set_attr(self, attr_name: str, value: Any, indices=None) -> None:
-            for i in self._get_indices(indices):
-                setattr(self.venv.envs[i], attr_name, value)
+            self.venv.env_call("set", attr_name, self._get_indices(indices), value)
 
         def env_method(self, method_name: str, *args: Any, indices=None, **kwargs: Any) -> list:
-            return [getattr(self.venv.envs[i], method_name)(*args, **kwargs) for i in self._get_indices(indices)]
+            return self.venv.env_call("call", method_name, self._get_indices(indices), *args, **kwargs)
 
         def env_is_wrapped(self, wrapper_class: type, indices=None) -> list:
-            return [isinstance(self.venv.envs[i], wrapper_class) for i in self._get_indices(indices)]
+            return self.venv.env_call("isinstance", "", self._get_indices(indices), wrapper_class)
 
     return SB3VecEnv(venv)
 

@@ -47,16 +47,17 @@ def test_vector_env_is_registered_and_declares_its_autoreset_mode(env_id) -> Non
         venv.close()
 
 
+@pytest.mark.parametrize("backend", [{"threads": 2}, {"processes": 2}], ids=["threads", "processes"])
 @pytest.mark.parametrize("env_cls", [SuckerRodV1Env, SuckerRodV2Env])
-def test_vector_env_matches_single_envs_through_an_autoreset(env_cls) -> None:
+def test_vector_env_matches_single_envs_through_an_autoreset(env_cls, backend) -> None:
     n, steps = 3, 5
-    venv = KernelVectorEnv(env_cls, n, threads=2, **SHORT)
+    venv = KernelVectorEnv(env_cls, n, **backend, **SHORT)
     singles = [env_cls(**SHORT) for _ in range(n)]
     rng = np.random.default_rng(0)
     actions = rng.uniform(-1, 1, (steps, n, 2)).astype(np.float32)
     try:
         obs, _ = venv.reset(seed=40)
-        wells = {e.well.well_id for e in venv.envs}
+        wells = {w.well_id for w in venv.env_call("get", "well", range(n))}
         assert len(wells) == n  # different wells, different meshes
         done = np.zeros(n, bool)
         ref = [e.reset(seed=40 + i)[0] for i, e in enumerate(singles)]
@@ -85,6 +86,41 @@ def test_sb3_adapter_trains_ppo_briefly() -> None:
         model.learn(total_timesteps=8)
     assert model.num_timesteps >= 8
     venv.close()
+
+
+def test_process_backend_serves_sb3_and_refuses_bad_sizes() -> None:
+    """The SB3 adapter on worker processes equals it on threads (same-step resets through an episode's end), its
+    get_attr / env_method reach the workers' envs; bad `processes` values and a worker that cannot build its env
+    are one clear error each."""
+    acts = np.random.default_rng(1).uniform(-1, 1, (5, 2, 2)).astype(np.float32)
+    runs = []
+    for backend in ({"threads": 1}, {"processes": 2}):
+        venv = sb3_vec_env(KernelVectorEnv(SuckerRodV1Env, 2, **backend, **SHORT))
+        try:
+            venv.seed(7)
+            rec = [venv.reset()]
+            for a in acts:
+                venv.step_async(a)
+                obs, rew, done, infos = venv.step_wait()
+                rec += [obs, rew, done, [i.get("terminal_observation") for i in infos]]
+            assert venv.get_attr("horizon_s") == [0.25 * 3600.0] * 2
+            rec.append(venv.env_method("inflow_multiplier", 100.0, indices=[1]))
+            assert venv.env_is_wrapped(gym.Wrapper) == [False, False]
+        finally:
+            venv.close()
+        runs.append(rec)
+    assert any(d.any() for d in runs[0][3::4])  # an episode ended inside the run
+    for x, y in zip(*runs):
+        if isinstance(x, list):
+            for a, b in zip(x, y):
+                assert (a is None and b is None) or np.array_equal(a, b)
+        else:
+            np.testing.assert_array_equal(x, y)
+    for bad in (0, -1, 1.5, True, "2"):
+        with pytest.raises(ValueError, match="processes"):
+            KernelVectorEnv(SuckerRodV1Env, 2, processes=bad, **SHORT)
+    with pytest.raises(RuntimeError, match="building env 0"):
+        KernelVectorEnv(SuckerRodV1Env, 2, processes=2, scenario="no-such-split", **SHORT)
 
 
 def test_fast_stepping_is_off_in_v1_and_reuses_strokes_when_on() -> None:
