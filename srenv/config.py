@@ -57,6 +57,7 @@ from .config_sections import (  # noqa: F401  (re-exported: the sections are the
     num,
     opt,
 )
+from .config_units import si_mapping
 from .errors import ConfigError
 from .safe_yaml import (  # noqa: F401
     _AMBIGUOUS_NUMBER,
@@ -161,8 +162,7 @@ def _parse(cls: type, data: Any, path: str) -> Any:
                 raise ConfigError(where, None, "a value (this field is required)"
                                   + (f" in {f.metadata['unit']}" if "unit" in f.metadata else ""))
             continue
-        tp = hints[name]
-        value = data[name]
+        tp, value = hints[name], data[name]
         origin = typing.get_origin(tp)
         if origin is tuple:
             (item_tp, _ellipsis) = typing.get_args(tp)
@@ -183,7 +183,6 @@ def _parse(cls: type, data: Any, path: str) -> Any:
         else:
             kwargs[name] = _parse_scalar(tp, value, where, dict(f.metadata))
     return cls(**kwargs)
-
 
 
 def _optional(tp: Any, where: str) -> type:
@@ -258,6 +257,8 @@ def apply_overrides(data: dict, overrides: dict[str, Any] | list[str] | None, ow
             pairs.append((k.strip(), _parse_override_value(v.strip())))
         items = pairs
     for key, value in items:
+        if key.split(".")[0] == "units":  # the file's numbers are SI by now (read_raw): its units are settled
+            raise ConfigError(key, value, "a config field (a file's units: block is not overridden)")
         node: Any = data
         parts = key.split(".")
         for part in parts[:-1]:
@@ -282,11 +283,10 @@ def apply_overrides(data: dict, overrides: dict[str, Any] | list[str] | None, ow
 def read_raw(path_or_name: str | Path) -> dict:
     path = _resolve(path_or_name)
     data = load_yaml_file(path, "config")
-    if data is None:
-        data = {}
+    data = {} if data is None else data
     if not isinstance(data, dict):
         raise ConfigError("config", str(path), "a YAML mapping at the top level")
-    return data
+    return si_mapping(data)  # a `units:` block (field units) read into SI here: overrides applied after are SI
 
 
 def _material_defaults(data: dict) -> dict:
@@ -320,6 +320,7 @@ def _check_exclusive(data: dict) -> None:
 
 
 def config_from_dict(data: dict) -> WellConfig:
+    data = si_mapping(data) if isinstance(data, dict) else data
     _check_exclusive(data)
     cfg = _parse(WellConfig, _material_defaults(data), "")
     _check_consistency(cfg)
@@ -331,7 +332,7 @@ def field_bounds(key: str) -> tuple[float, float]:
     """(lo, hi) of a numeric field given as 'section.field' (-inf / inf where unbounded): lets callers that
     perturb a value (the env's domain randomisation) keep it inside what the loader accepts."""
     section, name = key.split(".")
-    cls = typing.get_type_hints(WellConfig)[section]
+    cls = _type_hints(WellConfig)[section]
     meta = {f.name: f.metadata for f in dataclasses.fields(cls)}[name]
     return float(meta.get("lo", -math.inf)), float(meta.get("hi", math.inf))
 
@@ -397,4 +398,3 @@ def config_doc() -> str:
 
     walk(WellConfig, "")
     return "\n".join(lines)
-
