@@ -21,7 +21,7 @@ import typing
 from typing import Any
 
 from . import field_units
-from .errors import ConfigError
+from .errors import ConfigError, short_repr
 
 
 def _inner(tp: Any) -> Any:
@@ -151,7 +151,8 @@ def _number(value: Any, where: str, meta: Any, units: dict) -> Any:
         return _parse_scalar(float, si, where, dict(meta))
     except (ConfigError, OverflowError) as ex:
         expected = ex.expected if isinstance(ex, ConfigError) else "a finite number"
-        raise ConfigError(where, f"{value} {unit}", f"{expected}; in {unit}: {_range_in(meta, ratio, unit)} "
+        shown = short_repr(value if isinstance(value, int) else float(value))  # a 5000-digit int: its size
+        raise ConfigError(where, f"{shown} {unit}", f"{expected}; in {unit}: {_range_in(meta, ratio, unit)} "
                           f"(units.{meta['unit']}: {unit})") from None
 
 
