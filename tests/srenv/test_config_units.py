@@ -208,3 +208,28 @@ def test_the_units_table_in_the_docs_is_current() -> None:
     assert "default_field_units" in doc and "default_field_units" in (ROOT / "README.md").read_text()
     assert sum(len(v) for v in declared_units().values()) > 50
     assert os.path.exists(CONFIG_DIR / "default_field_units.yaml")
+
+
+# ------------------------------------------------------------------------------ simulate --out-units field
+def test_simulate_writes_a_field_unit_card_the_card_readers_read_back(tmp_path: Path, capsys: pytest.CaptureFixture,
+                                                                     monkeypatch: pytest.MonkeyPatch) -> None:
+    import numpy as np
+
+    from srenv.surface_unit.measured_motion import read_card_csv
+
+    monkeypatch.chdir(tmp_path)
+    for out, units in (("si.csv", "si"), ("field.csv", "field")):
+        assert run_srenv(["simulate", "paper_fig3_vertical", "--strokes", "1", "--out", out, "--out-units", units],
+                         capsys)[0] == 0
+    lines = Path("field.csv").read_text().splitlines()
+    assert lines[1] == "s,in,,lbf,in,,lbf,"  # the unit row; velocities stay m/s (empty cell: the name's unit)
+    cols = ("t_s", "polished_rod_position_m", "polished_rod_load_n")
+    pump = ("pump_position_m", "pump_load_n", "pump_velocity_m_s")
+    si, field = (read_card_csv(p, "CARD.csv", cols, pump) for p in ("si.csv", "field.csv"))
+    raw_field = np.loadtxt("field.csv", delimiter=",", skiprows=2)
+    assert raw_field[:, 3].max() == pytest.approx(si["polished_rod_load_n"].max() / 4.4482216152605, rel=1e-11)
+    for c in cols + pump:
+        scale = float(np.abs(si[c]).max())
+        np.testing.assert_allclose(field[c], si[c], rtol=1e-11, atol=1e-11 * scale, err_msg=c)
+    rc, err = run_srenv(["simulate", "paper_fig3_vertical", "--out", "x.csv", "--out-units", "imperial"], capsys)
+    assert rc == 2 and "--out-units" in err and "field" in err and not Path("x.csv").exists()
