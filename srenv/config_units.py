@@ -21,6 +21,7 @@ import typing
 from typing import Any
 
 from . import field_units
+from .config_scalar import _parse_scalar
 from .errors import ConfigError, short_repr
 
 
@@ -142,8 +143,6 @@ def _number(value: Any, where: str, meta: Any, units: dict) -> Any:
     if isinstance(value, bool) or not isinstance(value, numbers.Real):
         return value
     unit, ratio = units[meta["unit"]]
-    from .config import _parse_scalar
-
     try:
         si = field_units.convert(value, unit, meta["unit"])
         if not math.isfinite(si):
