@@ -33,6 +33,7 @@ from .config_checks import (  # noqa: F401  (re-exported: the resource bounds ar
     node_count,
     steps_per_stroke,
 )
+from .config_scalar import _parse_scalar
 from .config_sections import (  # noqa: F401  (re-exported: the sections are the config API)
     _CHECKS,
     MATERIAL_DEFAULTS,
@@ -57,6 +58,7 @@ from .config_sections import (  # noqa: F401  (re-exported: the sections are the
     num,
     opt,
 )
+from .config_units import si_mapping
 from .errors import ConfigError
 from .safe_yaml import (  # noqa: F401
     _AMBIGUOUS_NUMBER,
@@ -73,68 +75,6 @@ from .shipped import shipped_dir
 # ----------------------------------------------------------------------------------------------- parsing
 def _is_dataclass_type(tp: Any) -> bool:
     return isinstance(tp, type) and dataclasses.is_dataclass(tp)
-
-
-def _parse_scalar(tp: Any, value: Any, path: str, meta: dict) -> Any:
-    unit = meta.get("unit", "")
-    if tp is bool:
-        if isinstance(value, bool):
-            return value
-        raise ConfigError(path, value, "true or false")
-    if tp is str:
-        if not isinstance(value, str):
-            raise ConfigError(path, value, "a string")
-        opts = meta.get("options")
-        if opts and value not in opts:
-            raise ConfigError(path, value, "one of " + ", ".join(opts))
-        return value
-    if tp in (int, float):
-        check = meta.get("check", "any")
-        pred, phrase = _CHECKS[check]
-        what = f"{'an integer' if tp is int else phrase} in {unit}" if unit and unit != "-" else (
-            "an integer" if tp is int else phrase)
-        if tp is int:
-            what = f"{'a non-negative' if check == 'nonneg' else 'a positive'} integer" + (
-                f" in {unit}" if unit not in ("", "-") else "")
-        lo, hi = meta.get("lo"), meta.get("hi")
-        what += _range_phrase(lo, hi)
-        value = _plain_number(value)
-        if isinstance(value, bool) or not isinstance(value, (int, float)):
-            raise ConfigError(path, value, what)
-        if isinstance(value, int):
-            # compare exactly before any float(): float(10**400) overflows (and no field is that large)
-            if abs(value) > _MAX_INT_MAGNITUDE:
-                raise ConfigError(path, value, what)
-        elif not math.isfinite(value) or (tp is int and not value.is_integer()):
-            raise ConfigError(path, value, what)
-        x = tp(value)
-        if not pred(float(x)) or (lo is not None and x < lo) or (hi is not None and x > hi):
-            raise ConfigError(path, value, what)
-        return x
-    raise TypeError(f"unsupported config type {tp} at {path}")  # programming error, not user input
-
-
-def _plain_number(value: Any) -> Any:
-    """numpy scalars (np.float32(5.0), np.int64(5): what a training loop hands the env) are numbers."""
-    import numbers
-
-    if isinstance(value, numbers.Integral) and not isinstance(value, (bool, int)):
-        return int(value)
-    if isinstance(value, numbers.Real) and not isinstance(value, (bool, int, float)):
-        return float(value)
-    return value
-
-
-# integers beyond this are refused before any conversion to float (every bound is far below it)
-_MAX_INT_MAGNITUDE = 10**15
-
-
-def _range_phrase(lo: float | None, hi: float | None) -> str:
-    if lo is not None and hi is not None:
-        return f" within [{lo:g}, {hi:g}]"
-    if hi is not None:
-        return f" at most {hi:g}"
-    return f" at least {lo:g}" if lo is not None else ""
 
 
 @functools.cache
@@ -161,8 +101,7 @@ def _parse(cls: type, data: Any, path: str) -> Any:
                 raise ConfigError(where, None, "a value (this field is required)"
                                   + (f" in {f.metadata['unit']}" if "unit" in f.metadata else ""))
             continue
-        tp = hints[name]
-        value = data[name]
+        tp, value = hints[name], data[name]
         origin = typing.get_origin(tp)
         if origin is tuple:
             (item_tp, _ellipsis) = typing.get_args(tp)
@@ -183,7 +122,6 @@ def _parse(cls: type, data: Any, path: str) -> Any:
         else:
             kwargs[name] = _parse_scalar(tp, value, where, dict(f.metadata))
     return cls(**kwargs)
-
 
 
 def _optional(tp: Any, where: str) -> type:
@@ -258,6 +196,8 @@ def apply_overrides(data: dict, overrides: dict[str, Any] | list[str] | None, ow
             pairs.append((k.strip(), _parse_override_value(v.strip())))
         items = pairs
     for key, value in items:
+        if key.split(".")[0] == "units":  # the file's numbers are SI by now (read_raw): its units are settled
+            raise ConfigError(key, value, "a config field (a file's units: block is not overridden)")
         node: Any = data
         parts = key.split(".")
         for part in parts[:-1]:
@@ -282,11 +222,10 @@ def apply_overrides(data: dict, overrides: dict[str, Any] | list[str] | None, ow
 def read_raw(path_or_name: str | Path) -> dict:
     path = _resolve(path_or_name)
     data = load_yaml_file(path, "config")
-    if data is None:
-        data = {}
+    data = {} if data is None else data
     if not isinstance(data, dict):
         raise ConfigError("config", str(path), "a YAML mapping at the top level")
-    return data
+    return si_mapping(data)  # a `units:` block (field units) read into SI here: overrides applied after are SI
 
 
 def _material_defaults(data: dict) -> dict:
@@ -320,6 +259,7 @@ def _check_exclusive(data: dict) -> None:
 
 
 def config_from_dict(data: dict) -> WellConfig:
+    data = si_mapping(data) if isinstance(data, dict) else data
     _check_exclusive(data)
     cfg = _parse(WellConfig, _material_defaults(data), "")
     _check_consistency(cfg)
@@ -331,7 +271,7 @@ def field_bounds(key: str) -> tuple[float, float]:
     """(lo, hi) of a numeric field given as 'section.field' (-inf / inf where unbounded): lets callers that
     perturb a value (the env's domain randomisation) keep it inside what the loader accepts."""
     section, name = key.split(".")
-    cls = typing.get_type_hints(WellConfig)[section]
+    cls = _type_hints(WellConfig)[section]
     meta = {f.name: f.metadata for f in dataclasses.fields(cls)}[name]
     return float(meta.get("lo", -math.inf)), float(meta.get("hi", math.inf))
 
@@ -397,4 +337,3 @@ def config_doc() -> str:
 
     walk(WellConfig, "")
     return "\n".join(lines)
-

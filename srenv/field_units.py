@@ -43,6 +43,17 @@ def from_si(value, unit: str, field: str = "units"):
     return np.asarray(value, dtype=float) / f if isinstance(value, (list, tuple, np.ndarray)) else float(value) / f
 
 
+def convert(value: float, unit: str, to: str, field: str = "units") -> float:
+    """One number in `unit` -> `to` (a unit of the same quantity), rounded once from the decimal product of the
+    value as written and the factors: 1.75 in is 44.45 mm to the last bit, as if 44.45 had been written."""
+    from decimal import Decimal, localcontext
+
+    with localcontext() as ctx:
+        ctx.prec = 40
+        exact = Decimal(repr(float(value))) * Decimal(repr(factor(unit, field))) / Decimal(repr(factor(to, field)))
+    return float(exact)
+
+
 def same_dimension(unit: str, si_unit: str, field: str) -> float:
     """Factor of `unit`, checked to measure the quantity whose SI unit is `si_unit`."""
     f = factor(unit, field)

@@ -31,14 +31,23 @@ MOTION_FLAGS = {
 }
 
 
-def trace_csv_writer(trace: dict):
+# --out-units field: positions in in and loads in lbf, named in a unit row under the header that the card readers
+# take (surface_unit.measured_motion.read_card_csv); the velocities stay m/s (no field unit: an empty cell)
+FIELD_COLUMN_UNITS = {"t_s": "s", "polished_rod_position_m": "in", "polished_rod_load_n": "lbf",
+                      "pump_position_m": "in", "pump_load_n": "lbf"}
+
+
+def trace_csv_writer(trace: dict, units: str = "si"):
+    from ..field_units import from_si
     from ..simulation.simulator import TRACE_COLUMNS
 
     cols = [c for c in TRACE_COLUMNS if c in trace]
-    data = np.column_stack([trace[c] for c in cols])
+    field = {c: FIELD_COLUMN_UNITS[c] for c in cols if c in FIELD_COLUMN_UNITS} if units == "field" else {}
+    data = np.column_stack([from_si(trace[c], field[c]) if c in field else trace[c] for c in cols])
+    header = ",".join(cols) + ("\n" + ",".join(field.get(c, "") for c in cols) if field else "")
 
     def write(tmp: str) -> None:
-        np.savetxt(tmp, data, delimiter=",", header=",".join(cols), comments="", fmt="%.12g")
+        np.savetxt(tmp, data, delimiter=",", header=header, comments="", fmt="%.12g")
     return write
 
 
@@ -101,7 +110,7 @@ def cmd_simulate(args: argparse.Namespace) -> int:
     summary["energy_residual_j"] = sim.energy_balance()["residual_j"]
     check_finite(trace, summary)
     line = json_line(summary)
-    writers = [(args.out, trace_csv_writer(trace))]
+    writers = [(args.out, trace_csv_writer(trace, args.out_units))]
     if args.plot:  # both files or neither: an interrupted plot leaves no CSV of a failed run
         from ..analysis.render import save_cards
 
@@ -144,6 +153,8 @@ def build_parser() -> argparse.ArgumentParser:
     s.add_argument("--always-qp", action="store_true", help="solve every step's QP (reference mode)")
     s.add_argument("--out", required=True, help="CSV file, one row per time step")
     s.add_argument("--plot", help="PNG with the surface and pump cards")
+    s.add_argument("--out-units", choices=("si", "field"), default="si", help="CSV units: si (the column names' "
+                   "units) or field (positions in in, loads in lbf, named in a unit row under the header)")
     s.set_defaults(func=cmd_simulate)
     b = sub.add_parser("bench", help="performance figures as JSON")
     add_number(b, "bench", "--repeats", default=5)
