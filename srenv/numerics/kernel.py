@@ -198,25 +198,20 @@ def steps(const, fric_p, valve_p, prog, cnt, ksd, kso, kd, ko, md, mo, cd, f, ea
         # v_n + dt(1-gamma)a_n until the DC loop fills it. v_n is read from prev_v, not v: within a step `v`
         # holds the latest DC iterate or a failed pattern solve, and b0 is rebuilt from scratch when the
         # kernel resumes after a NEED_QP return.
-        # One sweep: node i's row needs the prediction at i + 1, taken one node ahead (the same operations in
-        # the same order as a prediction pass followed by a row pass).
-        vp_next, ut_next = predict(u[0], prev_v[0], a[0], dt, h, q, c2)
-        vp_prev, ut_prev = 0.0, 0.0
         for i in range(n):
-            vpr, ut = vp_next, ut_next
+            vpr, ut = predict(u[i], prev_v[i], a[i], dt, h, q, c2)
             b[i] = vpr
             rhs[i] = ut
-            bi = f[i] + c1 * md[i] * vpr
-            ku = kd[i] * ut
+            b0[i] = f[i] + c1 * md[i] * vpr
+        for i in range(n):
+            ku = kd[i] * rhs[i]
             if i > 0:
-                ku += ko[i - 1] * ut_prev
-                bi += c1 * mo[i - 1] * vp_prev
+                ku += ko[i - 1] * rhs[i - 1]
+                b0[i] += c1 * mo[i - 1] * b[i - 1]
             if i < n - 1:
-                vp_next, ut_next = predict(u[i + 1], prev_v[i + 1], a[i + 1], dt, h, q, c2)
-                ku += ko[i] * ut_next
-                bi += c1 * mo[i] * vp_next
-            b0[i] = bi - ku
-            vp_prev, ut_prev = vpr, ut
+                ku += ko[i] * rhs[i + 1]
+                b0[i] += c1 * mo[i] * b[i + 1]
+            b0[i] -= ku
         b0[0] -= kc * ua_new + mc * aa_new
         if kv_tau != 0.0:  # the top column of C_K = tau K, moved over like K's
             b0[0] -= kv_tau * kc * va_new
@@ -311,7 +306,7 @@ def steps(const, fric_p, valve_p, prog, cnt, ksd, kso, kd, ko, md, mo, cd, f, ea
             vp.lin_dk = 0.0
             vp.lin_shift_n = 0.0
         # -- Newmark update and the work of each force (trapezoidal work over du: closes exactly for the
-        # trapezoidal rule), the element force envelope, stick episodes and statuses in one sweep
+        # trapezoidal rule)
         ua_old = top[TOP_U]
         va_old = top[TOP_V]
         du_a = ua_new - ua_old
@@ -337,18 +332,6 @@ def steps(const, fric_p, valve_p, prog, cnt, ksd, kso, kd, ko, md, mo, cd, f, ea
             prev_v[i] = vi
             u[i] = u_new
             a[i] = a_new
-            if i > 0:  # element force envelope (equivalent force; element 0 below, from the top's equation)
-                ne = ea_len[i] * (u_new - u[i - 1])
-                if kv_tau != 0.0:
-                    ne += kv_tau * ea_len[i] * (vi - v[i - 1])
-                emax[i] = max(emax[i], ne)
-                emin[i] = min(emin[i], ne)
-            s = ns[i] and vi == 0.0  # stick episodes, statuses of the smooth nodes
-            if s and not prev_stuck[i]:
-                stick[i] += 1
-            prev_stuck[i] = s
-            if not ns[i]:
-                status[i] = 1 if vi > 0 else (-1 if vi < 0 else 0)
         energy[E_GRAV] = e_grav + c.top_load_n * du_a
         energy[E_REACT] = e_react
         energy[E_VISC] = e_visc
@@ -367,9 +350,16 @@ def steps(const, fric_p, valve_p, prog, cnt, ksd, kso, kd, ko, md, mo, cd, f, ea
         top[TOP_U] = ua_new
         top[TOP_V] = va_new
         top[TOP_A] = aa_new
-        emax[0] = max(emax[0], n0)  # the top element's envelope
-        emin[0] = min(emin[0], n0)
-        # -- recording: paths, the per-step record (stick episodes and statuses: in the update's sweep)
+        # element force envelope (equivalent force) for stress ranges per taper
+        ne = n0
+        for e in range(n):
+            if e > 0:
+                ne = ea_len[e] * (u[e] - u[e - 1])
+                if kv_tau != 0.0:
+                    ne += kv_tau * ea_len[e] * (v[e] - v[e - 1])
+            emax[e] = max(emax[e], ne)
+            emin[e] = min(emin[e], ne)
+        # -- recording: paths, stick episodes, statuses of the smooth nodes, the per-step record
         path = PATH_QP if used_qp else (PATH_CORRECTED if corrected > 0 else PATH_CERTIFIED)
         cn = cnt[0]
         if path == PATH_QP:
@@ -378,6 +368,13 @@ def steps(const, fric_p, valve_p, prog, cnt, ksd, kso, kd, ko, md, mo, cd, f, ea
             cn.corrected += 1
         else:
             cn.certified += 1
+        for i in range(n):
+            s = ns[i] and v[i] == 0.0
+            if s and not prev_stuck[i]:
+                stick[i] += 1
+            prev_stuck[i] = s
+            if not ns[i]:
+                status[i] = 1 if v[i] > 0 else (-1 if v[i] < 0 else 0)
         if rec_on:
             r = cn.recorded
             if r < rec.shape[1]:
