@@ -87,6 +87,6 @@ for r in range(reps):
 unit = "env steps/s" if args.env else ("" if args.kernel else "strokes/s")
 for case in res["before"][0]:
     ratios = [a[case] / b[case] for a, b in zip(res["after"], res["before"])]
-    print(f"{case}: before {statistics.median(x[case] for x in res['before']):.1f} {unit}, after "
-          f"{statistics.median(x[case] for x in res['after']):.1f}; after/before min {min(ratios):.3f} "
+    print(f"{case}: before {statistics.median(x[case] for x in res['before']):.3g} {unit}, after "
+          f"{statistics.median(x[case] for x in res['after']):.3g}; after/before min {min(ratios):.3f} "
           f"median {statistics.median(ratios):.3f} max {max(ratios):.3f} (n={len(ratios)})")
