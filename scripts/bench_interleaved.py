@@ -6,6 +6,11 @@ Strokes/s of `srenv bench`'s cases (unrecorded, after a warm-up stroke):
     git worktree add /tmp/before <commit>
     python scripts/bench_interleaved.py /tmp/before . --repeats 9 --strokes 30
 
+The kernel against its floor (``--kernel``: ``srenv bench``'s kernel block, each side's own floor run in its
+process; after/before of ``floor_ratio`` and ``us_per_step``):
+
+    python scripts/bench_interleaved.py /tmp/before . --kernel --repeats 6
+
 Env steps/s of srenv/SuckerRod-v1 with the acceptance's protocol (train scenario, a warm-up step on seed 3, then
 12 steps on each of seeds 11 and 12 at full speed, action [1, 1], and at the VSD minimum, [-0.6, 1]);
 ``--fast-stepping`` makes the after side's env with ``fast_stepping=True`` (the before side cannot take it):
@@ -24,6 +29,8 @@ ap.add_argument("after")
 ap.add_argument("--repeats", type=int, default=9)
 ap.add_argument("--strokes", type=int, default=30)
 ap.add_argument("--env", action="store_true", help="env steps/s of srenv/SuckerRod-v1 instead of strokes/s")
+ap.add_argument("--kernel", action="store_true",
+                help="srenv bench's kernel block (µs/step, the floor's, floor_ratio) instead of strokes/s")
 ap.add_argument("--fast-stepping", action="store_true", help="the after side's env with fast_stepping=True")
 args = ap.parse_args()
 reps, strokes = args.repeats, args.strokes
@@ -60,18 +67,26 @@ for label, a0 in (("full_speed", 1.0), ("vsd_minimum", -0.6)):
     out[label] = n / (time.process_time() - t0)
 print(json.dumps(out))
 '''
+kernel_code = r'''
+import json
+from srenv.tools.bench_kernel import kernel_figures
+k = kernel_figures(repeats=5, strokes=10)
+print(json.dumps({key: k[key] for key in ("us_per_step", "floor_us_per_step", "floor_ratio")}))
+'''
 trees = {"before": args.before, "after": args.after}
 res = {k: [] for k in trees}
 for r in range(reps):
     for side in (("before", "after") if r % 2 == 0 else ("after", "before")):
         mode = "fast" if side == "after" and args.fast_stepping else "plain"
         argv = [sys.executable, "-c", env_code, "0", mode] if args.env else [sys.executable, "-c", code, str(strokes)]
+        if args.kernel:
+            argv = [sys.executable, "-c", kernel_code]
         p = subprocess.run(argv, env={"PYTHONPATH": trees[side], "PATH": "/usr/bin"}, capture_output=True, text=True,
                            check=True, cwd=trees[side])
         res[side].append(json.loads(p.stdout.strip().splitlines()[-1]))
-unit = "env steps/s" if args.env else "strokes/s"
+unit = "env steps/s" if args.env else ("" if args.kernel else "strokes/s")
 for case in res["before"][0]:
     ratios = [a[case] / b[case] for a, b in zip(res["after"], res["before"])]
-    print(f"{case}: before {statistics.median(x[case] for x in res['before']):.1f} {unit}, after "
-          f"{statistics.median(x[case] for x in res['after']):.1f}; after/before min {min(ratios):.3f} "
+    print(f"{case}: before {statistics.median(x[case] for x in res['before']):.3g} {unit}, after "
+          f"{statistics.median(x[case] for x in res['after']):.3g}; after/before min {min(ratios):.3f} "
           f"median {statistics.median(ratios):.3f} max {max(ratios):.3f} (n={len(ratios)})")

@@ -43,50 +43,88 @@ def solve_pattern(ksd, kso, b, lo, hi, ns, status, v, lam, rhs, stuck, cp, dp, m
 
     Returns the number of corrections used (0 = certified as is) or -1 when not certified.
     `status`: +1 sliding down (lam = hi), -1 sliding up (lam = lo), 0 stuck (v = 0).
+    Each pass is two sweeps: the pattern's right-hand side inside the forward elimination, the certificate
+    inside the back substitution (node i+1's conditions once v_i is known). The arithmetic is
+    :func:`thomas_pattern`'s after a separate right-hand-side pass and followed by a separate check pass,
+    operation for operation (tests/srenv/numerics/test_active_set_fused.py).
     """
     n = ksd.shape[0]
     for it in range(maxcorr + 1):
+        # forward sweep: the pattern's rhs and the elimination (stuck rows: v_i = 0)
+        cprev = 0.0
+        dprev = 0.0
+        nstuck = 0
         for i in range(n):
-            if ns[i] and status[i] == 0:
+            nsi = ns[i]
+            st = status[i]
+            if nsi and st == 0:
                 stuck[i] = True
                 rhs[i] = 0.0
-            else:
-                stuck[i] = False
-                if ns[i]:
-                    lam[i] = hi[i] if status[i] > 0 else lo[i]
-                else:
-                    lam[i] = lo[i]
-                rhs[i] = b[i] - lam[i]
-        thomas_pattern(ksd, kso, rhs, stuck, v, cp, dp)
-        ok = True
-        for i in range(n):
-            if not ns[i]:
+                cp[i] = 0.0
+                dp[i] = 0.0
+                cprev = 0.0
+                dprev = 0.0
+                nstuck += 1
                 continue
-            if status[i] == 0:
-                kv = ksd[i] * v[i]
-                if i > 0:
-                    kv += kso[i - 1] * v[i - 1]
-                if i < n - 1:
-                    kv += kso[i] * v[i + 1]
-                lam[i] = b[i] - kv
-                scale = toll * (abs(lo[i]) + abs(hi[i]) + 1.0)
-                if lam[i] > hi[i] + scale:
-                    status[i] = 1
-                    ok = False
-                elif lam[i] < lo[i] - scale:
-                    status[i] = -1
-                    ok = False
-            elif status[i] > 0:
-                if v[i] < -tolv:
-                    status[i] = 0
-                    ok = False
+            stuck[i] = False
+            if nsi:
+                li = hi[i] if st > 0 else lo[i]
             else:
-                if v[i] > tolv:
-                    status[i] = 0
-                    ok = False
+                li = lo[i]
+            lam[i] = li
+            r = b[i] - li
+            rhs[i] = r
+            if i == 0:
+                cprev = kso[0] / ksd[0] if n > 1 else 0.0
+                dprev = r / ksd[0]
+            else:
+                a = kso[i - 1]
+                den = ksd[i] - a * cprev
+                cprev = (kso[i] / den) if i < n - 1 else 0.0
+                dprev = (r - a * dprev) / den
+            cp[i] = cprev
+            dp[i] = dprev
+        # back substitution; the certificate of node j = i + 1 once v_i is known
+        ok = True
+        vn = 0.0  # v[j]
+        vnn = 0.0  # v[j + 1]
+        for i in range(n - 1, -2, -1):
+            vi = 0.0
+            if i >= 0:
+                vi = dp[i] - cp[i] * vn if i < n - 1 else dp[i]
+                v[i] = vi
+            j = i + 1
+            if j < n and ns[j]:
+                sj = status[j]
+                if sj == 0:
+                    kv = ksd[j] * vn
+                    if j > 0:
+                        kv += kso[j - 1] * vi
+                    if j < n - 1:
+                        kv += kso[j] * vnn
+                    lj = b[j] - kv
+                    lam[j] = lj
+                    scale = toll * (abs(lo[j]) + abs(hi[j]) + 1.0)
+                    if lj > hi[j] + scale:
+                        status[j] = 1
+                        ok = False
+                    elif lj < lo[j] - scale:
+                        status[j] = -1
+                        ok = False
+                elif sj > 0:
+                    if vn < -tolv:
+                        status[j] = 0
+                        ok = False
+                else:
+                    if vn > tolv:
+                        status[j] = 0
+                        ok = False
+            vnn = vn
+            vn = vi
         if ok:
-            for i in range(n):
-                if ns[i] and status[i] == 0:
-                    v[i] = 0.0  # exact rest
+            if nstuck > 0:
+                for i in range(n):
+                    if ns[i] and status[i] == 0:
+                        v[i] = 0.0  # exact rest
             return it
     return -1

@@ -314,20 +314,27 @@ def steps(const, fric_p, valve_p, prog, cnt, ksd, kso, kd, ko, md, mo, cd, f, ea
         ds_new, ds_old = p.damp_s, p.damp_prev
         if kv_tau != 0.0:  # Kelvin-Voigt work, before u and prev_v move on (kv = 0: nothing changes)
             kv_work(energy, kv_tau, ea_len, u, v, prev_v, a, dt, beta, gamma, ua_old, ua_new, va_old, va_new)
+        # the sums in locals (the same additions in the same order: an array element written in the loop is
+        # reloaded and stored at every node, since numba cannot tell it apart from the other arrays)
+        e_grav, e_react, e_visc = energy[E_GRAV], energy[E_REACT], energy[E_VISC]
         for i in range(n):
             vo = prev_v[i]  # v_n: `v` already holds v_{n+1}
-            u_new, a_new = update(u[i], vo, a[i], v[i], dt, h, q, c1, c2)
+            vi = v[i]
+            u_new, a_new = update(u[i], vo, a[i], vi, dt, h, q, c1, c2)
             du = u_new - u[i]
-            energy[E_GRAV] += f[i] * du
-            energy[E_REACT] -= 0.5 * (lam[i] + prev_lam[i]) * du
-            energy[E_VISC] += 0.5 * cd[i] * (v[i] + prev_v[i]) * du
+            e_grav += f[i] * du
+            li = lam[i]
+            e_react -= 0.5 * (li + prev_lam[i]) * du
+            e_visc += 0.5 * cd[i] * (vi + vo) * du
             if split:  # the trapezoid of each end's own damping force: the factors' share beyond C's
-                energy[E_VISC] += 0.5 * cd[i] * ((ds_new - 1.0) * v[i] + (ds_old - 1.0) * prev_v[i]) * du
-            prev_lam[i] = lam[i]
-            prev_v[i] = v[i]
+                e_visc += 0.5 * cd[i] * ((ds_new - 1.0) * vi + (ds_old - 1.0) * vo) * du
+            prev_lam[i] = li
+            prev_v[i] = vi
             u[i] = u_new
             a[i] = a_new
-        energy[E_GRAV] += c.top_load_n * du_a
+        energy[E_GRAV] = e_grav + c.top_load_n * du_a
+        energy[E_REACT] = e_react
+        energy[E_VISC] = e_visc
         # polished-rod load from the top node's equation (includes its half element's weight/inertia)
         n0 = c.top_ea_len_n_m * (u[0] - ua_new)
         if kv_tau != 0.0:
