@@ -36,7 +36,6 @@ class Annulus:
         d_c, d_t = cfg.casing_inner_diameter_mm * 1e-3, cfg.tubing_outer_diameter_mm * 1e-3
         self.area_m2 = math.pi / 4 * (d_c * d_c - d_t * d_t)
         self._full_m3 = self.area_m2 * pump_md_m  # the annulus filled to the pump
-        self._rho_g = fluid.density_kg_m3 * GRAVITY_M_S2  # level_intake_pressure_pa's first product
         self.rate_multiplier = 1.0  # the reservoir's deliverability over time (v1's inflow schedule)
         self.reset(cfg.initial_fluid_level_m)
 
@@ -50,9 +49,9 @@ class Annulus:
         return self.volume_m3 / self.area_m2
 
     def intake_pressure_pa(self) -> float:
-        # level_intake_pressure_pa's arithmetic, inlined: asked twice at every stroke the env fast-forwards
-        h = min(self.volume_m3 / self.area_m2, self.pump_md_m)
-        return self.cfg.casing_pressure_pa + self._rho_g * float(self._pump_tvd - self._tvd(self.pump_md_m - h))
+        h = min(self.level_m, self.pump_md_m)
+        return level_intake_pressure_pa(self.cfg.casing_pressure_pa, self.fluid.density_kg_m3, self._pump_tvd,
+                                        self._tvd(self.pump_md_m - h))
 
     def inflow_m3_s(self) -> float:
         p_wf = self.intake_pressure_pa()
