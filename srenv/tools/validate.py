@@ -115,7 +115,7 @@ def _fit(cfg_dict: dict, rec, params: list[str], strokes: int, work_dir: str) ->
 
 def compare(rec, sim, result, pump_card, convention: str) -> dict:
     """The JSON figures of one prediction and one diagnosis against the record."""
-    from ..analysis.card_compare import card_difference, card_rms, harmonic_shares, resample_stroke
+    from ..analysis.card_compare import card_difference, harmonic_shares, resample_stroke
 
     tr = result.trace
     x, f = tr["polished_rod_position_m"], tr["polished_rod_load_n"]
@@ -127,7 +127,7 @@ def compare(rec, sim, result, pump_card, convention: str) -> dict:
     out = {
         "pprl_error_pct": 100.0 * (float(f.max()) / pprl - 1.0),
         "mprl_error_pct": 100.0 * (float(f.min()) / mprl - 1.0),
-        "card_rms_pct_of_pprl": 100.0 * card_rms(rec.position_m, rec.load_n, x - x.min(), f) / pprl,
+        "card_rms_pct_of_pprl": 100.0 * float(np.sqrt(np.mean(diff * diff))) / pprl,  # card_rms of this diff
         # the card difference split into a level (a constant: a load cell's zero or a string's weight moves the
         # whole card) and a shape (what is left about that level): docs/realism.md
         "card_offset_n": float(diff.mean()),
@@ -151,11 +151,10 @@ def compare(rec, sim, result, pump_card, convention: str) -> dict:
     if rec.pump_load_n is not None:
         fp = load_in_convention(pump_card.pump_load_n, convention, sim.p_pump_pa, sim.area_bottom_m2)
         rng = float(np.ptp(rec.pump_load_n))
-        out["pump_card_rms_pct_of_range"] = 100.0 * card_rms(rec.pump_position_m, rec.pump_load_n,
-                                                             pump_card.pump_position_m, fp, align_bottom=True) / rng
+        d = card_difference(rec.pump_position_m, rec.pump_load_n, pump_card.pump_position_m, fp, align_bottom=True)
+        out["pump_card_rms_pct_of_range"] = 100.0 * float(np.sqrt(np.mean(d * d))) / rng
         # where the difference sits: a constant (weight, load convention) moves both strokes alike, a card
         # height (damping, fluid load) moves them apart (docs/realism.md)
-        d = card_difference(rec.pump_position_m, rec.pump_load_n, pump_card.pump_position_m, fp, align_bottom=True)
         half = d.size // 2
         out["pump_card_offset_n"] = {"upstroke": float(d[:half].mean()), "downstroke": float(d[half:].mean())}
         out["pump_card_convention"] = convention
