@@ -151,10 +151,12 @@ class SurfaceMotion:
         v = self.velocity_at(np.array([-h, 0.0, h]), spm, stroke_m)
         return float(v[1]), float((v[2] - v[0]) / (2 * h))
 
-    def stroke_done(self, result: RunResult) -> None:
-        """A stroke has run (Simulator.run_stroke): with a motor, its torque sets the next strokes' crank speed."""
+    def stroke_done(self, result: RunResult) -> RunResult:
+        """A stroke has run (Simulator.run_stroke): with a motor, its torque sets the next strokes' crank speed.
+        Returns the result."""
         if self.motor is not None:
             self.motor.observe(self.unit_for(result.stroke_length_m), result)
+        return result
 
     def pull_velocity(self, t_s: np.ndarray, speed_m_s: float) -> np.ndarray:
         ramp = max(self.cfg.pull_ramp_s, 1e-12)
