@@ -24,6 +24,8 @@ BASELINE = {"damping.damping_factor": 0.05, "damping.stiffness_proportional_s": 
             "pump.liquid_compressibility_per_pa": 0.0}
 RIGID_TRANSFER = {"pump.liquid_compressibility_per_pa": 0.0}  # the realistic model with the instant transfer
 UNANCHORED = {"tubing.anchored": False}  # what-if: the records do not say whether the tubing is anchored
+MOTOR_WHAT_IFS = {"constant_crank_speed": {"enabled": False}, "motor_inertia_1e4": {"inertia_kg_m2": 1e4},
+                  "motor_slip_0.13": {"rated_slip": 0.13}}
 VERTICAL = {"survey.stations": []}  # the string's weight taken as if vertical (the vendor's diagnosis?)
 FIGURES = ("pprl_error_pct", "mprl_error_pct", "card_rms_pct_of_pprl", "pump_card_rms_pct_of_range",
            "pump_card_offset_n", "spectrum")
@@ -113,6 +115,10 @@ def main() -> None:
             "rigid_transfer": {key: validate(rec, [], 4, "effective", RIGID_TRANSFER)[0][key] for key in FIGURES},
             "vertical_weight": {key: validate(rec, [], 4, "effective", VERTICAL)[0][key] for key in FIGURES},
             "unanchored_tubing": {key: validate(rec, [], 4, "effective", UNANCHORED)[0][key] for key in FIGURES},
+            # the record's motor (used where the motion is the record's unit's, 11708328): off (constant crank
+            # speed, the previous model) and the what-ifs of its unknowns (docs/realism.md, "The record's motor")
+            **{name: {key: got[key] for key in (*FIGURES, "motor")} for name, got in (
+                (name, validate(rec, [], 4, "effective", motor=m)[0]) for name, m in MOTOR_WHAT_IFS.items())},
             # the baseline's share above h20 seen through a load cell's 2nd-order low-pass at fc, over the
             # measured share (the card's sampling, 187-200 per stroke, is above h90: it removes nothing below)
             "baseline_above_h20_ratio_through_lowpass": {

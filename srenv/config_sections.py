@@ -9,7 +9,7 @@ import typing
 from dataclasses import dataclass, field
 
 from .config_fields import _CHECKS, choice, num, opt  # noqa: F401  (_CHECKS re-exported for the loader)
-from .config_unit import GEOMETRIES, ROTATIONS, BeamUnitConfig  # noqa: F401  (re-exported with the sections)
+from .config_unit import GEOMETRIES, ROTATIONS, BeamUnitConfig, MotorConfig  # noqa: F401  (re-exported with the sections)
 
 
 # ----------------------------------------------------------------------------------------------- sections
@@ -192,6 +192,9 @@ class SurfaceConfig:
     beam_unit: BeamUnitConfig | None = field(default=None, metadata={"doc": (
         "motion beam_unit: the unit by its nameplate (API 11E dimensions; docs/surface_unit.md) instead of a "
         "catalogue designation")})
+    motor: MotorConfig | None = field(default=None, metadata={"doc": (
+        "motion conventional or beam_unit: the unit's motor; its slip lets the crank speed follow the gearbox "
+        "torque through the stroke at the same SPM (docs/surface_unit.md, 'The motor'); null = constant crank speed")})
 
 
 @dataclass(frozen=True)

@@ -59,3 +59,25 @@ class BeamUnitConfig:
         "surface.stroke_length_m / control stroke, capped at r_m's stroke (a continuously adjustable crank "
         "pin, for the env's stroke action), counterbalance_moment_nm (given for r_m) scaled with the stroke as a "
         "crew rebalances on a hole change; false: the stroke is r_m's whatever is requested"))
+
+
+# ------------------------------------------------------------------------ the unit's motor (surface.motor)
+# opt-in: without it the crank turns at constant speed (srenv.surface_unit.motor, docs/surface_unit.md)
+NEMA_LETTERS = ("B", "C", "D")
+
+
+@dataclass(frozen=True)
+class MotorConfig:
+    """The prime mover of a linkage motion: a NEMA induction motor whose slip lets the crank speed follow the net
+    gearbox torque through the stroke (the mean speed stays the SPM's)."""
+
+    rated_power_w: float = num(unit="W", lo=100.0, hi=1.0e6, doc="the motor's nameplate power (20 hp = 14914 W)")
+    nema_design: str = field(default="D", metadata={"options": NEMA_LETTERS, "doc": (
+        "NEMA MG-1 design letter: its nominal rated slip (B 0.03, C 0.04, D 0.065) and largest torque (2.0, 1.9, "
+        "2.75 x rated) when rated_slip is not given")})
+    rated_slip: float | None = num(None, unit="-", lo=0.001, hi=0.5,
+                                   doc="slip at rated torque, 1 - speed / synchronous speed; null = the design's")
+    inertia_kg_m2: float = num(0.0, unit="kg*m^2", check="nonneg", hi=1.0e7,
+                               doc="rotating inertia referred to the crank shaft (motor rotor and sheaves x the "
+                                   "squared speed ratio, gearbox, cranks and counterweights); 0 = the quasi-static "
+                                   "slip line")

@@ -165,16 +165,58 @@ def position_is_synthesised(position_m: np.ndarray) -> bool:
     return bool(np.sqrt(np.mean((fit - x) ** 2)) < SYNTHETIC_POSITION_RMS * np.ptp(x))
 
 
-def unit_position_for_card(rec: FieldRecord) -> np.ndarray | None:
+def unit_position_for_card(rec: FieldRecord, crank=None) -> np.ndarray | None:
     """The polished-rod position of the record's own unit (its API dimensions and rotation) at each card sample,
-    at constant crank speed from the card's bottom sample, scaled to the card's stroke; None without a unit."""
+    at constant crank speed from the card's bottom sample (or on a motor's crank profile,
+    ``surface_unit.motor.CrankProfile``), scaled to the card's stroke; None without a unit."""
     cu = unit_from_record(rec)
     if cu is None:
         return None
     n = len(rec.position_m)
     k0 = int(np.argmin(rec.position_m))
-    p = np.asarray(cu.position_m(cu.theta_bottom + 2 * np.pi * (np.arange(n) - k0) / n), dtype=float)
+    if crank is None:
+        past_bottom = 2 * np.pi * (np.arange(n) - k0) / n
+    else:
+        past_bottom = crank.angle_and_speed((np.arange(n) - k0) * (rec.period_s / n))[0]
+    p = np.asarray(cu.position_m(cu.theta_bottom + past_bottom), dtype=float)
     return (p - p[k0]) * (float(np.ptp(rec.position_m)) / cu.stroke_m)
+
+
+HP_W = 745.6998715822702  # one mechanical horsepower, W
+
+
+def record_motor(rec: FieldRecord) -> dict | None:
+    """The record's ``equipmentData.RodPumpMotor`` as a ``surface.motor`` block plus where each item came from:
+    rated power from ``HP``, the NEMA design letter from ``Model`` ('Nema D'); the rated slip is the design's
+    nominal (the record's ``SlipTorque`` is not a slip: 3 on a NEMA B and a NEMA D motor alike, its meaning is
+    not documented), the inertia not given (0: the quasi-static slip line, docs/realism.md). None when the
+    record names no motor, no power or no NEMA design B, C or D."""
+    import json
+    import re
+
+    from ..surface_unit.motor import NEMA_DESIGNS
+
+    if not str(rec.source).lower().endswith(".json"):
+        return None
+    try:
+        with open(rec.source, encoding="utf-8") as fh:
+            motor = (json.load(fh).get("equipmentData") or {}).get("RodPumpMotor") or {}
+    except (OSError, ValueError, AttributeError):
+        return None
+    hp, model = motor.get("HP"), str(motor.get("Model") or "")
+    letter = re.fullmatch(r"\s*(?:nema)?\s*(?:design)?\s*([a-z])\s*", model, flags=re.IGNORECASE)
+    if not isinstance(hp, (int, float)) or isinstance(hp, bool) or not 0 < hp < 1e4 or letter is None:
+        return None
+    design = letter.group(1).upper()
+    if design not in NEMA_DESIGNS:
+        return None
+    return {"block": {"nema_design": design, "rated_power_w": float(hp) * HP_W, "rated_slip": None,
+                      "inertia_kg_m2": 0.0},
+            "source": {"rated_power_w": f"equipmentData.RodPumpMotor.HP = {hp}",
+                       "nema_design": f"equipmentData.RodPumpMotor.Model = {model!r}",
+                       "rated_slip": f"NEMA {design} nominal {NEMA_DESIGNS[design][0]:g} (the record's SlipTorque = "
+                                     f"{motor.get('SlipTorque')!r} is not read: its meaning is not documented)",
+                       "inertia_kg_m2": "not in the record: 0, the quasi-static slip line"}}
 
 
 def unit_kinematics_check(rec: FieldRecord) -> dict | None:

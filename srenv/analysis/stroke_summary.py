@@ -174,4 +174,6 @@ def summarize(sim: Simulator, results: list[RunResult]) -> dict:
     gearbox = sim.surface.gearbox_report(results)
     if gearbox is not None:
         summary.update(gearbox.summary())
+    if getattr(sim.surface, "motor", None) is not None:  # surface.motor: the crank speed it gave (motor.py)
+        summary["motor"] = sim.surface.motor.summary()
     return summary

@@ -282,7 +282,7 @@ class Simulator(PumpCycle):
         # the stroke's own start state: the top's acceleration jumps when the SPM (or stroke) changes
         va, start = self.surface.stroke_motion(spm, stroke, n_steps)
         self._start_top(*start)
-        return self._run(va, period / n_steps, record, spm, stroke)
+        return self.surface.stroke_done(self._run(va, period / n_steps, record, spm, stroke))  # surface.motor
 
     def run_duration(self, duration_s: float, pull_velocity_m_s: float | None = None,
                      record: bool = True) -> RunResult:

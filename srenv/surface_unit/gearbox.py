@@ -201,8 +201,10 @@ def analyse_runs(
     counterbalance_moment_nm: float,
     counterbalance_offset_rad: float = 0.0,
     motor_efficiency: float = 1.0,
+    crank=None,
 ) -> GearboxReport:
-    """:func:`analyse` over recorded strokes (``run_stroke(record=True)``), each at its own SPM."""
+    """:func:`analyse` over recorded strokes (``run_stroke(record=True)``), each at its own SPM; ``crank``
+    (result -> (θ, ω) at its steps) replaces the constant crank speed (a motor's, ``motor.MotorDrive``)."""
     if not results or any(r.trace is None or r.spm <= 0 for r in results):
         raise ValueError("gearbox analysis needs recorded strokes (record=True, SPM > 0)")
     columns: dict[str, list[FloatArray]] = {k: [] for k in ("theta", "load", "vel", "omega", "dt")}
@@ -210,10 +212,15 @@ def analyse_runs(
         n = r.n_steps
         if len(r.trace["t_s"]) != n:
             raise ValueError(f"a stroke recorded {len(r.trace['t_s'])} of its {n} steps: cannot place θ")
-        columns["theta"].append(stroke_crank_angle_rad(unit, r))
+        if crank is not None:
+            theta, omega = crank(r)
+            columns["theta"].append(theta)
+            columns["omega"].append(omega)
+        else:
+            columns["theta"].append(stroke_crank_angle_rad(unit, r))
+            columns["omega"].append(np.full(n, 2.0 * math.pi * r.spm / 60.0))
         columns["load"].append(r.trace["polished_rod_load_n"])
         columns["vel"].append(r.trace["polished_rod_velocity_m_s"])
-        columns["omega"].append(np.full(n, 2.0 * math.pi * r.spm / 60.0))
         columns["dt"].append(np.full(n, r.duration_s / n))
     joined = {k: np.concatenate(v) for k, v in columns.items()}
     return analyse(

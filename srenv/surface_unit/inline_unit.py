@@ -24,6 +24,9 @@ UNRATED = 1.0e12  # max stroke / load of a unit named without a designation: not
 
 def check_surface(s: SurfaceConfig) -> None:
     """Cross-field checks of the inline unit (each refusal names the field, the value and what is expected)."""
+    if getattr(s, "motor", None) is not None and s.motion not in ("conventional", "beam_unit"):
+        raise ConfigError("surface.motor", "a motor", "null unless surface.motion is 'conventional' or 'beam_unit' "
+                          "(the motor drives a unit's cranks)")
     if s.motion != "beam_unit":
         if s.beam_unit is not None:
             raise ConfigError(WHERE, "a unit", "null unless surface.motion is 'beam_unit' (it drives the well)")

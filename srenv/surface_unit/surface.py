@@ -24,6 +24,7 @@ from ..errors import ConfigError
 from .beam_unit import ConventionalUnit
 from .inline_unit import counterbalance, inline_unit, unit_for_stroke
 from .measured_motion import MeasuredMotion, load_measured_motion
+from .motor import motor_drive
 from .unit_catalogue import conventional_unit
 
 if TYPE_CHECKING:  # annotations only: the surface unit sits below the config that checks against its catalogue
@@ -62,6 +63,8 @@ class SurfaceMotion:
         self._strokes: dict[tuple, tuple[np.ndarray, tuple[float, float]]] = {}
         if self.kind == "measured":
             self._measured = load_measured_motion(cfg.measured_card_csv, cfg.measured_spm)
+        # surface.motor (opt-in): the crank speed follows the gearbox torque (motor.py); None = constant speed
+        self.motor = motor_drive(cfg) if self._unit is not None else None
 
     @property
     def measured(self) -> MeasuredMotion | None:
@@ -98,7 +101,7 @@ class SurfaceMotion:
     def stroke_motion(self, spm: float, stroke_m: float, n_steps: int) -> tuple[np.ndarray, tuple[float, float]]:
         """(:meth:`stroke_velocity`, :meth:`stroke_start_state`) of one stroke, kept for the last setpoints (a
         fresh copy of the velocity each call: the caller owns it)."""
-        key = (float(spm), float(stroke_m), int(n_steps))
+        key = (float(spm), float(stroke_m), int(n_steps), self.motor.version if self.motor is not None else 0)
         got = self._strokes.get(key)
         if got is None:
             got = (self.stroke_velocity(spm, stroke_m, n_steps), self.stroke_start_state(spm, stroke_m))
@@ -121,6 +124,9 @@ class SurfaceMotion:
             return -0.5 * stroke_m * omega * np.sin(omega * t)
         if self.kind in LINKAGE_MOTIONS:
             unit = self.unit_for(stroke_m)
+            if self.motor is not None:  # the motor's crank angle and speed (constant until a stroke has run)
+                theta, omega = self.motor.angle_and_speed(unit, t, spm)
+                return -np.asarray(unit.torque_factor_m(theta)) * omega
             return -np.asarray(unit.torque_factor_m(unit.crank_angle_rad(t, spm))) * omega
         if self.kind == "measured":
             return self._measured.velocity_down_m_s(t, spm)
@@ -144,6 +150,13 @@ class SurfaceMotion:
         h = 1e-5 * 60.0 / spm
         v = self.velocity_at(np.array([-h, 0.0, h]), spm, stroke_m)
         return float(v[1]), float((v[2] - v[0]) / (2 * h))
+
+    def stroke_done(self, result: RunResult) -> RunResult:
+        """A stroke has run (Simulator.run_stroke): with a motor, its torque sets the next strokes' crank speed.
+        Returns the result."""
+        if self.motor is not None:
+            self.motor.observe(self.unit_for(result.stroke_length_m), result)
+        return result
 
     def pull_velocity(self, t_s: np.ndarray, speed_m_s: float) -> np.ndarray:
         ramp = max(self.cfg.pull_ramp_s, 1e-12)
@@ -174,4 +187,5 @@ class SurfaceMotion:
             counterbalance_moment_nm=moment,
             counterbalance_offset_rad=offset_rad,
             motor_efficiency=self.cfg.motor_efficiency,
+            crank=None if self.motor is None else (lambda r: self.motor.crank_of(unit, r)),
         )

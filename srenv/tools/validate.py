@@ -100,6 +100,76 @@ def _simulate(cfg_dict: dict, strokes: int):
     return sim, sim.run_strokes(strokes)[-1]
 
 
+MOTOR_TOLERANCE_PCT = 0.1  # two iterates of the motor's motion agree within this share of the stroke (%)
+MOTOR_ITERATIONS = 6
+
+
+def _record_motor_block(rec, card, motor: dict | None) -> tuple[dict | None, dict]:
+    """The motor that drives a record's unit (``field_model.record_motor``, fields of ``motor`` set over it;
+    ``{"enabled": False}`` = none) and the JSON entry saying what was used and why."""
+    from ..analysis.field_model import record_motor
+
+    found = record_motor(rec) if rec.config is None else None
+    if not getattr(card, "motion_from_unit", False):
+        why = "the card's position is measured: the motor's slip is already in it" if found else "no motor"
+        return None, {"used": False, "reason": why}
+    over = dict(motor or {})
+    if found is None or not over.pop("enabled", True):
+        return None, {"used": False, "reason": "the record names no usable motor" if found is None else "disabled"}
+    block = {**found["block"], **over}
+    source = {**found["source"], **{k: "set by the caller (what-if)" for k in over}}
+    return block, {"used": True, **block, "source": source}
+
+
+def _simulate_motor(cfg: dict, card, rec, strokes: int, work_dir: str, block: dict, entry: dict):
+    """The record's unit driven by its motor: simulate at the crank profile, take the last stroke's net torque
+    (counterbalance: the record's, or the stroke's optimum when not given), the motor's crank speed from it,
+    the unit's motion on that crank profile, simulate again; until two motions agree (MOTOR_TOLERANCE_PCT)."""
+    from dataclasses import replace
+
+    from ..analysis.field_model import unit_from_record, unit_position_for_card
+    from ..config import _parse, apply_overrides
+    from ..config_unit import MotorConfig
+    from ..surface_unit.inline_unit import record_unit_config
+    from ..surface_unit.motor import (
+        CrankProfile,
+        MotorLaw,
+        crank_speed_rad_s,
+        net_torque_nm,
+        position_change_pct,
+        torque_on_grid,
+    )
+
+    law = MotorLaw.from_config(_parse(MotorConfig, block, "equipmentData.RodPumpMotor"))  # declared ranges
+    unit, ub = unit_from_record(rec), record_unit_config(rec.unit)
+    moment = ub["counterbalance_moment_nm"] or None
+    offset = np.radians(ub["crank_offset_deg"]) * (-1.0 if ub["geometry"] == "mark_ii" else 1.0)
+    scale = float(np.ptp(rec.position_m)) / unit.stroke_m
+    profile, changes = None, []
+    for it in range(MOTOR_ITERATIONS):
+        sim, result = _simulate(cfg, strokes)
+        n = result.n_steps
+        t = np.arange(1, n + 1) * (result.duration_s / n)
+        past = 2 * np.pi * t / result.duration_s if profile is None else profile.angle_and_speed(t)[0]
+        torque, cb = net_torque_nm(unit, unit.theta_bottom + past, result.trace["polished_rod_load_n"], moment,
+                                   offset, tf_scale=scale)
+        new = CrankProfile(crank_speed_rad_s(law, torque_on_grid(past, torque), rec.spm), rec.period_s)
+        changes.append(position_change_pct(profile, new, unit))
+        if changes[-1] < MOTOR_TOLERANCE_PCT or it == MOTOR_ITERATIONS - 1:
+            break
+        profile = new
+        card = replace(card, position_m=unit_position_for_card(rec, profile))
+        csv = os.path.join(work_dir, f"motion_motor{it + 1}.csv")  # a new file: the motion cache keys on it
+        _write_motion_csv(card, csv)
+        cfg = apply_overrides(cfg, {"surface.measured_card_csv": csv})
+    shown = profile if profile is not None else CrankProfile(np.full(8, 2 * np.pi / rec.period_s), rec.period_s)
+    entry.update({"rated_slip_used": law.rated_slip, "counterbalance_nm": float(cb),
+                  "counterbalance_source": "record" if moment else "srenv optimal (not in the record)",
+                  "crank_speed_pct_of_mean": shown.speed_range_pct(), "simulations": len(changes),
+                  "motion_change_pct_of_stroke": changes, "converged": changes[-1] < MOTOR_TOLERANCE_PCT})
+    return sim, result, card
+
+
 def _fit(cfg_dict: dict, rec, params: list[str], strokes: int, work_dir: str) -> dict:
     from ..analysis.fit import CardFit, fit_card
 
@@ -161,10 +231,13 @@ def compare(rec, sim, result, pump_card, convention: str) -> dict:
     return out
 
 
-def validate(rec, params: list[str], strokes: int, convention: str, overrides: dict | None = None
-             ) -> tuple[dict, object]:
+def validate(rec, params: list[str], strokes: int, convention: str, overrides: dict | None = None,
+             motor: dict | None = None) -> tuple[dict, object]:
     """Predict, diagnose and compare one record (`overrides`: config fields set on the realistic model,
-    e.g. for the baseline of docs/realism.md)."""
+    e.g. for the baseline of docs/realism.md; `motor`: fields set over the record's motor, e.g.
+    ``{"inertia_kg_m2": 1e4}``, or ``{"enabled": False}`` for constant crank speed)."""
+    from dataclasses import replace
+
     from ..analysis.field_model import well_config
     from ..config import apply_overrides
 
@@ -186,12 +259,24 @@ def validate(rec, params: list[str], strokes: int, convention: str, overrides: d
         if params:
             fitted = _fit(cfg, card, params, strokes, work)
             cfg = apply_overrides(cfg, fitted["params"])
-        sim, result = _simulate(cfg, strokes)
+        block, motor_entry = _record_motor_block(rec, card, motor)
+        if block is None:
+            sim, result = _simulate(cfg, strokes)
+        else:  # the record's unit driven by its motor: the crank speed follows the torque (docs/realism.md)
+            sim, result, card = _simulate_motor(cfg, card, rec, strokes, work, block, motor_entry)
+            card = replace(card, notes=[*card.notes, (
+                f"the unit is driven by the record's motor (NEMA {block['nema_design']}, "
+                f"{block['rated_power_w']:.0f} W, rated slip {motor_entry['rated_slip_used']:g}, inertia "
+                f"{block['inertia_kg_m2']:g} kg*m^2 at the crank; counterbalance "
+                f"{motor_entry['counterbalance_source']}): the crank speed follows the net gearbox torque, "
+                f"{motor_entry['crank_speed_pct_of_mean']['min_pct_of_mean']:.1f}-"
+                f"{motor_entry['crank_speed_pct_of_mean']['max_pct_of_mean']:.1f} % of its mean")])
         pump_card, diag = _diagnose(cfg, rec)  # the stored card, as the vendor diagnosed it
         out = compare(card, sim, result, pump_card, convention)
     from ..analysis.field_model import position_is_synthesised, unit_kinematics_check
 
     out["unit_kinematics"] = unit_kinematics_check(rec)
+    out["motor"] = motor_entry
     out.update({"record": rec.source, "record_notes": list(getattr(card, "notes", [])),
                 "position_synthesised": rec.config is None and position_is_synthesised(rec.position_m),
                 "motion_source": "record unit" if getattr(card, "motion_from_unit", False) else "card",
