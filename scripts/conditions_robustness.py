@@ -6,14 +6,17 @@ wells, used to choose between models (docs/conditions.md, runs 3 and 4). Two che
 * ``v2_family``: wells of the family drawn from a stream of their own (``draw_params(k, stream=CHECK_STREAM)``,
   outside v2's train / validation / test / family wells and every card set), each with v2's per-well physics as
   v2 applies it (``v2_physics.overrides``: its beam unit and Kelvin-Voigt damping), at the four corners of its
-  operating range, the full pump and every other condition at one severity (run 4's pre-registered check).
+  operating range, the full pump and every other condition at one severity (run 4's pre-registered check);
+* ``v2_family_synth``: the v2-family check's cards, every one with its position channel replaced by what a
+  load-only controller writes (``card_augment.synthesised_position``: a cosine of time at the card's stroke and
+  period, phased on its bottom; the loads kept by time; run 5's pre-registered check).
 
-    python scripts/conditions_robustness.py [--models M.npz ...] [--checks out_of_family v2_family]
+    python scripts/conditions_robustness.py [--models M.npz ...] [--checks out_of_family v2_family v2_family_synth]
         [--wells NAME ...] [--severities 0.4 0.8] [--taus 0 0.02] [--v2-wells 12] [--v2-severity 0.6]
         [--out REPORT.json]
 
 Prints one JSON line per model: per check the cards right, of how many, what each full card was called; the
-score (the mean of the checks' accuracies, run 4's rule). A combination a well's config refuses (e.g. free gas
+score (the mean of the checks' accuracies, runs 4 and 5's rules). A combination a well's config refuses (e.g. free gas
 on a well with the nonmonotone plunger law) is skipped, for every model alike.
 """
 
@@ -23,6 +26,7 @@ import argparse
 import dataclasses
 import json
 
+from srenv.analysis.card_augment import synthesised_position
 from srenv.analysis.card_classifier import DEFAULT_MODEL, CardClassifier
 from srenv.analysis.condition_card import condition_config, simulate_card
 from srenv.config import load_config
@@ -77,6 +81,14 @@ def v2_cards(n_wells: int, severity: float):
                 yield f"clscheck-{k}/{spm_end}/{stroke_end}", label, card
 
 
+def synthesised(stream):
+    """The same cards with the position a load-only controller writes (the last stroke's trace: one period,
+    samples at equal times, the period's end not repeated)."""
+    for where, label, card in stream:
+        x = synthesised_position(card.polished_rod_position_m)
+        yield where, label, dataclasses.replace(card, polished_rod_position_m=x)
+
+
 def score(clfs: dict, stream) -> dict:
     """Per model: cards right, of how many, what each full card was called, right per label."""
     out = {m: {"right": 0, "of": 0, "full_called": {}, "right_by_label": dict.fromkeys(LABELS, 0),
@@ -108,7 +120,7 @@ def healthy_by_corner(full_called: dict) -> dict:
 def main() -> None:
     ap = argparse.ArgumentParser()
     ap.add_argument("--models", nargs="+", default=[str(DEFAULT_MODEL)])
-    ap.add_argument("--checks", nargs="+", choices=("out_of_family", "v2_family"),
+    ap.add_argument("--checks", nargs="+", choices=("out_of_family", "v2_family", "v2_family_synth"),
                     default=["out_of_family", "v2_family"])
     ap.add_argument("--wells", nargs="+", default=list(WELLS))
     ap.add_argument("--severities", type=float, nargs="+", default=[0.4, 0.8])
@@ -121,9 +133,13 @@ def main() -> None:
     checks = {}
     if "out_of_family" in a.checks:
         checks["out_of_family"] = score(clfs, cards(a.wells, a.severities, a.taus))
+    v2 = list(v2_cards(a.v2_wells, a.v2_severity)) if {"v2_family", "v2_family_synth"} & set(a.checks) else []
     if "v2_family" in a.checks:
-        checks["v2_family"] = score(clfs, v2_cards(a.v2_wells, a.v2_severity))
-        for r in checks["v2_family"].values():
+        checks["v2_family"] = score(clfs, v2)
+    if "v2_family_synth" in a.checks:
+        checks["v2_family_synth"] = score(clfs, synthesised(v2))
+    for check in ("v2_family", "v2_family_synth"):
+        for r in checks.get(check, {}).values():
             r["healthy_full_by_corner"] = healthy_by_corner(r["full_called"])
     rows = []
     for m in clfs:

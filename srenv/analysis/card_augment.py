@@ -6,11 +6,42 @@ surface-unit kinematics reach the same positions at other times); the load passe
 (a load cell and its electronics, time constant up to 3 % of the stroke), gets white noise (up to 1.5 %
 of the load range) and an offset of the zero (up to 3 % of the peak), the position white noise (up to
 0.3 % of the stroke).
+
+Opt-in instrument effects (``instrument=InstrumentAugment(...)``; run 5, docs/conditions.md): a position channel
+synthesised by a load-only controller (a pure cosine of time at the card's stroke and period, phased on its
+bottom, the loads kept by time) and a position transducer lagging the load cell. Without it every call draws
+and returns exactly what it did for runs 1-4.
 """
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import numpy as np
+
+
+@dataclass(frozen=True)
+class InstrumentAugment:
+    """Instrument effects on the position channel: probabilities per card and the lag's range (of the period)."""
+
+    synth_position_p: float = 0.0
+    position_lag_p: float = 0.0
+    max_lag_of_period: float = 0.03
+
+    def __post_init__(self):
+        for name in ("synth_position_p", "position_lag_p", "max_lag_of_period"):
+            v = getattr(self, name)
+            if not 0.0 <= v <= 1.0:
+                raise ValueError(f"{name}={v}: expected a number in [0, 1]")
+
+
+def synthesised_position(position: np.ndarray) -> np.ndarray:
+    """The position a load-only controller writes for a card (one stroke, n samples equally spaced in time):
+    x_min + (S/2)(1 - cos 2pi (k - k0)/n), S the card's stroke, k0 its bottom sample (docs/realism.md)."""
+    x = np.asarray(position, dtype=float)
+    n, k0 = len(x), int(np.argmin(x))
+    stroke = float(x.max() - x.min())
+    return float(x.min()) + 0.5 * stroke * (1.0 - np.cos(2.0 * np.pi * (np.arange(n) - k0) / n))
 
 
 def _periodic_interp(t: np.ndarray, y: np.ndarray) -> np.ndarray:
@@ -30,8 +61,10 @@ def _lowpass(y: np.ndarray, alpha: float) -> np.ndarray:
     return out[len(y):]
 
 
-def augment(position: np.ndarray, load: np.ndarray, rng: np.random.Generator) -> tuple[np.ndarray, np.ndarray]:
-    """One field-like version of a clean card."""
+def augment(position: np.ndarray, load: np.ndarray, rng: np.random.Generator,
+            instrument: InstrumentAugment | None = None) -> tuple[np.ndarray, np.ndarray]:
+    """One field-like version of a clean card (``instrument``: the opt-in position-channel effects, drawn after
+    every draw of runs 1-4 so that without it the draws and the arrays are unchanged)."""
     n = int(rng.integers(150, 301))
     t = (rng.uniform() + np.arange(n) / n + rng.normal(0.0, 0.15 / n, n)) % 1.0
     a, phi = rng.uniform(0.0, 0.12), rng.uniform(0.0, 2 * np.pi)
@@ -44,5 +77,11 @@ def augment(position: np.ndarray, load: np.ndarray, rng: np.random.Generator) ->
     y_range = float(load.max() - load.min())
     y = y + rng.normal(0.0, rng.uniform(0.0, 0.015) * y_range, n)
     y = y + rng.uniform(-0.03, 0.03) * float(np.abs(load).max())
-    x = x + rng.normal(0.0, rng.uniform(0.0, 0.003) * float(position.max() - position.min()), n)
-    return x, y
+    x_noise = rng.normal(0.0, rng.uniform(0.0, 0.003) * float(position.max() - position.min()), n)
+    if instrument is not None:
+        synth, lag, d = rng.uniform(), rng.uniform(), rng.uniform(0.0, instrument.max_lag_of_period)
+        if synth < instrument.synth_position_p:
+            return synthesised_position(x), y  # the controller writes it: no transducer noise
+        if lag < instrument.position_lag_p:
+            x = _periodic_interp((t - d) % 1.0, position)  # the transducer reads d of the period late
+    return x + x_noise, y

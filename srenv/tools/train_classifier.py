@@ -19,7 +19,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..analysis.card_augment import augment
+from ..analysis.card_augment import InstrumentAugment, augment
 from ..analysis.card_shape import BadCard, features
 from ..physics.conditions import LABELS
 from ..task.card_set import load_cards
@@ -38,13 +38,14 @@ def load_sets(dirs: list[str]) -> dict[str, np.ndarray]:
     return {k: np.concatenate([s[k] for s in sets]) for k in keys}
 
 
-def featurise(x: np.ndarray, y: np.ndarray, labels: np.ndarray, rng, aug: bool, draws: int = 1):
+def featurise(x: np.ndarray, y: np.ndarray, labels: np.ndarray, rng, aug: bool, draws: int = 1,
+              instrument: InstrumentAugment | None = None):
     """Feature rows and labels (cards the representation cannot read are dropped and counted)."""
     rows, out = [], []
     for _ in range(draws):
         for p, q, lab in zip(x, y, labels):
             if aug:
-                p, q = augment(p, q, rng)
+                p, q = augment(p, q, rng, instrument)
             try:
                 rows.append(features(p, q))
             except BadCard:
@@ -87,14 +88,15 @@ def fit(f0: np.ndarray, t0: np.ndarray, widths: tuple, epochs: int, seed: int) -
     return weights
 
 
-def evaluate(weights: dict, data: dict, idx: np.ndarray, aug: bool, seed: int) -> tuple[float, np.ndarray]:
+def evaluate(weights: dict, data: dict, idx: np.ndarray, aug: bool, seed: int,
+             instrument: InstrumentAugment | None = None) -> tuple[float, np.ndarray]:
     from ..analysis.card_classifier import CardClassifier
 
     clf = CardClassifier(tuple(str(s) for s in weights["labels"]), weights["mean"], weights["std"],
                          [(weights[f"w{i}"], weights[f"b{i}"]) for i in range(8) if f"w{i}" in weights])
     rng = np.random.default_rng(seed)
     f, t = featurise(data["polished_rod_position_m"][idx], data["polished_rod_load_n"][idx], data["label"][idx],
-                     rng, aug, VALIDATION_DRAWS if aug else 1)
+                     rng, aug, VALIDATION_DRAWS if aug else 1, instrument)
     pred = np.argmax(clf.proba_features(f), axis=1)
     cm = np.zeros((len(LABELS), len(LABELS)), dtype=np.int64)
     np.add.at(cm, (t, pred), 1)
@@ -112,6 +114,16 @@ def write_model(path: str, weights: dict) -> None:
     write_npz(path, {k: np.asarray(v) for k, v in weights.items()})
 
 
+def _probability(text: str) -> float:
+    try:
+        v = float(text)
+    except ValueError:
+        v = float("nan")
+    if not 0.0 <= v <= 1.0:
+        raise argparse.ArgumentTypeError(f"{text!r}: expected a probability in [0, 1]")
+    return v
+
+
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(prog="python -m srenv.tools.train_classifier", description=__doc__.splitlines()[0])
     ap.add_argument("--cards", nargs="+", required=True, help="directories written by `srenv cards`")
@@ -122,22 +134,32 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--candidates", nargs="*", choices=sorted(CANDIDATES), default=list(CANDIDATES))
     ap.add_argument("--compare", nargs="*", default=[], help="existing model files to score on the same "
                     "validation cards as candidates (e.g. the shipped model)")
+    ap.add_argument("--synth-position-p", type=_probability, default=0.0, help="augmentation: probability of a "
+                    "position channel synthesised by a load-only controller (run 5; default 0: runs 1-4)")
+    ap.add_argument("--position-lag-p", type=_probability, default=0.0, help="augmentation: probability of a "
+                    "position transducer lagging the load by up to 3 %% of the period (run 5; default 0)")
     a = ap.parse_args(argv)
+    inst = (InstrumentAugment(a.synth_position_p, a.position_lag_p)
+            if a.synth_position_p > 0.0 or a.position_lag_p > 0.0 else None)
     data = load_sets(a.cards)
     split_idx = {s: np.flatnonzero(data["split"] == s) for s in ("train", "validation", "test")}
     report: dict = {"n_cards": {s: len(i) for s, i in split_idx.items()}, "candidates": {}}
+    if inst is not None:
+        report["instrument_augment"] = {"synth_position_p": inst.synth_position_p,
+                                        "position_lag_p": inst.position_lag_p,
+                                        "max_lag_of_period": inst.max_lag_of_period}
     best, best_acc = None, -1.0
     tr = split_idx["train"]
     pools = {}  # AUG_COPIES augmented versions of every training card (or the clean cards), drawn once
     for aug in {CANDIDATES[c][1] for c in a.candidates}:
         pools[aug] = featurise(data["polished_rod_position_m"][tr], data["polished_rod_load_n"][tr],
-                               data["label"][tr], np.random.default_rng(a.seed), aug, AUG_COPIES if aug else 1)
+                               data["label"][tr], np.random.default_rng(a.seed), aug, AUG_COPIES if aug else 1, inst)
     models = {name: (lambda widths=widths, aug=aug: fit(*pools[aug], widths, a.epochs, a.seed))
               for name, (widths, aug) in CANDIDATES.items() if name in a.candidates}
     models.update({path: (lambda path=path: _read_weights(path)) for path in a.compare})  # trained before
     for name, make in models.items():
         w = make()
-        acc_aug, _ = evaluate(w, data, split_idx["validation"], True, a.seed + 1)
+        acc_aug, _ = evaluate(w, data, split_idx["validation"], True, a.seed + 1, inst)
         acc_clean, _ = evaluate(w, data, split_idx["validation"], False, a.seed + 1)
         report["candidates"][name] = {"validation_accuracy_augmented": acc_aug,
                                       "validation_accuracy_clean": acc_clean}
@@ -145,7 +167,7 @@ def main(argv: list[str] | None = None) -> int:
         if acc_aug > best_acc:
             best, best_acc, report["chosen"] = w, acc_aug, name
     for aug in (True, False):
-        acc, cm = evaluate(best, data, split_idx["test"], aug, a.seed + 2)
+        acc, cm = evaluate(best, data, split_idx["test"], aug, a.seed + 2, inst)
         key = "augmented" if aug else "clean"
         report[f"test_accuracy_{key}"], report[f"test_confusion_{key}"] = acc, cm.tolist()
     report["labels"] = list(LABELS)
