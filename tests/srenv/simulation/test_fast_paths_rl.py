@@ -1,0 +1,120 @@
+"""The fast paths of a changing-action step (issue 25, docs/speed.md §2d) give the numbers, to the bit, of the
+forms they replaced: the beam unit's linkage rates with each sine and cosine computed once, np.percentile's
+linear rule without its Python, the crank radius of a stroke found without building a unit per secant step."""
+
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+import pytest
+
+from srenv.analysis import card_features as cf
+from srenv.config_sections import BeamUnitConfig
+from srenv.surface_unit import beam_unit as bu
+from srenv.surface_unit.inline_unit import inline_unit, unit_for_stroke
+from srenv.surface_unit.unit_catalogue import conventional_unit
+
+UNITS = {  # tests/srenv/surface_unit/test_unit_geometry.py's Class III nameplates (SI)
+    "mark_ii": {"a_m": 2.032, "c_m": 1.166, "i_m": 1.161, "k_m": 1.732, "p_m": 1.437, "r_m": 0.4526,
+                "rotation": "counterclockwise", "torque_rating_nm": 18077.6},
+    "air_balanced": {"a_m": 3.0, "c_m": 1.5, "i_m": 1.45, "k_m": 2.25, "p_m": 1.75, "r_m": 0.6,
+                     "rotation": "clockwise", "torque_rating_nm": 36155.1},
+}
+
+
+def _units() -> list[bu.ConventionalUnit]:
+    return [conventional_unit("C-228D-213-86", 0), conventional_unit("C-228D-213-86", 2),
+            *(inline_unit(BeamUnitConfig(geometry=k, **v)) for k, v in UNITS.items())]
+
+
+# ------------------------------------------------------------------ the forms replaced (25d9225), verbatim
+def _old_angles(u: bu.ConventionalUnit, psi):
+    g = u.geometry
+    qx = u.crank_radius_m * np.sin(psi)
+    qy = u.crank_radius_m * np.cos(psi)
+    vx, vy = qx - u._saddle[0], qy - u._saddle[1]
+    dist = np.hypot(vx, vy)
+    cos_gamma = (g.c_m**2 + dist**2 - g.p_m**2) / (2.0 * g.c_m * dist)
+    delta = np.arctan2(vy, vx) - u._lever * np.arccos(np.clip(cos_gamma, -1.0, 1.0))
+    ex = u._saddle[0] + g.c_m * np.cos(delta)
+    ey = u._saddle[1] + g.c_m * np.sin(delta)
+    return delta, np.arctan2(ey - qy, ex - qx)
+
+
+def _old_beam_rates(u: bu.ConventionalUnit, psi):
+    g = u.geometry
+    delta, eps = _old_angles(u, psi)
+    m1 = tuple(g.c_m * n for n in (-np.sin(delta), np.cos(delta)))
+    m2 = tuple(-g.p_m * n for n in (-np.sin(eps), np.cos(eps)))
+    r = u.crank_radius_m
+    d1, e1 = bu._solve_columns(m1, m2, (r * np.cos(psi), -r * np.sin(psi)))
+    ud, ue = (np.cos(delta), np.sin(delta)), (np.cos(eps), np.sin(eps))
+    rhs2 = tuple(-r * trig + g.c_m * d1**2 * ud[j] - g.p_m * e1**2 * ue[j]
+                 for j, trig in enumerate((np.sin(psi), np.cos(psi))))
+    d2, _ = bu._solve_columns(m1, m2, rhs2)
+    return delta, d1, d2
+
+
+def _old_unit_for_stroke(u: BeamUnitConfig, stroke_m: float) -> bu.ConventionalUnit:
+    full = inline_unit(u)
+    if stroke_m >= full.stroke_m:
+        return full
+    r0, s0 = u.r_m, full.stroke_m
+    r1 = u.r_m * stroke_m / s0
+    s1 = inline_unit.__wrapped__(dataclasses.replace(u, r_m=r1)).stroke_m
+    for _ in range(20):
+        if abs(s1 - stroke_m) < 1e-10:
+            break
+        r0, s0, r1 = r1, s1, r1 + (stroke_m - s1) * (r1 - r0) / (s1 - s0)
+        s1 = inline_unit.__wrapped__(dataclasses.replace(u, r_m=r1)).stroke_m
+    return inline_unit.__wrapped__(dataclasses.replace(u, r_m=r1))
+
+
+# ------------------------------------------------------------------ pins
+def test_linkage_rates_are_the_old_ones_to_the_bit() -> None:
+    rng = np.random.default_rng(11)
+    for unit in _units():
+        for psi in (rng.uniform(-7.0, 7.0, 3001), np.linspace(0.0, 2 * np.pi, 720), np.array([0.3]),
+                    np.array(unit.theta_top)):
+            old = _old_beam_rates(unit, psi)
+            new = unit._beam_rates(psi)
+            assert all(np.array_equal(a, b) for a, b in zip(old, new))
+            first = unit._beam_rates(psi, second=False)
+            assert np.array_equal(first[0], old[0]) and np.array_equal(first[1], old[1]) and first[2] is None
+            assert all(np.array_equal(a, b) for a, b in zip(_old_angles(unit, psi), unit._angles(psi)))
+        theta = unit.theta_bottom + np.linspace(0.0, 2 * np.pi, 1500)
+        unit._tf_cache.clear()
+        tf = unit.torque_factor_m(theta)  # the kept-array path and the query path
+        assert np.array_equal(tf, unit.geometry.a_m * unit._sign * _old_beam_rates(unit, unit._psi(theta))[1])
+        assert unit.torque_factor_m(0.7) == float(unit.geometry.a_m * unit._sign
+                                                  * _old_beam_rates(unit, unit._psi(np.asarray(0.7)))[1])
+
+
+@pytest.mark.parametrize("n", [3, 4, 10, 11, 12, 1000, 1001, 4321])
+def test_percentiles_are_np_percentile_to_the_bit(n: int) -> None:
+    rng = np.random.default_rng(n)
+    for a in (rng.normal(0.0, 1e4, n), np.round(rng.normal(0.0, 3.0, n)), np.full(n, 2.5),
+              np.sort(rng.uniform(-1.0, 1.0, n))):
+        for qs in ((90, 10), (10, 90), (85,), (0, 100), (50, 99.9, 0.1)):
+            want = tuple(float(x) for x in np.percentile(a, qs))
+            got = cf.percentiles_linear(a, qs)
+            assert got == want, (n, qs)
+    a = rng.normal(0.0, 1.0, n)
+    a[n // 2] = np.nan
+    assert all(np.isnan(cf.percentiles_linear(a, (90, 10))))
+
+
+def test_stroke_on_a_radius_is_the_built_units_and_the_secant_the_old_one() -> None:
+    from srenv.surface_unit import inline_unit as iu
+
+    rng = np.random.default_rng(4)
+    for kind, fields in UNITS.items():
+        u = BeamUnitConfig(geometry=kind, crank_follows_stroke=True, **fields)
+        full = inline_unit(u)
+        for r in rng.uniform(0.3, 1.0, 20) * u.r_m:
+            assert iu._stroke_on_radius(full, float(r)) \
+                == inline_unit.__wrapped__(dataclasses.replace(u, r_m=float(r))).stroke_m
+        for s in [*rng.uniform(0.4, 1.0, 30) * full.stroke_m, full.stroke_m, 2.0 * full.stroke_m]:
+            old, new = _old_unit_for_stroke(u, float(s)), unit_for_stroke.__wrapped__(u, float(s))
+            assert (new.crank_radius_m, new.stroke_m, new.geometry) == (old.crank_radius_m, old.stroke_m, old.geometry)
