@@ -20,8 +20,8 @@ CASES = {  # name: (env id, env kwargs)
     "v1_fast": ("srenv/SuckerRod-v1", {"fast_stepping": True}),
     "v2": ("srenv/SuckerRod-v2", {}),
 }
-SEEDS = (1, 2)
-STEPS = 8
+SEEDS = (1, 2, 3)
+STEPS = 20
 
 
 def _feed(h, value) -> None:
