@@ -113,7 +113,13 @@ def optimal_counterbalance_nm(
     """
     theta = np.asarray(crank_angle_rad, dtype=float)
     well = unit.net_torque_nm(theta, polished_rod_load_n, 0.0)
-    arm = unit.counterbalance_arm(theta, crank_offset_rad)
+    return _optimal(np.asarray(well), unit.counterbalance_arm(theta, crank_offset_rad))
+
+
+def _optimal(well: FloatArray, arm: FloatArray) -> float:
+    """:func:`optimal_counterbalance_nm` from the well's torque w_i and the counterbalance's arm s_i. It reads w
+    through |w_i - M s_i| (M > 0) and the sign of w_i - M s_i where s_i != 0 alone, so the sign of a zero w_i
+    does not reach the moment."""
     worst_arm = float(np.max(np.abs(arm)))
     if worst_arm == 0.0:
         return 0.0
@@ -170,7 +176,16 @@ def analyse(
     load = np.asarray(polished_rod_load_n, dtype=float)
     # an air-balanced unit's counterbalance is the cylinder's force at the polished rod, through TF
     moment, force = (0.0, counterbalance_moment_nm) if unit.air_balanced else (counterbalance_moment_nm, 0.0)
-    torque = np.asarray(unit.net_torque_nm(theta, load, moment, counterbalance_offset_rad, force))
+    if unit.air_balanced:
+        torque = np.asarray(unit.net_torque_nm(theta, load, moment, counterbalance_offset_rad, force))
+        optimal = optimal_counterbalance_nm(unit, theta, load, counterbalance_offset_rad)
+    else:  # net_torque_nm's arithmetic, the torque factors and the crank's arm taken once for both figures
+        well = np.asarray(unit.torque_factor_m(theta)) * (load - unit.geometry.structural_unbalance_n - force)
+        arm = unit.counterbalance_arm(theta, counterbalance_offset_rad)
+        torque = well - moment * arm
+        # optimal_counterbalance_nm's w is net_torque_nm(θ, load, 0) = well - 0·sin(θ + φ): well up to the
+        # sign of its zeros, which _optimal does not see (tests/srenv/simulation/test_fast_paths_rl.py)
+        optimal = _optimal(well, arm)
     shape = theta.shape
     return GearboxReport(
         crank_angle_rad=theta,
@@ -180,7 +195,7 @@ def analyse(
         time_step_s=np.broadcast_to(np.asarray(time_step_s, dtype=float), shape).copy(),
         torque_rating_nm=unit.geometry.torque_rating_nm,
         counterbalance_moment_nm=float(counterbalance_moment_nm),
-        optimal_counterbalance_nm=optimal_counterbalance_nm(unit, theta, load, counterbalance_offset_rad),
+        optimal_counterbalance_nm=optimal,
         motor_efficiency=float(motor_efficiency),
         air_balanced=unit.air_balanced,
     )

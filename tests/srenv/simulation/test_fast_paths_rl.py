@@ -118,3 +118,24 @@ def test_stroke_on_a_radius_is_the_built_units_and_the_secant_the_old_one() -> N
         for s in [*rng.uniform(0.4, 1.0, 30) * full.stroke_m, full.stroke_m, 2.0 * full.stroke_m]:
             old, new = _old_unit_for_stroke(u, float(s)), unit_for_stroke.__wrapped__(u, float(s))
             assert (new.crank_radius_m, new.stroke_m, new.geometry) == (old.crank_radius_m, old.stroke_m, old.geometry)
+
+
+def test_gearbox_analysis_takes_torque_factor_and_arm_once_with_the_old_figures() -> None:
+    from srenv.surface_unit import gearbox
+
+    rng = np.random.default_rng(9)
+    for unit in _units():
+        theta = unit.theta_bottom + np.linspace(0.0, 2 * np.pi, 1200)
+        su = unit.geometry.structural_unbalance_n
+        base = 4e4 + 2e4 * np.sin(theta - unit.theta_bottom)
+        exact_su = base.copy()
+        exact_su[::5] = su  # the well's torque exactly zero (a signed zero) at every fifth sample
+        for load in (base, base + rng.normal(0.0, 3e3, theta.size), exact_su):
+            for moment, offset in ((3e4, 0.0), (5e4, 0.17), (0.0, -0.2)):
+                rep = gearbox.analyse(unit, theta, load, np.zeros_like(theta), 1.0, 0.01,
+                                      counterbalance_moment_nm=moment, counterbalance_offset_rad=offset)
+                m, f = (0.0, moment) if unit.air_balanced else (moment, 0.0)
+                assert np.array_equal(rep.net_torque_nm, unit.net_torque_nm(theta, load, m, offset, f))
+                assert np.array_equal(np.signbit(rep.net_torque_nm), np.signbit(unit.net_torque_nm(theta, load, m,
+                                                                                                   offset, f)))
+                assert rep.optimal_counterbalance_nm == gearbox.optimal_counterbalance_nm(unit, theta, load, offset)
