@@ -176,15 +176,18 @@ def analyse(
     load = np.asarray(polished_rod_load_n, dtype=float)
     # an air-balanced unit's counterbalance is the cylinder's force at the polished rod, through TF
     moment, force = (0.0, counterbalance_moment_nm) if unit.air_balanced else (counterbalance_moment_nm, 0.0)
-    if unit.air_balanced:
+    # optimal_counterbalance_nm's w is net_torque_nm(θ, load, 0) = TF·(load - SU - 0) - 0·sin(θ + φ): TF·(load - SU
+    # - 0) up to the sign of its zeros, which _optimal does not see; its arm is TF on an air-balanced unit, the
+    # torque's crank arm on the others: each taken once here (tests/srenv/simulation/test_fast_paths_rl.py)
+    tf = np.asarray(unit.torque_factor_m(theta))
+    su = unit.geometry.structural_unbalance_n
+    if unit.air_balanced:  # the torque by net_torque_nm: its 0·sin(θ + τ + φ) signs the torque's exact zeros
         torque = np.asarray(unit.net_torque_nm(theta, load, moment, counterbalance_offset_rad, force))
-        optimal = optimal_counterbalance_nm(unit, theta, load, counterbalance_offset_rad)
-    else:  # net_torque_nm's arithmetic, the torque factors and the crank's arm taken once for both figures
-        well = np.asarray(unit.torque_factor_m(theta)) * (load - unit.geometry.structural_unbalance_n - force)
+        optimal = _optimal(tf * (load - su - 0.0), tf)
+    else:  # net_torque_nm's arithmetic (force = 0)
+        well = tf * (load - su - force)
         arm = unit.counterbalance_arm(theta, counterbalance_offset_rad)
         torque = well - moment * arm
-        # optimal_counterbalance_nm's w is net_torque_nm(θ, load, 0) = well - 0·sin(θ + φ): well up to the
-        # sign of its zeros, which _optimal does not see (tests/srenv/simulation/test_fast_paths_rl.py)
         optimal = _optimal(well, arm)
     shape = theta.shape
     return GearboxReport(
