@@ -139,3 +139,56 @@ def test_gearbox_analysis_takes_torque_factor_and_arm_once_with_the_old_figures(
                 assert np.array_equal(np.signbit(rep.net_torque_nm), np.signbit(unit.net_torque_nm(theta, load, m,
                                                                                                    offset, f)))
                 assert rep.optimal_counterbalance_nm == gearbox.optimal_counterbalance_nm(unit, theta, load, offset)
+
+
+def _numpy_bisection(well: np.ndarray, arm: np.ndarray) -> float:
+    """optimal_counterbalance_nm's bisection as written in numpy before issue 25 (every pass reads every sample)."""
+    from srenv.surface_unit import gearbox
+
+    lo, hi = 0.0, 2.0 * float(np.max(np.abs(well))) / float(np.max(np.abs(arm)))
+    for _ in range(gearbox._BISECTION_PASSES):
+        if hi - lo <= gearbox._BISECTION_RTOL * max(hi, 1.0):
+            break
+        mid = 0.5 * (lo + hi)
+        torque = well - mid * arm
+        worst = int(np.argmax(np.abs(torque)))
+        slope = -arm[worst] * np.copysign(1.0, torque[worst])
+        if slope > 0.0:
+            hi = mid
+        elif slope < 0.0:
+            lo = mid
+        else:
+            return mid
+    return 0.5 * (lo + hi)
+
+
+def test_pruned_bisection_takes_the_same_steps_as_the_full_one() -> None:
+    from srenv.surface_unit import gearbox
+
+    rng = np.random.default_rng(21)
+    cases = []
+    for unit in _units():
+        theta = unit.theta_bottom + np.linspace(0.0, 2 * np.pi, 2400)
+        load = 4e4 + 2e4 * np.sin(theta - unit.theta_bottom) + rng.normal(0.0, 2e3, theta.size)
+        well = np.asarray(unit.net_torque_nm(theta, load, 0.0))
+        for arm in (unit.counterbalance_arm(theta, 0.0), unit.counterbalance_arm(theta, 0.3),
+                    np.asarray(unit.torque_factor_m(theta))):
+            cases.append((well, arm))
+    for _ in range(300):  # random torques, plateaus and exact ties of |T| (mirrored and repeated samples)
+        n = int(rng.integers(2, 400))
+        w, s = rng.normal(0.0, 1e4, n), rng.normal(0.0, 1.0, n)
+        if rng.random() < 0.3:
+            w, s = np.r_[w, -w], np.r_[s, -s]
+        if rng.random() < 0.3:
+            w, s = np.round(w / 1e3) * 1e3, np.round(s * 4) / 4
+            s[s == 0] = 0.5
+        cases.append((w, s))
+    for well, arm in cases:
+        hi = 2.0 * float(np.max(np.abs(well))) / float(np.max(np.abs(arm)))
+        assert gearbox._bisect(np.ascontiguousarray(well), np.ascontiguousarray(arm), hi) \
+            == _numpy_bisection(well, arm)
+    # the pruning drops most of a stroke's samples once the bracket is narrow (what makes it faster)
+    well, arm = cases[0]
+    best = _numpy_bisection(well, arm)
+    kept, _ = gearbox._prune(well, arm, best * (1 - 1e-3), best * (1 + 1e-3), 1e-6)
+    assert 0 < kept.size < well.size // 4
