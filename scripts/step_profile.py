@@ -30,6 +30,14 @@ from collections import defaultdict
 
 PARTS = (  # (module, qualified name): the step's Python, timed by self time with --functions
     ("srenv.simulation.simulator", "Simulator.run_stroke"),
+    ("srenv.simulation.simulator", "Simulator._run"),
+    ("srenv.numerics.kernel", "run"),
+    ("srenv.surface_unit.surface", "SurfaceMotion.stroke_motion"),
+    ("srenv.surface_unit.inline_unit", "unit_for_stroke"),
+    ("srenv.analysis.card_features", "stick_slip_energy_j"),
+    ("srenv.analysis.card_features", "impact_speed_m_s"),
+    ("srenv.analysis.card_shape", "features"),
+    ("srenv.task.interval", "IntervalRunner._repeat_stroke"),
     ("srenv.task.interval", "stroke_figures"),
     ("srenv.analysis.stroke_summary", "summarize"),
     ("srenv.surface_unit.surface", "SurfaceMotion.gearbox_report"),

@@ -34,6 +34,8 @@ import math
 
 import numpy as np
 
+from .card_pass import first_below, stick_slip_sum
+
 REST_TOL_M_S = 1e-12
 
 
@@ -82,6 +84,10 @@ def stick_slip_energy_j(pump_position_m: np.ndarray, pump_velocity_m_s: np.ndarr
     x = np.asarray(pump_position_m, float)
     v = np.asarray(pump_velocity_m_s, float)
     f = np.asarray(pump_load_n, float)
+    total, any_run, finite = stick_slip_sum(np.ascontiguousarray(x), np.ascontiguousarray(v),
+                                            np.ascontiguousarray(f), REST_TOL_M_S, end_fraction, ramp_fraction)
+    if finite:  # the compiled pass (card_pass.py): the numpy form's numbers
+        return total / (2.0 * stiffness_n_m) if any_run else 0.0
     runs = _rest_runs(v)
     if not runs:
         return 0.0
@@ -135,10 +141,9 @@ def impact_speed_m_s(pump_position_m: np.ndarray, pump_velocity_m_s: np.ndarray,
         return 0.0
     mid = 0.5 * (hi + lo)
     top = int(np.argmax(x))
-    below = np.flatnonzero(f[top:] < mid)
-    if len(below) == 0:
+    k = first_below(np.ascontiguousarray(f), top, mid)  # the first sample from the top on below the mid-load
+    if k < 0:
         return 0.0
-    k = top + int(below[0])
     return float(max(0.0, -v[max(k - 1, top)]))  # downward speed (velocities are upward-positive)
 
 

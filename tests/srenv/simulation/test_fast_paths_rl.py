@@ -192,3 +192,75 @@ def test_pruned_bisection_takes_the_same_steps_as_the_full_one() -> None:
     best = _numpy_bisection(well, arm)
     kept, _ = gearbox._prune(well, arm, best * (1 - 1e-3), best * (1 + 1e-3), 1e-6)
     assert 0 < kept.size < well.size // 4
+
+
+def _old_stick_slip_energy_j(x, v, f, stiffness_n_m, end_fraction=0.02, ramp_fraction=0.05) -> float:
+    """card_features.stick_slip_energy_j in numpy, as it was before issue 25's compiled pass."""
+    rest = np.abs(v) <= cf.REST_TOL_M_S
+    if not rest.any():
+        return 0.0
+    d = np.diff(np.concatenate(([0], rest.astype(np.int8), [0])))
+    starts, ends = np.flatnonzero(d == 1), np.flatnonzero(d == -1)
+    runs = [(int(s), int(e)) for s, e in zip(starts, ends) if e - s >= 2]
+    if not runs:
+        return 0.0
+    lo, hi = float(x.min()), float(x.max())
+    travel = max(hi - lo, 1e-6)
+    d0, ramp = end_fraction * travel, ramp_fraction * travel
+    total = 0.0
+    for s, e in runs:
+        seg = f[max(s - 1, 0): min(e + 1, len(f))]
+        df = float(seg.max() - seg.min())
+        dist = min(float(x[s]) - lo, hi - float(x[s]))
+        total += min(1.0, max(0.0, dist - d0) / ramp) * df * df
+    return total / (2.0 * stiffness_n_m)
+
+
+def _old_impact_speed_m_s(x, v, f) -> float:
+    if len(f) < 3:
+        return 0.0
+    hi, lo = (float(q) for q in np.percentile(f, (90, 10)))
+    if hi - lo <= 1.0:
+        return 0.0
+    mid = 0.5 * (hi + lo)
+    top = int(np.argmax(x))
+    below = np.flatnonzero(f[top:] < mid)
+    if len(below) == 0:
+        return 0.0
+    k = top + int(below[0])
+    return float(max(0.0, -v[max(k - 1, top)]))
+
+
+def _stroke_traces() -> list[dict]:
+    """Pump traces of a few simulated strokes (a sticking deviated well among them) and synthetic ones with
+    plunger stops anywhere (runs of exact zeros, single zeros, stops at the ends, NaN)."""
+    from srenv.config import load_config
+    from srenv.simulation.simulator import Simulator
+
+    out = [r.trace for name in ("paper_fig4_deviated", "conventional_fig4")
+           for r in Simulator(load_config(name)).run_strokes(2)]
+    rng = np.random.default_rng(13)
+    for n in (5, 40, 700, 3001):
+        x = np.cumsum(rng.normal(0.0, 0.01, n))
+        v = rng.normal(0.0, 0.1, n)
+        for _ in range(int(rng.integers(0, 8))):
+            s = int(rng.integers(0, n))
+            v[s: s + int(rng.integers(1, 30))] = 0.0
+        v[: int(rng.integers(0, 3))] = 0.0
+        v[n - int(rng.integers(0, 3)):] = 0.0
+        f = 1e4 * np.sin(np.linspace(0.0, 6.0, n)) + rng.normal(0.0, 50.0, n)
+        out.append({"pump_position_m": x, "pump_velocity_m_s": v, "pump_load_n": f})
+    nan = {k: np.array(a, float) for k, a in out[-1].items()}
+    nan["pump_load_n"][17] = np.nan
+    return [*out, nan]
+
+
+def test_compiled_stick_slip_and_impact_are_the_numpy_forms() -> None:
+    stopped = 0
+    for tr in _stroke_traces():
+        x, v, f = (np.asarray(tr[k], float) for k in ("pump_position_m", "pump_velocity_m_s", "pump_load_n"))
+        old, new = _old_stick_slip_energy_j(x, v, f, 3.7e5), cf.stick_slip_energy_j(x, v, f, 3.7e5)
+        assert new == old or (np.isnan(old) and np.isnan(new))
+        stopped += old > 0.0
+        assert cf.impact_speed_m_s(x, v, f) == _old_impact_speed_m_s(x, v, f)
+    assert stopped >= 3  # the traces hold plunger stops away from the ends: the sum is exercised
