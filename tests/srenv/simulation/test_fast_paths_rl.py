@@ -264,3 +264,46 @@ def test_compiled_stick_slip_and_impact_are_the_numpy_forms() -> None:
         stopped += old > 0.0
         assert cf.impact_speed_m_s(x, v, f) == _old_impact_speed_m_s(x, v, f)
     assert stopped >= 3  # the traces hold plunger stops away from the ends: the sum is exercised
+
+
+def _old_card_features(position, load) -> np.ndarray:
+    """card_shape.features with np.r_ and np.roll, as it was before issue 25 (valid cards only)."""
+    from srenv.analysis import card_shape as cs
+
+    def branch(x, y):
+        xm = np.maximum.accumulate(x)
+        keep = np.r_[True, np.diff(xm) > 0]
+        if keep.sum() < 2:
+            return np.interp(cs.GRID, [0.0, 1.0], [y[0], y[-1]])
+        return np.interp(cs.GRID, xm[keep], y[keep])
+
+    x, y = np.asarray(position, dtype=np.float64), np.asarray(load, dtype=np.float64)
+    xr, yr = float(x.max() - x.min()), float(y.max() - y.min())
+    xc, yc = np.r_[x, x[:1]], np.r_[y, y[:1]]
+    if float(np.sum(0.5 * (yc[1:] + yc[:-1]) * np.diff(xc))) < 0.0:
+        x, y = x[::-1], y[::-1]
+    ymax, ymin = float(y.max()), float(y.min())
+    ratio = float(np.clip(ymin / ymax, -1.0, 1.0)) if ymax > 0 else 0.0
+    xn, yn = (x - x.min()) / xr, (y - ymin) / yr
+    b = int(np.argmin(xn))
+    xn, yn = np.roll(xn, -b), np.roll(yn, -b)
+    t = int(np.argmax(xn))
+    up = branch(xn[: t + 1], yn[: t + 1])
+    down = branch(1.0 - np.r_[xn[t:], xn[:1]], np.r_[yn[t:], yn[:1]])[::-1]
+    return np.r_[up, down, ratio]
+
+
+def test_card_features_without_r_and_roll_are_the_old_ones() -> None:
+    from srenv.analysis import card_shape as cs
+
+    rng = np.random.default_rng(17)
+    cards = [(tr["polished_rod_position_m"], tr["polished_rod_load_n"]) for tr in _stroke_traces()[:4]]
+    for n in (8, 9, 50, 1000):
+        phase = np.linspace(0.0, 2 * np.pi, n, endpoint=False) + rng.uniform(0.0, 6.0)
+        x = 0.5 * (1 - np.cos(phase)) + rng.normal(0.0, 0.01, n)
+        y = 2e4 + 1e4 * np.sin(phase) + rng.normal(0.0, 300.0, n)
+        cards += [(x, y), (x[::-1], y[::-1]), (x, -y)]
+    for x, y in cards:
+        new, old = cs.features(x, y), _old_card_features(x, y)
+        assert new.dtype == old.dtype and new.shape == old.shape == (cs.N_FEATURES,)
+        assert np.array_equal(new, old)
