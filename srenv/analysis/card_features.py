@@ -30,7 +30,11 @@ Polished-rod power
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
+
+from .card_pass import first_below, stick_slip_sum
 
 REST_TOL_M_S = 1e-12
 
@@ -80,6 +84,10 @@ def stick_slip_energy_j(pump_position_m: np.ndarray, pump_velocity_m_s: np.ndarr
     x = np.asarray(pump_position_m, float)
     v = np.asarray(pump_velocity_m_s, float)
     f = np.asarray(pump_load_n, float)
+    total, any_run, finite = stick_slip_sum(np.ascontiguousarray(x), np.ascontiguousarray(v),
+                                            np.ascontiguousarray(f), REST_TOL_M_S, end_fraction, ramp_fraction)
+    if finite:  # the compiled pass (card_pass.py): the numpy form's numbers
+        return total / (2.0 * stiffness_n_m) if any_run else 0.0
     runs = _rest_runs(v)
     if not runs:
         return 0.0
@@ -95,6 +103,31 @@ def stick_slip_energy_j(pump_position_m: np.ndarray, pump_velocity_m_s: np.ndarr
     return total / (2.0 * stiffness_n_m)
 
 
+def percentiles_linear(a: np.ndarray, qs: tuple) -> tuple:
+    """``np.percentile(a, qs)`` (its default 'linear' rule) as floats, to the bit, without its Python: one
+    partition of a copy at the order statistics it reads and its own interpolation (``_lerp``: from the lower
+    neighbour below a fraction of 0.5, from the upper one from 0.5 on). A NaN in ``a`` goes to np.percentile.
+    Pinned against np.percentile in tests/srenv/simulation/test_fast_paths.py."""
+    n = a.size
+    last = n - 1
+    spots = []
+    for q in qs:
+        v = last * (q / 100)  # numpy: (n - 1) * (q / 100)
+        # numpy's previous index: floor(v), or -1 (the maximum, twice) at or above the last index
+        prev = -1 if v >= last else math.floor(v)
+        spots.append((v, prev, last if prev < 0 else prev, last if prev < 0 else prev + 1))
+    part = np.partition(a, sorted({0, last, *(k for *_, i, j in spots for k in (i, j))}))
+    if math.isnan(part[last]):
+        return tuple(float(x) for x in np.percentile(a, qs))
+    out = []
+    for v, prev, i, j in spots:
+        lo, hi = float(part[i]), float(part[j])
+        g = v - prev  # numpy's gamma
+        d = hi - lo
+        out.append(hi - d * (1 - g) if g >= 0.5 else lo + d * g)
+    return tuple(out)
+
+
 def impact_speed_m_s(pump_position_m: np.ndarray, pump_velocity_m_s: np.ndarray, pump_load_n: np.ndarray
                      ) -> float:
     """Plunger speed (m/s) when the load transfers on the downstroke (0 with a full barrel)."""
@@ -103,15 +136,14 @@ def impact_speed_m_s(pump_position_m: np.ndarray, pump_velocity_m_s: np.ndarray,
     f = np.asarray(pump_load_n, float)
     if len(f) < 3:
         return 0.0
-    hi, lo = (float(q) for q in np.percentile(f, (90, 10)))  # one call: the same two order statistics
+    hi, lo = percentiles_linear(f, (90, 10))
     if hi - lo <= 1.0:
         return 0.0
     mid = 0.5 * (hi + lo)
     top = int(np.argmax(x))
-    below = np.flatnonzero(f[top:] < mid)
-    if len(below) == 0:
+    k = first_below(np.ascontiguousarray(f), top, mid)  # the first sample from the top on below the mid-load
+    if k < 0:
         return 0.0
-    k = top + int(below[0])
     return float(max(0.0, -v[max(k - 1, top)]))  # downward speed (velocities are upward-positive)
 
 

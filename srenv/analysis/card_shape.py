@@ -31,7 +31,7 @@ def _branch(x: np.ndarray, y: np.ndarray) -> np.ndarray:
     """Loads at GRID along a branch whose positions run from 0 to 1 (made monotone: a sample that steps
     back within the branch, noise at a reversal, is held at the running maximum)."""
     xm = np.maximum.accumulate(x)
-    keep = np.r_[True, np.diff(xm) > 0]
+    keep = np.concatenate(([True], np.diff(xm) > 0))  # np.r_'s values without its Python (every env step)
     if keep.sum() < 2:
         return np.interp(GRID, [0.0, 1.0], [y[0], y[-1]])
     return np.interp(GRID, xm[keep], y[keep])
@@ -50,7 +50,7 @@ def features(position, load) -> np.ndarray:
         raise BadCard("the card's position does not vary (no stroke)")
     if yr <= 1e-12 * max(1.0, abs(float(y.max()))):
         raise BadCard("the card's load does not vary")
-    xc, yc = np.r_[x, x[:1]], np.r_[y, y[:1]]
+    xc, yc = np.concatenate((x, x[:1])), np.concatenate((y, y[:1]))
     if float(np.sum(0.5 * (yc[1:] + yc[:-1]) * np.diff(xc))) < 0.0:  # stored with time reversed
         x, y = x[::-1], y[::-1]
     ymax, ymin = float(y.max()), float(y.min())
@@ -58,16 +58,16 @@ def features(position, load) -> np.ndarray:
     xn = (x - x.min()) / xr
     yn = (y - ymin) / yr
     b = int(np.argmin(xn))
-    xn, yn = np.roll(xn, -b), np.roll(yn, -b)
+    xn, yn = np.concatenate((xn[b:], xn[:b])), np.concatenate((yn[b:], yn[:b]))  # np.roll(-b)
     t = int(np.argmax(xn))
     up_x, up_y = xn[: t + 1], yn[: t + 1]
-    dn_x = np.r_[xn[t:], xn[:1]]
-    dn_y = np.r_[yn[t:], yn[:1]]
+    dn_x = np.concatenate((xn[t:], xn[:1]))
+    dn_y = np.concatenate((yn[t:], yn[:1]))
     if len(up_x) < 2 or len(dn_x) < 2:
         raise BadCard("the card has no up or no down branch")
     up = _branch(up_x, up_y)
     down = _branch(1.0 - dn_x, dn_y)[::-1]  # read at the same GRID positions, bottom to top
-    return np.r_[up, down, ratio]
+    return np.concatenate((up, down, [ratio]))
 
 
 def features_batch(positions: np.ndarray, loads: np.ndarray) -> np.ndarray:

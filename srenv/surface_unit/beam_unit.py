@@ -174,14 +174,6 @@ def _solve_columns(
     return _cross(b, m2) / det, _cross(m1, b) / det
 
 
-def _unit(angle: FloatArray) -> tuple[FloatArray, FloatArray]:
-    return np.cos(angle), np.sin(angle)
-
-
-def _normal(angle: FloatArray) -> tuple[FloatArray, FloatArray]:
-    return -np.sin(angle), np.cos(angle)
-
-
 def _wrap_pi(angle: FloatArray) -> FloatArray:
     return (angle + np.pi) % (2.0 * np.pi) - np.pi
 
@@ -226,15 +218,16 @@ class ConventionalUnit:
                 f"stroke_m={self.stroke_m:.4f})")
 
     # ------------------------------------------------------------------ linkage
-    def _dead_centre(self, extended: bool) -> tuple[float, float]:
+    def _dead_centre(self, extended: bool, radius_m: float | None = None) -> tuple[float, float]:
         """(ψ, beam angle δ) where pin, crank centre and pitman are collinear: the ends of the stroke.
 
         Extended (pitman and crank in line, E farthest from O) pushes E up: the bottom of the stroke on a
         Class I unit (E behind the saddle), the top on a Class III unit (E on the horsehead's side). Folded is
-        the other end. Solved in closed form on the triangle O-G-E.
+        the other end. Solved in closed form on the triangle O-G-E (on crank radius ``radius_m``, default own).
         """
         g = self.geometry
-        reach = g.p_m + self.crank_radius_m if extended else g.p_m - self.crank_radius_m
+        r = self.crank_radius_m if radius_m is None else radius_m
+        reach = g.p_m + r if extended else g.p_m - r
         cos_gamma = (g.c_m**2 + g.k_m**2 - reach**2) / (2.0 * g.c_m * g.k_m)
         # E above the line G-O: clockwise of G→O on a Class I unit, counterclockwise on a Class III one
         delta = math.atan2(-self._saddle[1], -self._saddle[0]) - self._lever * math.acos(cos_gamma)
@@ -245,31 +238,40 @@ class ConventionalUnit:
 
     def _angles(self, psi: FloatArray) -> tuple[FloatArray, FloatArray]:
         """Back-arm angle δ (direction G→E from +x) and pitman angle ε (direction pin→E)."""
+        return self._linkage(psi)[:2]
+
+    def _linkage(self, psi: FloatArray) -> tuple[FloatArray, ...]:
+        """(δ, ε, sin ψ, cos ψ, cos δ, sin δ), each computed once: the rates reuse them (the same bits)."""
         g = self.geometry
-        qx = self.crank_radius_m * np.sin(psi)
-        qy = self.crank_radius_m * np.cos(psi)
+        sin_psi, cos_psi = np.sin(psi), np.cos(psi)
+        qx = self.crank_radius_m * sin_psi
+        qy = self.crank_radius_m * cos_psi
         vx, vy = qx - self._saddle[0], qy - self._saddle[1]
         dist = np.hypot(vx, vy)
         cos_gamma = (g.c_m**2 + dist**2 - g.p_m**2) / (2.0 * g.c_m * dist)
         # the assembled branch: E above the pin (the pitman hangs down), i.e. clockwise from G→pin on a
         # Class I unit, counterclockwise on a Class III one
         delta = np.arctan2(vy, vx) - self._lever * np.arccos(np.clip(cos_gamma, -1.0, 1.0))
-        ex = self._saddle[0] + g.c_m * np.cos(delta)
-        ey = self._saddle[1] + g.c_m * np.sin(delta)
-        return delta, np.arctan2(ey - qy, ex - qx)
+        cos_delta, sin_delta = np.cos(delta), np.sin(delta)
+        ex = self._saddle[0] + g.c_m * cos_delta
+        ey = self._saddle[1] + g.c_m * sin_delta
+        return delta, np.arctan2(ey - qy, ex - qx), sin_psi, cos_psi, cos_delta, sin_delta
 
-    def _beam_rates(self, psi: FloatArray) -> tuple[FloatArray, FloatArray, FloatArray]:
-        """δ(ψ), dδ/dψ and d²δ/dψ², from differentiating the loop G + C·u(δ) = pin(ψ) + P·u(ε) twice."""
+    def _beam_rates(self, psi: FloatArray, second: bool = True) -> tuple[FloatArray, FloatArray, FloatArray | None]:
+        """δ(ψ), dδ/dψ, d²δ/dψ² (None if not ``second``) from the loop G + C·u(δ) = pin(ψ) + P·u(ε)."""
         g = self.geometry
-        delta, eps = self._angles(psi)
-        m1 = tuple(g.c_m * n for n in _normal(delta))
-        m2 = tuple(-g.p_m * n for n in _normal(eps))
+        delta, eps, sin_psi, cos_psi, cos_delta, sin_delta = self._linkage(psi)
+        cos_eps, sin_eps = np.cos(eps), np.sin(eps)
+        m1 = (g.c_m * -sin_delta, g.c_m * cos_delta)   # C·n(δ), n = (-sin, cos)
+        m2 = (-g.p_m * -sin_eps, -g.p_m * cos_eps)     # -P·n(ε)
         r = self.crank_radius_m
-        d1, e1 = _solve_columns(m1, m2, (r * np.cos(psi), -r * np.sin(psi)))
-        ud, ue = _unit(delta), _unit(eps)
+        d1, e1 = _solve_columns(m1, m2, (r * cos_psi, -r * sin_psi))
+        if not second:
+            return delta, d1, None
+        ud, ue = (cos_delta, sin_delta), (cos_eps, sin_eps)
         rhs2 = tuple(
             -r * trig + g.c_m * d1**2 * ud[j] - g.p_m * e1**2 * ue[j]
-            for j, trig in enumerate((np.sin(psi), np.cos(psi)))
+            for j, trig in enumerate((sin_psi, cos_psi))
         )
         d2, _ = _solve_columns(m1, m2, rhs2)
         return delta, d1, d2
@@ -305,7 +307,7 @@ class ConventionalUnit:
         key = arr.tobytes() if arr.ndim == 1 and arr.size >= TF_CACHE_MIN_SAMPLES else None
         tf = self._tf_cache.get(key) if key is not None else None
         if tf is None:
-            tf = self.geometry.a_m * self._sign * self._beam_rates(self._psi(arr))[1]
+            tf = self.geometry.a_m * self._sign * self._beam_rates(self._psi(arr), second=False)[1]
             if key is None:
                 return _as_output(tf)
             if len(self._tf_cache) >= TF_CACHE_SIZE:  # units are shared (lru-cached) across threads: no iterating

@@ -113,7 +113,13 @@ def optimal_counterbalance_nm(
     """
     theta = np.asarray(crank_angle_rad, dtype=float)
     well = unit.net_torque_nm(theta, polished_rod_load_n, 0.0)
-    arm = unit.counterbalance_arm(theta, crank_offset_rad)
+    return _optimal(np.asarray(well), unit.counterbalance_arm(theta, crank_offset_rad))
+
+
+def _optimal(well: FloatArray, arm: FloatArray) -> float:
+    """:func:`optimal_counterbalance_nm` from the well's torque w_i and the counterbalance's arm s_i. It reads w
+    through |w_i - M s_i| (M > 0) and the sign of w_i - M s_i where s_i != 0 alone, so the sign of a zero w_i
+    does not reach the moment."""
     worst_arm = float(np.max(np.abs(arm)))
     if worst_arm == 0.0:
         return 0.0
@@ -126,28 +132,57 @@ def optimal_counterbalance_nm(
 def _bisect(well: FloatArray, arm: FloatArray, hi: float) -> float:
     """The bisection of :func:`optimal_counterbalance_nm` on [0, hi], compiled: it ran ~40 numpy passes over
     the stroke's samples per env step. The same arithmetic sample by sample (T_i = w_i - M s_i, the first
-    sample of largest |T_i|), so the same moment to the bit (tests/srenv/surface_unit/test_surface_unit.py)."""
+    sample of largest |T_i|), so the same moment to the bit (tests/srenv/simulation/test_fast_paths.py).
+
+    Once the bracket has narrowed, most samples can no longer be the largest |T_i| anywhere in it: every 4th
+    pass from the 6th keeps only those that can (:func:`_prune`, in their order), so the later passes read a
+    few samples instead of all: the same worst sample, so the same steps (tests/srenv/simulation/
+    test_fast_paths_rl.py)."""
     lo = 0.0
-    for _ in range(_BISECTION_PASSES):
+    finite = np.all(np.isfinite(well)) and np.all(np.isfinite(arm)) and math.isfinite(hi) and well.size > 0
+    # the rounding of any |T_i| on [0, hi] is below ~1e-15 of this: a margin of 1e-9 of it keeps every sample
+    # that could be the computed worst one
+    margin = 1e-9 * (np.max(np.abs(well)) + abs(hi) * np.max(np.abs(arm))) if finite else 0.0
+    w, s = well, arm
+    for it in range(_BISECTION_PASSES):
         if hi - lo <= _BISECTION_RTOL * max(hi, 1.0):
             break
         mid = 0.5 * (lo + hi)
         worst = 0
         peak = -1.0
-        for i in range(well.size):
-            t = abs(well[i] - mid * arm[i])
+        for i in range(w.size):
+            t = abs(w[i] - mid * s[i])
             if t > peak or math.isnan(t):  # numpy's argmax: the first largest, or the first NaN
                 worst, peak = i, t
                 if math.isnan(t):
                     break
-        slope = -arm[worst] * math.copysign(1.0, well[worst] - mid * arm[worst])
+        slope = -s[worst] * math.copysign(1.0, w[worst] - mid * s[worst])
         if slope > 0.0:
             hi = mid
         elif slope < 0.0:
             lo = mid
         else:
             return mid
+        if finite and it >= 5 and (it - 5) % 4 == 0 and w.size > 8:
+            w, s = _prune(w, s, lo, hi, margin)
     return 0.5 * (lo + hi)
+
+
+@njit(cache=True)
+def _prune(well: FloatArray, arm: FloatArray, lo: float, hi: float, margin: float) -> tuple:
+    """The samples (in their order) whose |T_i| can reach max_j |T_j| for some M in [lo, hi]. |T_i(M)| is convex
+    in M, so at most its larger end value on the bracket; max_j |T_j(M)| is at least the largest of the
+    samples' smallest |T_j| on it (0 where T_j changes sign)."""
+    low = 0.0
+    for i in range(well.size):
+        a = well[i] - lo * arm[i]
+        b = well[i] - hi * arm[i]
+        if (a > 0.0 and b > 0.0) or (a < 0.0 and b < 0.0):
+            low = max(low, min(abs(a), abs(b)))
+    keep = np.empty(well.size, dtype=np.bool_)
+    for i in range(well.size):
+        keep[i] = max(abs(well[i] - lo * arm[i]), abs(well[i] - hi * arm[i])) >= low - margin
+    return well[keep], arm[keep]
 
 
 def analyse(
@@ -170,7 +205,19 @@ def analyse(
     load = np.asarray(polished_rod_load_n, dtype=float)
     # an air-balanced unit's counterbalance is the cylinder's force at the polished rod, through TF
     moment, force = (0.0, counterbalance_moment_nm) if unit.air_balanced else (counterbalance_moment_nm, 0.0)
-    torque = np.asarray(unit.net_torque_nm(theta, load, moment, counterbalance_offset_rad, force))
+    # optimal_counterbalance_nm's w is net_torque_nm(θ, load, 0) = TF·(load - SU - 0) - 0·sin(θ + φ): TF·(load - SU
+    # - 0) up to the sign of its zeros, which _optimal does not see; its arm is TF on an air-balanced unit, the
+    # torque's crank arm on the others: each taken once here (tests/srenv/simulation/test_fast_paths_rl.py)
+    tf = np.asarray(unit.torque_factor_m(theta))
+    su = unit.geometry.structural_unbalance_n
+    if unit.air_balanced:  # the torque by net_torque_nm: its 0·sin(θ + τ + φ) signs the torque's exact zeros
+        torque = np.asarray(unit.net_torque_nm(theta, load, moment, counterbalance_offset_rad, force))
+        optimal = _optimal(tf * (load - su - 0.0), tf)
+    else:  # net_torque_nm's arithmetic (force = 0)
+        well = tf * (load - su - force)
+        arm = unit.counterbalance_arm(theta, counterbalance_offset_rad)
+        torque = well - moment * arm
+        optimal = _optimal(well, arm)
     shape = theta.shape
     return GearboxReport(
         crank_angle_rad=theta,
@@ -180,7 +227,7 @@ def analyse(
         time_step_s=np.broadcast_to(np.asarray(time_step_s, dtype=float), shape).copy(),
         torque_rating_nm=unit.geometry.torque_rating_nm,
         counterbalance_moment_nm=float(counterbalance_moment_nm),
-        optimal_counterbalance_nm=optimal_counterbalance_nm(unit, theta, load, counterbalance_offset_rad),
+        optimal_counterbalance_nm=optimal,
         motor_efficiency=float(motor_efficiency),
         air_balanced=unit.air_balanced,
     )

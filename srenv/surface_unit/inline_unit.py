@@ -11,8 +11,10 @@ import functools
 import math
 from typing import TYPE_CHECKING, Any
 
+import numpy as np
+
 from ..errors import ConfigError
-from .beam_unit import BeamUnitGeometry, ConventionalUnit
+from .beam_unit import BeamUnitGeometry, ConventionalUnit, _wrap_pi
 from .unit_catalogue import parse_designation
 
 if TYPE_CHECKING:
@@ -104,6 +106,15 @@ def inline_unit(u: BeamUnitConfig) -> ConventionalUnit:
     return ConventionalUnit(geometry)
 
 
+def _stroke_on_radius(full: ConventionalUnit, radius_m: float) -> float:
+    """The stroke_m of ``full``'s linkage on crank radius ``radius_m``: ConventionalUnit.__init__'s dead centres
+    and arithmetic, so a unit built on that radius has this stroke to the bit (tests/srenv/simulation/
+    test_fast_paths_rl.py), without building and checking one."""
+    class_one = full._lever > 0
+    bottom, top = full._dead_centre(class_one, radius_m)[1], full._dead_centre(not class_one, radius_m)[1]
+    return full.geometry.a_m * float(_wrap_pi(np.asarray(top - bottom)))
+
+
 @functools.lru_cache(maxsize=256)
 def unit_for_stroke(u: BeamUnitConfig, stroke_m: float) -> ConventionalUnit:
     """The unit of ``u`` with its crank radius moved so that its stroke is ``stroke_m`` (<= the stroke of
@@ -115,12 +126,15 @@ def unit_for_stroke(u: BeamUnitConfig, stroke_m: float) -> ConventionalUnit:
         return full
     r0, s0 = u.r_m, full.stroke_m
     r1 = u.r_m * stroke_m / s0
-    s1 = inline_unit.__wrapped__(dataclasses.replace(u, r_m=r1)).stroke_m
+    # the secant reads a radius's stroke off the full unit's linkage (the bits of a unit built on that radius,
+    # without building and checking one per step: a new stroke every env step of an RL agent); only the unit
+    # it returns is built, and checked
+    s1 = _stroke_on_radius(full, r1)
     for _ in range(20):
         if abs(s1 - stroke_m) < 1e-10:
             break
         r0, s0, r1 = r1, s1, r1 + (stroke_m - s1) * (r1 - r0) / (s1 - s0)
-        s1 = inline_unit.__wrapped__(dataclasses.replace(u, r_m=r1)).stroke_m
+        s1 = _stroke_on_radius(full, r1)
     return inline_unit.__wrapped__(dataclasses.replace(u, r_m=r1))
 
 

@@ -17,6 +17,21 @@ from .. import ENV_ID, ENV_ID_V1, ENVS
 
 # the acceptance's operating points: a0 = 1 full speed, a0 = -0.6 an average rate at or below the VSD minimum
 MODES = {"full_speed": (1.0, 1.0), "vsd_minimum": (-0.6, 1.0), "idle": (-1.0, -1.0)}
+# what an RL agent does: a new action every step, uniform in the action box (a fixed seed: the same actions in
+# every run and every tree)
+RANDOM_MODE = "random_actions"
+RANDOM_ACTIONS_SEED = 0
+
+
+def mode_actions(label: str):
+    """The actions of a bench mode, one per step: a constant one, or uniform random ones from a fixed seed."""
+    if label == RANDOM_MODE:
+        rng = np.random.default_rng(RANDOM_ACTIONS_SEED)
+        while True:
+            yield rng.uniform(-1.0, 1.0, 2).astype(np.float32)
+    a = np.array(MODES[label], np.float32)
+    while True:
+        yield a
 
 
 def task_env_ids() -> list[str]:
@@ -25,23 +40,25 @@ def task_env_ids() -> list[str]:
 
 
 def env_rates(env_id: str, steps: int, seeds: tuple = (11, 12), **kwargs) -> dict:
-    """Env steps per CPU second in each mode: a warm-up step on seed 3, then `steps` steps on each seed."""
+    """Env steps per CPU second in each mode (the constant actions of ``MODES`` and ``random_actions``): a
+    warm-up step on seed 3, then `steps` steps on each seed."""
     import gymnasium as gym
 
     out = {}
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         env = gym.make(env_id, scenario="train", **kwargs)
-        for label, action in MODES.items():
-            a = np.array(action, np.float32)
+        for label in (*MODES, RANDOM_MODE):
+            actions = mode_actions(label)
             env.reset(seed=3)
-            env.step(a)
+            env.step(next(actions))
             n, exact, t_step, t_reset = 0, 0, 0.0, 0.0
             for seed in seeds:
                 t0 = time.process_time()
                 env.reset(seed=seed)
                 t_reset += time.process_time() - t0
                 for _ in range(steps):
+                    a = next(actions)
                     t0 = time.process_time()
                     exact += env.step(a)[4]["exact_strokes"]
                     t_step += time.process_time() - t0

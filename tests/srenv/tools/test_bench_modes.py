@@ -1,0 +1,27 @@
+"""``srenv bench``'s env modes include ``random_actions`` (issue 25: an RL agent changes the action every step),
+with the same fields as the constant-action modes."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from srenv.tools.bench_speed import MODES, RANDOM_MODE, env_rates, mode_actions
+
+
+def test_random_actions_mode_changes_the_action_every_step_from_a_fixed_seed() -> None:
+    a, b = mode_actions(RANDOM_MODE), mode_actions(RANDOM_MODE)
+    first = [next(a) for _ in range(5)]
+    assert all(np.array_equal(x, next(b)) for x in first)  # the same actions in every run
+    assert len({x.tobytes() for x in first}) == 5
+    assert all(x.dtype == np.float32 and np.all(np.abs(x) <= 1.0) for x in first)
+    const = mode_actions("full_speed")
+    assert np.array_equal(next(const), np.float32(MODES["full_speed"]))
+
+
+def test_bench_reports_random_actions_with_positive_rates() -> None:
+    out = env_rates("srenv/SuckerRod-v2", steps=1, seeds=(11,))
+    assert set(out) == {*MODES, RANDOM_MODE}
+    row = out[RANDOM_MODE]
+    assert set(row) == set(out["full_speed"])
+    assert row["env_steps_per_cpu_s"] > 0 and row["with_resets_env_steps_per_cpu_s"] > 0
+    assert row["exact_strokes_per_step"] >= 1  # a new setpoint: at least one exact stroke
