@@ -151,6 +151,10 @@ def parse_train_config(data: Any, source: str = "<dict>") -> TrainConfig:
     # gymnasium.make("module:Env-v0") imports `module` (from the working directory, too): only ids that
     # srenv itself registers are accepted, so a YAML can never name code to import
     _expect(isinstance(env_id, str) and env_id in allowed, "env_id", env_id, "one of " + ", ".join(allowed))
+    if vec_env == "native":  # the env must have a native vector env (v1, v2, or the residual / shaped env on one)
+        from .sb3.native import native_plan
+
+        native_plan(env_id, env_kwargs)
     cfg = TrainConfig(
         algo=algo, env_id=env_id, env_kwargs=dict(env_kwargs), n_envs=n_envs,
         n_timesteps=_positive_int(data, "n_timesteps", 100_000), policy=str(data.get("policy", "MlpPolicy")),
