@@ -152,9 +152,12 @@ def parse_train_config(data: Any, source: str = "<dict>") -> TrainConfig:
     # srenv itself registers are accepted, so a YAML can never name code to import
     _expect(isinstance(env_id, str) and env_id in allowed, "env_id", env_id, "one of " + ", ".join(allowed))
     if vec_env == "native":  # the env must have a native vector env (v1, v2, or the residual / shaped env on one)
-        from .sb3.native import native_plan
+        from .native_vec import native_plan
 
-        native_plan(env_id, env_kwargs)
+        try:
+            native_plan(env_id, env_kwargs)
+        except ValueError as exc:
+            raise TrainConfigError(str(exc)) from None
     cfg = TrainConfig(
         algo=algo, env_id=env_id, env_kwargs=dict(env_kwargs), n_envs=n_envs,
         n_timesteps=_positive_int(data, "n_timesteps", 100_000), policy=str(data.get("policy", "MlpPolicy")),

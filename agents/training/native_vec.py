@@ -16,9 +16,8 @@ from typing import Any
 
 from srenv import ENV_ID_V1, ENV_ID_V2
 
-from ..config import TrainConfigError
-from ..residual_env import RESIDUAL_ENV_ID
-from ..shaping import SHAPED_ENV_ID
+from .residual_env import RESIDUAL_ENV_ID
+from .shaping import SHAPED_ENV_ID
 
 NATIVE_IDS = (ENV_ID_V1, ENV_ID_V2)  # the ids with a vector entry point (srenv/__init__.py)
 
@@ -28,11 +27,11 @@ def wrap_slot(env: Any, shaped: bool, residual: dict[str, Any] | None) -> Any:
     from stable_baselines3.common.monitor import Monitor
 
     if shaped:
-        from ..shaping import ShapedEnv
+        from .shaping import ShapedEnv
 
         env = ShapedEnv(env)
     if residual is not None:
-        from ..residual_env import ResidualEnv
+        from .residual_env import ResidualEnv
 
         env = ResidualEnv(env, residual["base"], residual.get("base_params") or {}, residual.get("scale", 0.3),
                           residual.get("idle_scale"))
@@ -40,7 +39,8 @@ def wrap_slot(env: Any, shaped: bool, residual: dict[str, Any] | None) -> Any:
 
 
 def native_plan(env_id: str, env_kwargs: dict[str, Any]) -> tuple[str, dict[str, Any], bool, dict | None]:
-    """(inner id with a vector entry point, its kwargs, shaped?, residual kwargs or None) for a training id."""
+    """(inner id with a vector entry point, its kwargs, shaped?, residual kwargs or None) for a training id; a
+    ValueError in the training YAML's message form for an id without one (agents.training.config re-raises it)."""
     kwargs = dict(env_kwargs)
     residual = None
     if env_id == RESIDUAL_ENV_ID:
@@ -52,9 +52,9 @@ def native_plan(env_id: str, env_kwargs: dict[str, Any]) -> tuple[str, dict[str,
     if shaped:  # the potential reads v1's state (agents/training/shaping.py)
         env_id = kwargs.pop("inner_env_id", ENV_ID_V1)
         if env_id != ENV_ID_V1:
-            raise TrainConfigError(f"train config: shaped inner_env_id = {env_id!r}: expected {ENV_ID_V1}")
+            raise ValueError(f"train config: shaped inner_env_id = {env_id!r}: expected {ENV_ID_V1}")
     if env_id not in NATIVE_IDS:
-        raise TrainConfigError(f"train config: vec_env = 'native' with env_id {env_id!r}: expected an env with a "
+        raise ValueError(f"train config: vec_env = 'native' with env_id {env_id!r}: expected an env with a "
                                f"native vector env ({', '.join(NATIVE_IDS)}, or the residual / shaped env on one)")
     return env_id, kwargs, shaped, residual
 
