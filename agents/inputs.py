@@ -58,6 +58,8 @@ FIELDS: dict[str, dict[str, Number]] = {
         "n_timesteps": Number("n_timesteps", int, hi=MAX_TIMESTEPS, why="wall time"),
         "n_envs": Number("n_envs", int, lo=0, hi=MAX_ENVS, lo_open=False, why="processes (0 = all cores)"),
         "num_env_runners": Number("num_env_runners", int, lo=0, hi=MAX_ENVS, lo_open=False, why="processes"),
+        "vec_processes": Number("vec_processes", int, lo=0, hi=MAX_ENVS, lo_open=False,
+                                why="processes (0 = all cores, 1 = threads)"),
     },
     "report": {
         "episodes[].seed": Number("episodes[].seed", int, lo=0, hi=MAX_SEED, lo_open=False),

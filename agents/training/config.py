@@ -6,6 +6,8 @@ it is evaluated as code, and ``env_id`` must be an id srenv registers)::
     algo: ppo                      # ppo | sac | a2c | td3
     env_kwargs: {config: default}  # passed to gymnasium.make("srenv/SuckerRod-v0", **env_kwargs)
     n_envs: null                   # null = os.cpu_count(); SubprocVecEnv when > 1
+    vec_env: subproc               # subproc | dummy (SB3's) | native (srenv's vector env, v1/v2 and wrappers)
+    vec_processes: 0               # native only: worker processes, 0 = one per core, 1 = threads in this process
     n_timesteps: 200000
     policy: MlpPolicy
     policy_kwargs: {net_arch: [64, 64], activation_fn: tanh}
@@ -39,7 +41,7 @@ from .residual_env import RESIDUAL_ENV_ID
 # Keys of the YAML that configure the harness; every other key goes to the algorithm's constructor.
 _HARNESS_KEYS = {"algo", "env_id", "env_kwargs", "n_envs", "n_timesteps", "policy", "policy_kwargs",
                  "normalize", "seed", "checkpoint_freq", "eval_freq", "n_eval_episodes", "eval_seed",
-                 "save_replay_buffer", "vec_env", "backend"}
+                 "save_replay_buffer", "vec_env", "vec_processes", "backend"}
 
 
 def allowed_env_ids() -> list[str]:
@@ -74,6 +76,7 @@ class TrainConfig:
     eval_seed: int = 10_000
     save_replay_buffer: bool = True
     vec_env: str = "subproc"
+    vec_processes: int = 0  # vec_env native: 0 = one worker process per core (capped at n_envs), 1 = threads
     algo_kwargs: dict[str, Any] = field(default_factory=dict)
 
     @property
@@ -139,12 +142,22 @@ def parse_train_config(data: Any, source: str = "<dict>") -> TrainConfig:
     _expect(isinstance(policy_kwargs, dict), "policy_kwargs", policy_kwargs,
             "a mapping (strings of Python code are not evaluated)")
     vec_env = data.get("vec_env", "subproc")
-    _expect(vec_env in ("subproc", "dummy"), "vec_env", vec_env, "subproc or dummy")
+    _expect(vec_env in ("subproc", "dummy", "native"), "vec_env", vec_env, "subproc, dummy or native")
+    vec_processes = declared("vec_processes", data.get("vec_processes", 0))
+    _expect(vec_env == "native" or "vec_processes" not in data, "vec_processes", data.get("vec_processes"),
+            "no value unless vec_env: native")
     env_id = data.get("env_id", ENV_ID_V0)
     allowed = allowed_env_ids()
     # gymnasium.make("module:Env-v0") imports `module` (from the working directory, too): only ids that
     # srenv itself registers are accepted, so a YAML can never name code to import
     _expect(isinstance(env_id, str) and env_id in allowed, "env_id", env_id, "one of " + ", ".join(allowed))
+    if vec_env == "native":  # the env must have a native vector env (v1, v2, or the residual / shaped env on one)
+        from .native_vec import native_plan
+
+        try:
+            native_plan(env_id, env_kwargs)
+        except ValueError as exc:
+            raise TrainConfigError(str(exc)) from None
     cfg = TrainConfig(
         algo=algo, env_id=env_id, env_kwargs=dict(env_kwargs), n_envs=n_envs,
         n_timesteps=_positive_int(data, "n_timesteps", 100_000), policy=str(data.get("policy", "MlpPolicy")),
@@ -153,7 +166,7 @@ def parse_train_config(data: Any, source: str = "<dict>") -> TrainConfig:
         seed=_seed(data, "seed", 0), checkpoint_freq=_positive_int(data, "checkpoint_freq", 10_000),
         eval_freq=_positive_int(data, "eval_freq", 10_000),
         n_eval_episodes=_positive_int(data, "n_eval_episodes", 5), eval_seed=_seed(data, "eval_seed", 10_000),
-        save_replay_buffer=bool(data.get("save_replay_buffer", True)), vec_env=vec_env,
+        save_replay_buffer=bool(data.get("save_replay_buffer", True)), vec_env=vec_env, vec_processes=vec_processes,
         algo_kwargs={k: _yaml12_float(v) for k, v in data.items() if k not in _HARNESS_KEYS},
     )
     # keywords the harness passes itself: verbose / device may override its defaults, the others may not

@@ -15,6 +15,11 @@ Autoreset is gymnasium's NEXT_STEP mode (``metadata["autoreset_mode"]``): the st
 that env (its action is ignored, reward 0). ``reset(seed=s)`` seeds env i with s + i (gymnasium's convention).
 Another task version uses it with one line: ``vector_entry(SuckerRodV2Env)``. :class:`SB3VecEnv` adapts it to
 stable-baselines3 (which resets in the same step and hands the final observation in ``infos``).
+
+``env_wrapper=f`` wraps every slot's env as ``f(env)`` where it is built (in the workers too, so ``f`` must pickle:
+a module-level function or a ``functools.partial`` of one): how ``python -m agents train`` with ``vec_env: native``
+puts its residual, reward-shaping and ``Monitor`` wrappers inside each slot (gymnasium's own ``wrappers=`` is
+refused in this vectorization mode). Without it the slots are the bare envs, as before.
 """
 
 from __future__ import annotations
@@ -28,7 +33,7 @@ import numpy as np
 from gymnasium.vector import AutoresetMode, VectorEnv
 from gymnasium.vector.utils import batch_space
 
-from .vector_steps import env_op, next_step, same_step
+from .vector_steps import env_op, next_step, same_step, slot_env
 
 
 def default_threads() -> int:
@@ -44,7 +49,9 @@ class KernelVectorEnv(VectorEnv):
     metadata: ClassVar[dict[str, Any]] = {"autoreset_mode": AutoresetMode.NEXT_STEP, "render_modes": []}
 
     def __init__(self, env_cls: type, num_envs: int, threads: int | None = None, processes: int | None = None,
-                 **env_kwargs: Any) -> None:
+                 env_wrapper: Callable[[Any], Any] | None = None, **env_kwargs: Any) -> None:
+        self._pool = self._procs = None  # close() (also from __del__) works when the arguments or envs fail
+        self.envs = []
         if isinstance(num_envs, bool) or not isinstance(num_envs, (int, np.integer)) or int(num_envs) < 1:
             raise ValueError(f"num_envs = {num_envs!r}: expected an integer >= 1")
         if processes is not None and (isinstance(processes, bool) or not isinstance(processes, (int, np.integer))
@@ -53,16 +60,15 @@ class KernelVectorEnv(VectorEnv):
         env_kwargs.pop("max_episode_steps", None)  # gymnasium passes the spec's; the envs truncate themselves
         self.num_envs = int(num_envs)
         self.processes = min(int(processes or 1), self.num_envs)
-        self._procs = None
         if self.processes > 1:
             from .vector_procs import ProcessShards
 
             self.envs = []  # the envs live in the workers
-            self._procs = ProcessShards(env_cls, self.num_envs, self.processes, env_kwargs)
+            self._procs = ProcessShards(env_cls, self.num_envs, self.processes, env_kwargs, env_wrapper)
             obs_space, act_space = self._procs.spaces
             self.threads = 1
         else:
-            self.envs = [env_cls(**env_kwargs) for _ in range(self.num_envs)]
+            self.envs = [slot_env(env_cls, env_kwargs, env_wrapper) for _ in range(self.num_envs)]
             obs_space, act_space = self.envs[0].observation_space, self.envs[0].action_space
             self.threads = max(1, min(int(threads or default_threads()), self.num_envs))
         self.single_observation_space = obs_space
@@ -136,25 +142,28 @@ class KernelVectorEnv(VectorEnv):
 def vector_entry(env_cls: type) -> Callable[..., KernelVectorEnv]:
     """A gymnasium ``vector_entry_point`` for ``env_cls``."""
     def make(num_envs: int = 1, threads: int | None = None, processes: int | None = None,
-             **env_kwargs: Any) -> KernelVectorEnv:
-        return KernelVectorEnv(env_cls, num_envs, threads=threads, processes=processes, **env_kwargs)
+             env_wrapper: Callable[[Any], Any] | None = None, **env_kwargs: Any) -> KernelVectorEnv:
+        return KernelVectorEnv(env_cls, num_envs, threads=threads, processes=processes, env_wrapper=env_wrapper,
+                               **env_kwargs)
     return make
 
 
 def make_v1(num_envs: int = 1, threads: int | None = None, processes: int | None = None,
-            **env_kwargs: Any) -> KernelVectorEnv:
+            env_wrapper: Callable[[Any], Any] | None = None, **env_kwargs: Any) -> KernelVectorEnv:
     """srenv/SuckerRod-v1's vector entry point."""
     from .sucker_rod_v1 import SuckerRodV1Env
 
-    return KernelVectorEnv(SuckerRodV1Env, num_envs, threads=threads, processes=processes, **env_kwargs)
+    return KernelVectorEnv(SuckerRodV1Env, num_envs, threads=threads, processes=processes,
+                           env_wrapper=env_wrapper, **env_kwargs)
 
 
 def make_v2(num_envs: int = 1, threads: int | None = None, processes: int | None = None,
-            **env_kwargs: Any) -> KernelVectorEnv:
+            env_wrapper: Callable[[Any], Any] | None = None, **env_kwargs: Any) -> KernelVectorEnv:
     """srenv/SuckerRod-v2's vector entry point (its events and classifier run per well, in the same threads)."""
     from .sucker_rod_v2 import SuckerRodV2Env
 
-    return KernelVectorEnv(SuckerRodV2Env, num_envs, threads=threads, processes=processes, **env_kwargs)
+    return KernelVectorEnv(SuckerRodV2Env, num_envs, threads=threads, processes=processes,
+                           env_wrapper=env_wrapper, **env_kwargs)
 
 
 def sb3_vec_env(venv: KernelVectorEnv):

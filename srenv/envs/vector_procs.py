@@ -15,12 +15,12 @@ import multiprocessing as mp
 
 import numpy as np
 
-from .vector_steps import env_op, next_step, same_step
+from .vector_steps import env_op, next_step, same_step, slot_env
 
 
-def _worker(conn, env_cls: type, env_kwargs: dict, count: int, first: int) -> None:
+def _worker(conn, env_cls: type, env_kwargs: dict, count: int, first: int, env_wrapper=None) -> None:
     try:
-        envs = [env_cls(**env_kwargs) for _ in range(count)]
+        envs = [slot_env(env_cls, env_kwargs, env_wrapper) for _ in range(count)]
         conn.send(("ok", (envs[0].observation_space, envs[0].action_space)))
     except Exception as exc:  # noqa: BLE001 - reported to the parent as one line
         conn.send(("error", f"building env {first}: {type(exc).__name__}: {exc}"))
@@ -51,14 +51,14 @@ def _worker(conn, env_cls: type, env_kwargs: dict, count: int, first: int) -> No
 class ProcessShards:
     """P worker processes holding a contiguous block of the N envs each."""
 
-    def __init__(self, env_cls: type, num_envs: int, processes: int, env_kwargs: dict) -> None:
+    def __init__(self, env_cls: type, num_envs: int, processes: int, env_kwargs: dict, env_wrapper=None) -> None:
         ctx = mp.get_context("forkserver")
         self.blocks = [b.tolist() for b in np.array_split(np.arange(num_envs), processes)]
         self.conns, self.procs = [], []
         for block in self.blocks:
             parent, child = ctx.Pipe()
-            p = ctx.Process(target=_worker, args=(child, env_cls, dict(env_kwargs), len(block), block[0]),
-                            daemon=True)
+            p = ctx.Process(target=_worker, args=(child, env_cls, dict(env_kwargs), len(block), block[0],
+                                                         env_wrapper), daemon=True)
             p.start()
             child.close()
             self.conns.append(parent)

@@ -9,6 +9,12 @@ from typing import Any
 import numpy as np
 
 
+def slot_env(env_cls: type, env_kwargs: dict, env_wrapper: Any = None) -> Any:
+    """One slot's env: ``env_cls(**env_kwargs)``, wrapped by ``env_wrapper(env)`` when one is given."""
+    env = env_cls(**env_kwargs)
+    return env if env_wrapper is None else env_wrapper(env)
+
+
 def next_step(env: Any, done: bool, action: np.ndarray) -> tuple:
     """One env's step under NEXT_STEP autoreset: the step after its episode ended only resets it."""
     if done:
@@ -31,13 +37,18 @@ def same_step(env: Any, action: np.ndarray) -> tuple:
 
 def env_op(env: Any, what: str, name: str, args: tuple, kwargs: dict) -> Any:
     """get / set / call / isinstance on one env (the SB3 adapter's get_attr, set_attr, env_method, ...)."""
-    if what == "get":
-        return getattr(env, name)
+    if what == "get":  # through wrappers as SB3's DummyVecEnv reads (a bare env: getattr)
+        return env.get_wrapper_attr(name) if hasattr(env, "get_wrapper_attr") else getattr(env, name)
     if what == "set":
         setattr(env, name, args[0])
         return None
     if what == "call":
-        return getattr(env, name)(*args, **kwargs)
-    if what == "isinstance":
-        return isinstance(env, args[0])
+        fn = env.get_wrapper_attr(name) if hasattr(env, "get_wrapper_attr") else getattr(env, name)
+        return fn(*args, **kwargs)
+    if what == "isinstance":  # the env or any wrapper under it (SB3's env_is_wrapped)
+        while env is not None:
+            if isinstance(env, args[0]):
+                return True
+            env = getattr(env, "env", None)
+        return False
     raise ValueError(f"env operation {what!r}: expected get, set, call or isinstance")

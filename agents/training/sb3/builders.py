@@ -37,8 +37,14 @@ def build_policy_kwargs(policy_kwargs: dict[str, Any]) -> dict[str, Any]:
     return out
 
 
-def build_vec_env(cfg: TrainConfig, n_envs: int, seed: int, subproc: bool) -> Any:
+def build_vec_env(cfg: TrainConfig, n_envs: int, seed: int, subproc: bool, native: bool = False) -> Any:
+    """SB3's DummyVecEnv / SubprocVecEnv of ``make_env``, or (``native``) srenv's native vector env (:mod:`..native_vec`)."""
     from functools import partial
+
+    if native:
+        from ..native_vec import build_native_vec_env
+
+        return build_native_vec_env(cfg.env_id, cfg.env_kwargs, n_envs, seed, cfg.vec_processes)
 
     from stable_baselines3.common.env_util import make_vec_env
     from stable_baselines3.common.vec_env import DummyVecEnv, SubprocVecEnv

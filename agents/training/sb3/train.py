@@ -55,7 +55,7 @@ def train(cfg: TrainConfig, out_dir: str | Path, total_timesteps: int | None = N
     target = int(total_timesteps or cfg.n_timesteps)
     n_envs = cfg.resolved_n_envs
     t_start = time.perf_counter()
-    venv_raw = build_vec_env(cfg, n_envs, cfg.seed, subproc=cfg.vec_env == "subproc")
+    venv_raw = build_vec_env(cfg, n_envs, cfg.seed, subproc=cfg.vec_env == "subproc", native=cfg.vec_env == "native")
     eval_env = build_vec_env(cfg, 1, cfg.eval_seed, subproc=False)
     loaded = _load_checkpoint(cfg, venv_raw, out) if resume else None
     resumed_from = None

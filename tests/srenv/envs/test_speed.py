@@ -145,3 +145,31 @@ def test_fast_stepping_error_on_a_steady_sample() -> None:
     for key in ("production_m3", "pprl_max_n", "return"):
         assert err[key] < 0.005, (key, err[key])
     assert 0 < r["fast"]["figures"]["exact_strokes"] < r["reference"]["exact_strokes"] / 4
+
+
+@pytest.mark.parametrize("backend", [{"threads": 2}, {"processes": 2}], ids=["threads", "processes"])
+def test_env_wrapper_wraps_every_slot_in_both_backends(backend) -> None:
+    """``env_wrapper`` wraps each slot where it is built (the workers too): the wrapper is seen by env_is_wrapped,
+    its episode statistics arrive in the infos, attributes are read through it, and the steps are the bare envs'."""
+    acts = np.random.default_rng(2).uniform(-1, 1, (4, 2, 2)).astype(np.float32)
+    runs = []
+    for wrapper in (None, gym.wrappers.RecordEpisodeStatistics):
+        venv = sb3_vec_env(gym.make_vec("srenv/SuckerRod-v1", num_envs=2, vectorization_mode="vector_entry_point",
+                                        env_wrapper=wrapper, **backend, **SHORT))
+        try:
+            venv.seed(5)
+            rec = [venv.reset()]
+            for a in acts:
+                venv.step_async(a)
+                obs, rew, done, infos = venv.step_wait()
+                rec += [obs, rew, done]
+                if wrapper is not None and done.any():
+                    assert all("episode" in i for i, d in zip(infos, done) if d)
+            assert venv.env_is_wrapped(gym.wrappers.RecordEpisodeStatistics) == [wrapper is not None] * 2
+            assert venv.get_attr("horizon_s") == [0.25 * 3600.0] * 2
+        finally:
+            venv.close()
+        runs.append(rec)
+    assert any(d.any() for d in runs[0][3::3])
+    for x, y in zip(*runs):
+        np.testing.assert_array_equal(x, y)
