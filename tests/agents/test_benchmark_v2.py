@@ -282,3 +282,17 @@ def test_evaluate_only_takes_the_tuned_alarm_params_from_the_report_else_the_fix
     rep["policies"]["alarm_pump_off"]["params"] = {**tuned, "alarm_prob": 0.05}  # checked as any report field
     with pytest.raises(ValueError, match="alarm_prob"):
         _specs(cfg, rep, REPO)
+
+
+def test_pilot_config_plays_the_validation_split_and_names_its_env_in_the_report(tmp_path):
+    """The v2 pilot (docs/agents.md, "The v2 pilot") spends no look at the test split, and a report's title names
+    the env it ran on (it said v1 for every config before)."""
+    from agents.benchmark.report import write_markdown
+
+    pilot = load_benchmark_config(REPO / "configs/benchmark/v2_pilot.yaml")
+    assert pilot["test"]["scenario"] == "validation" and pilot["env_id"] == "srenv/SuckerRod-v2"
+    assert pilot["tuning"]["scenario"] == "train"
+    report = json.loads((REPO / "docs/archive/benchmark_v2_pilot.json").read_text())
+    assert report["test"]["scenario"] == "validation" and report["env_id"] == "srenv/SuckerRod-v2"
+    write_markdown(report, tmp_path / "b.md", None)
+    assert (tmp_path / "b.md").read_text().splitlines()[0].endswith("(srenv/SuckerRod-v2)")
