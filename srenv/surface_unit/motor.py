@@ -278,7 +278,7 @@ class MotorDrive:
         p = self.profile(self._last_spm()) if self.torque is not None else None
         return {"motor_rated_slip": self.law.rated_slip, "motor_nema_design": self.law.design,
                 "motor_inertia_kg_m2": self.law.inertia_kg_m2,
-                "motor_counterbalance": self.last_counterbalance,
+                "motor_counterbalance_nm": self.last_counterbalance,
                 "motor_counterbalance_source": "configured" if self.counterbalance is not None else "optimal",
                 "crank_speed_pct_of_mean": None if p is None else p.speed_range_pct(),
                 "motor_last_change_pct_of_stroke": self.last_change_pct}

@@ -136,7 +136,7 @@ def test_without_a_counterbalance_the_motor_meets_the_balanced_unit():
     s0 = sim0.surface.motor.summary()
     assert s0["motor_counterbalance_source"] == "optimal"
     best = sim0.surface.gearbox_report(r0[-1:]).optimal_counterbalance_nm
-    assert s0["motor_counterbalance"] == pytest.approx(best, rel=0.05)
+    assert s0["motor_counterbalance_nm"] == pytest.approx(best, rel=0.05)
 
 
 def test_a_motor_on_a_motion_without_cranks_is_refused():
