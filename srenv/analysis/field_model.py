@@ -191,18 +191,11 @@ def record_motor(rec: FieldRecord) -> dict | None:
     nominal (the record's ``SlipTorque`` is not a slip: 3 on a NEMA B and a NEMA D motor alike, its meaning is
     not documented), the inertia not given (0: the quasi-static slip line, docs/realism.md). None when the
     record names no motor, no power or no NEMA design B, C or D."""
-    import json
     import re
 
     from ..surface_unit.motor import NEMA_DESIGNS
 
-    if not str(rec.source).lower().endswith(".json"):
-        return None
-    try:
-        with open(rec.source, encoding="utf-8") as fh:
-            motor = (json.load(fh).get("equipmentData") or {}).get("RodPumpMotor") or {}
-    except (OSError, ValueError, AttributeError):
-        return None
+    motor = rec.motor  # read with the record (field_record.read_dynacard_json), not from its file again
     hp, model = motor.get("HP"), str(motor.get("Model") or "")
     letter = re.fullmatch(r"\s*(?:nema)?\s*(?:design)?\s*([a-z])\s*", model, flags=re.IGNORECASE)
     if not isinstance(hp, (int, float)) or isinstance(hp, bool) or not 0 < hp < 1e4 or letter is None:

@@ -51,6 +51,7 @@ class FieldRecord:
     card_type: str | None = None                       # the vendor's card type (Startup, Shutdown, ...)
     # the vendor's own prediction of the record's full-pump surface card (its "ideal card"): PPRL, MPRL (N)
     reference_prediction: dict | None = None
+    motor: dict = field(default_factory=dict)          # equipmentData.RodPumpMotor as given (field_model.record_motor)
 
     @property
     def period_s(self) -> float:
@@ -225,6 +226,8 @@ def read_dynacard_json(path: str | Path, reverse: bool = False, auto_orient: boo
         unit=_unit(eq.get("SurfaceUnit"), "equipmentData.SurfaceUnit"))
     rec.notes += _depth_notes(rec)
     rec.card_type = _card_type(d.get("CardDetails"))
+    motor = eq.get("RodPumpMotor")
+    rec.motor = motor if isinstance(motor, dict) else {}
     rec.reference_prediction = _ideal_card(d.get("Performance"), float(np.ptp(rec.position_m)), notes)
     dh = d.get("downholeCard")
     if isinstance(dh, dict) and dh.get("Position") and dh.get("Load"):
