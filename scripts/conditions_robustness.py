@@ -9,14 +9,18 @@ wells, used to choose between models (docs/conditions.md, runs 3 and 4). Two che
   operating range, the full pump and every other condition at one severity (run 4's pre-registered check);
 * ``v2_family_synth``: the v2-family check's cards, every one with its position channel replaced by what a
   load-only controller writes (``card_augment.synthesised_position``: a cosine of time at the card's stroke and
-  period, phased on its bottom; the loads kept by time; run 5's pre-registered check).
+  period, phased on its bottom; the loads kept by time; run 5's pre-registered check);
+* ``v2_family_smooth``: the v2-family check's cards, every one (position and load alike) low-passed by
+  ``card_augment.spectral_lowpass`` at a fixed corner harmonic K = 10 (a real string and load cell smooth the card;
+  run 6's pre-registered check).
 
-    python scripts/conditions_robustness.py [--models M.npz ...] [--checks out_of_family v2_family v2_family_synth]
+    python scripts/conditions_robustness.py [--models M.npz ...]
+        [--checks out_of_family v2_family v2_family_synth v2_family_smooth]
         [--wells NAME ...] [--severities 0.4 0.8] [--taus 0 0.02] [--v2-wells 12] [--v2-severity 0.6]
         [--out REPORT.json]
 
 Prints one JSON line per model: per check the cards right, of how many, what each full card was called; the
-score (the mean of the checks' accuracies, runs 4 and 5's rules). A combination a well's config refuses (e.g. free gas
+score (the mean of the checks' accuracies, runs 4-6's rules). A combination a well's config refuses (e.g. free gas
 on a well with the nonmonotone plunger law) is skipped, for every model alike.
 """
 
@@ -26,7 +30,7 @@ import argparse
 import dataclasses
 import json
 
-from srenv.analysis.card_augment import synthesised_position
+from srenv.analysis.card_augment import spectral_lowpass, synthesised_position
 from srenv.analysis.card_classifier import DEFAULT_MODEL, CardClassifier
 from srenv.analysis.condition_card import condition_config, simulate_card
 from srenv.config import load_config
@@ -39,6 +43,8 @@ CHECK_STREAM = 0xC1A5  # the v2-family check's wells: a stream no split, family 
 CORNERS = (("spm_min", "stroke_min"), ("spm_min", "stroke_max"), ("spm_max", "stroke_min"),
            ("spm_max", "stroke_max"))
 FAILED = (ConfigError, NumericFailure, SolverFailure, ValueError)
+SMOOTH_K = 10.0  # the v2_family_smooth check's corner harmonic (run 6, fixed before any measurement)
+V2_CHECKS = ("v2_family", "v2_family_synth", "v2_family_smooth")
 
 
 def cards(wells, severities, taus):
@@ -89,6 +95,15 @@ def synthesised(stream):
         yield where, label, dataclasses.replace(card, polished_rod_position_m=x)
 
 
+def smoothed(stream, k_corner: float = SMOOTH_K):
+    """The same cards low-passed as a real string and load cell would (position and load alike; one period,
+    samples at equal times): harmonic k of the stroke times exp(-(k / k_corner)^2)."""
+    for where, label, card in stream:
+        x, y = spectral_lowpass(card.polished_rod_position_m, k_corner), spectral_lowpass(card.polished_rod_load_n,
+                                                                                          k_corner)
+        yield where, label, dataclasses.replace(card, polished_rod_position_m=x, polished_rod_load_n=y)
+
+
 def score(clfs: dict, stream) -> dict:
     """Per model: cards right, of how many, what each full card was called, right per label."""
     out = {m: {"right": 0, "of": 0, "full_called": {}, "right_by_label": dict.fromkeys(LABELS, 0),
@@ -120,7 +135,7 @@ def healthy_by_corner(full_called: dict) -> dict:
 def main() -> None:
     ap = argparse.ArgumentParser()
     ap.add_argument("--models", nargs="+", default=[str(DEFAULT_MODEL)])
-    ap.add_argument("--checks", nargs="+", choices=("out_of_family", "v2_family", "v2_family_synth"),
+    ap.add_argument("--checks", nargs="+", choices=("out_of_family", *V2_CHECKS),
                     default=["out_of_family", "v2_family"])
     ap.add_argument("--wells", nargs="+", default=list(WELLS))
     ap.add_argument("--severities", type=float, nargs="+", default=[0.4, 0.8])
@@ -133,12 +148,14 @@ def main() -> None:
     checks = {}
     if "out_of_family" in a.checks:
         checks["out_of_family"] = score(clfs, cards(a.wells, a.severities, a.taus))
-    v2 = list(v2_cards(a.v2_wells, a.v2_severity)) if {"v2_family", "v2_family_synth"} & set(a.checks) else []
+    v2 = list(v2_cards(a.v2_wells, a.v2_severity)) if set(V2_CHECKS) & set(a.checks) else []
     if "v2_family" in a.checks:
         checks["v2_family"] = score(clfs, v2)
     if "v2_family_synth" in a.checks:
         checks["v2_family_synth"] = score(clfs, synthesised(v2))
-    for check in ("v2_family", "v2_family_synth"):
+    if "v2_family_smooth" in a.checks:
+        checks["v2_family_smooth"] = score(clfs, smoothed(v2))
+    for check in V2_CHECKS:
         for r in checks.get(check, {}).values():
             r["healthy_full_by_corner"] = healthy_by_corner(r["full_called"])
     rows = []
@@ -150,7 +167,8 @@ def main() -> None:
     if a.out:
         with open(a.out, "w") as f:
             json.dump({"checks": list(checks), "v2_wells": a.v2_wells, "v2_severity": a.v2_severity,
-                       "severities": a.severities, "taus": a.taus, "models": rows}, f, indent=1)
+                       "severities": a.severities, "taus": a.taus,
+                       **({"smooth_k": SMOOTH_K} if "v2_family_smooth" in checks else {}), "models": rows}, f, indent=1)
             f.write("\n")
 
 

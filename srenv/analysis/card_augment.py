@@ -11,6 +11,12 @@ Opt-in instrument effects (``instrument=InstrumentAugment(...)``; run 5, docs/co
 synthesised by a load-only controller (a pure cosine of time at the card's stroke and period, phased on its
 bottom, the loads kept by time) and a position transducer lagging the load cell. Without it every call draws
 and returns exactly what it did for runs 1-4.
+
+Opt-in spectral smoothing (``spectral=SpectralAugment(p)``; run 6): real strings and load cells smooth the card
+(srenv's predicted cards carry 1.2-2.6x the measured share of harmonics 4-20 of the stroke and 25-100x above the
+20th, docs/realism.md), so with probability p the recorded card, position and load alike, passes a zero-phase
+periodic low-pass whose gain on harmonic k is exp(-(k/K)^2), K log-uniform in [6, 30]. Its draws come after every
+draw of runs 1-5, so without it the arrays are runs 1-5's.
 """
 
 from __future__ import annotations
@@ -33,6 +39,30 @@ class InstrumentAugment:
             v = getattr(self, name)
             if not 0.0 <= v <= 1.0:
                 raise ValueError(f"{name}={v}: expected a number in [0, 1]")
+
+
+@dataclass(frozen=True)
+class SpectralAugment:
+    """The card's spectrum: probability per card of the low-pass and the range of its corner harmonic K."""
+
+    p: float = 0.0
+    k_min: float = 6.0
+    k_max: float = 30.0
+
+    def __post_init__(self):
+        if not 0.0 <= self.p <= 1.0:
+            raise ValueError(f"p={self.p}: expected a number in [0, 1]")
+        if not 0.0 < self.k_min <= self.k_max:
+            raise ValueError(f"k_min={self.k_min}, k_max={self.k_max}: expected 0 < k_min <= k_max")
+
+
+def spectral_lowpass(y: np.ndarray, k_corner: float) -> np.ndarray:
+    """Zero-phase periodic low-pass of one stroke (n samples equally spaced in time): harmonic k of the stroke
+    times exp(-(k / k_corner)^2) (the mean kept, no phase shift: corners smooth without moving in time)."""
+    y = np.asarray(y, dtype=float)
+    c = np.fft.rfft(y)
+    k = np.arange(len(c))
+    return np.fft.irfft(c * np.exp(-(k / k_corner) ** 2), n=len(y))
 
 
 def synthesised_position(position: np.ndarray) -> np.ndarray:
@@ -62,9 +92,22 @@ def _lowpass(y: np.ndarray, alpha: float) -> np.ndarray:
 
 
 def augment(position: np.ndarray, load: np.ndarray, rng: np.random.Generator,
-            instrument: InstrumentAugment | None = None) -> tuple[np.ndarray, np.ndarray]:
+            instrument: InstrumentAugment | None = None,
+            spectral: SpectralAugment | None = None) -> tuple[np.ndarray, np.ndarray]:
     """One field-like version of a clean card (``instrument``: the opt-in position-channel effects, drawn after
-    every draw of runs 1-4 so that without it the draws and the arrays are unchanged)."""
+    every draw of runs 1-4; ``spectral``: the opt-in low-pass of the recorded card, drawn after those: without
+    an option the draws and the arrays are unchanged)."""
+    x, y = _field_like(position, load, rng, instrument)
+    if spectral is not None:
+        apply, k_corner = rng.uniform(), float(np.exp(rng.uniform(np.log(spectral.k_min), np.log(spectral.k_max))))
+        if apply < spectral.p:
+            return spectral_lowpass(x, k_corner), spectral_lowpass(y, k_corner)
+    return x, y
+
+
+def _field_like(position: np.ndarray, load: np.ndarray, rng: np.random.Generator,
+                instrument: InstrumentAugment | None) -> tuple[np.ndarray, np.ndarray]:
+    """Runs 1-5's augmentation (the resampling, the load cell, noise and zero, the instrument effects)."""
     n = int(rng.integers(150, 301))
     t = (rng.uniform() + np.arange(n) / n + rng.normal(0.0, 0.15 / n, n)) % 1.0
     a, phi = rng.uniform(0.0, 0.12), rng.uniform(0.0, 2 * np.pi)

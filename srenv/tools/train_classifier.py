@@ -19,8 +19,9 @@ from pathlib import Path
 
 import numpy as np
 
-from ..analysis.card_augment import InstrumentAugment, augment
+from ..analysis.card_augment import InstrumentAugment, SpectralAugment, augment
 from ..analysis.card_shape import BadCard, features
+from ..cli_types import OneLineParser
 from ..physics.conditions import LABELS
 from ..task.card_set import load_cards
 
@@ -39,13 +40,13 @@ def load_sets(dirs: list[str]) -> dict[str, np.ndarray]:
 
 
 def featurise(x: np.ndarray, y: np.ndarray, labels: np.ndarray, rng, aug: bool, draws: int = 1,
-              instrument: InstrumentAugment | None = None):
+              instrument: InstrumentAugment | None = None, spectral: SpectralAugment | None = None):
     """Feature rows and labels (cards the representation cannot read are dropped and counted)."""
     rows, out = [], []
     for _ in range(draws):
         for p, q, lab in zip(x, y, labels):
             if aug:
-                p, q = augment(p, q, rng, instrument)
+                p, q = augment(p, q, rng, instrument, spectral)
             try:
                 rows.append(features(p, q))
             except BadCard:
@@ -89,14 +90,15 @@ def fit(f0: np.ndarray, t0: np.ndarray, widths: tuple, epochs: int, seed: int) -
 
 
 def evaluate(weights: dict, data: dict, idx: np.ndarray, aug: bool, seed: int,
-             instrument: InstrumentAugment | None = None) -> tuple[float, np.ndarray]:
+             instrument: InstrumentAugment | None = None,
+             spectral: SpectralAugment | None = None) -> tuple[float, np.ndarray]:
     from ..analysis.card_classifier import CardClassifier
 
     clf = CardClassifier(tuple(str(s) for s in weights["labels"]), weights["mean"], weights["std"],
                          [(weights[f"w{i}"], weights[f"b{i}"]) for i in range(8) if f"w{i}" in weights])
     rng = np.random.default_rng(seed)
     f, t = featurise(data["polished_rod_position_m"][idx], data["polished_rod_load_n"][idx], data["label"][idx],
-                     rng, aug, VALIDATION_DRAWS if aug else 1, instrument)
+                     rng, aug, VALIDATION_DRAWS if aug else 1, instrument, spectral)
     pred = np.argmax(clf.proba_features(f), axis=1)
     cm = np.zeros((len(LABELS), len(LABELS)), dtype=np.int64)
     np.add.at(cm, (t, pred), 1)
@@ -124,8 +126,12 @@ def _probability(text: str) -> float:
     return v
 
 
+class _Parser(OneLineParser):
+    tool = "train_classifier"  # a bad flag: one line, exit 2, no usage dump
+
+
 def main(argv: list[str] | None = None) -> int:
-    ap = argparse.ArgumentParser(prog="python -m srenv.tools.train_classifier", description=__doc__.splitlines()[0])
+    ap = _Parser(prog="python -m srenv.tools.train_classifier", description=__doc__.splitlines()[0])
     ap.add_argument("--cards", nargs="+", required=True, help="directories written by `srenv cards`")
     ap.add_argument("--out", required=True, help="model file (.npz)")
     ap.add_argument("--report", help="JSON report: every candidate's validation accuracy, the test confusion")
@@ -138,9 +144,12 @@ def main(argv: list[str] | None = None) -> int:
                     "position channel synthesised by a load-only controller (run 5; default 0: runs 1-4)")
     ap.add_argument("--position-lag-p", type=_probability, default=0.0, help="augmentation: probability of a "
                     "position transducer lagging the load by up to 3 %% of the period (run 5; default 0)")
+    ap.add_argument("--spectral-p", type=_probability, default=0.0, help="augmentation: probability of the card's "
+                    "zero-phase low-pass exp(-(k/K)^2), K log-uniform in [6, 30] (run 6; default 0: runs 1-5)")
     a = ap.parse_args(argv)
     inst = (InstrumentAugment(a.synth_position_p, a.position_lag_p)
             if a.synth_position_p > 0.0 or a.position_lag_p > 0.0 else None)
+    spec = SpectralAugment(a.spectral_p) if a.spectral_p > 0.0 else None
     data = load_sets(a.cards)
     split_idx = {s: np.flatnonzero(data["split"] == s) for s in ("train", "validation", "test")}
     report: dict = {"n_cards": {s: len(i) for s, i in split_idx.items()}, "candidates": {}}
@@ -148,18 +157,21 @@ def main(argv: list[str] | None = None) -> int:
         report["instrument_augment"] = {"synth_position_p": inst.synth_position_p,
                                         "position_lag_p": inst.position_lag_p,
                                         "max_lag_of_period": inst.max_lag_of_period}
+    if spec is not None:
+        report["spectral_augment"] = {"p": spec.p, "k_min": spec.k_min, "k_max": spec.k_max}
     best, best_acc = None, -1.0
     tr = split_idx["train"]
     pools = {}  # AUG_COPIES augmented versions of every training card (or the clean cards), drawn once
     for aug in {CANDIDATES[c][1] for c in a.candidates}:
         pools[aug] = featurise(data["polished_rod_position_m"][tr], data["polished_rod_load_n"][tr],
-                               data["label"][tr], np.random.default_rng(a.seed), aug, AUG_COPIES if aug else 1, inst)
+                               data["label"][tr], np.random.default_rng(a.seed), aug, AUG_COPIES if aug else 1, inst,
+                               spec)
     models = {name: (lambda widths=widths, aug=aug: fit(*pools[aug], widths, a.epochs, a.seed))
               for name, (widths, aug) in CANDIDATES.items() if name in a.candidates}
     models.update({path: (lambda path=path: _read_weights(path)) for path in a.compare})  # trained before
     for name, make in models.items():
         w = make()
-        acc_aug, _ = evaluate(w, data, split_idx["validation"], True, a.seed + 1, inst)
+        acc_aug, _ = evaluate(w, data, split_idx["validation"], True, a.seed + 1, inst, spec)
         acc_clean, _ = evaluate(w, data, split_idx["validation"], False, a.seed + 1)
         report["candidates"][name] = {"validation_accuracy_augmented": acc_aug,
                                       "validation_accuracy_clean": acc_clean}
@@ -167,7 +179,7 @@ def main(argv: list[str] | None = None) -> int:
         if acc_aug > best_acc:
             best, best_acc, report["chosen"] = w, acc_aug, name
     for aug in (True, False):
-        acc, cm = evaluate(best, data, split_idx["test"], aug, a.seed + 2, inst)
+        acc, cm = evaluate(best, data, split_idx["test"], aug, a.seed + 2, inst, spec)
         key = "augmented" if aug else "clean"
         report[f"test_accuracy_{key}"], report[f"test_confusion_{key}"] = acc, cm.tolist()
     report["labels"] = list(LABELS)
