@@ -35,10 +35,14 @@ class InstrumentAugment:
     max_lag_of_period: float = 0.03
 
     def __post_init__(self):
-        for name in ("synth_position_p", "position_lag_p", "max_lag_of_period"):
-            v = getattr(self, name)
-            if not 0.0 <= v <= 1.0:
-                raise ValueError(f"{name}={v}: expected a number in [0, 1]")
+        _in_unit_interval(self, ("synth_position_p", "position_lag_p", "max_lag_of_period"))
+
+
+def _in_unit_interval(obj, names: tuple[str, ...]) -> None:
+    for name in names:
+        v = getattr(obj, name)
+        if not 0.0 <= v <= 1.0:
+            raise ValueError(f"{name}={v}: expected a number in [0, 1]")
 
 
 @dataclass(frozen=True)
@@ -50,8 +54,7 @@ class SpectralAugment:
     k_max: float = 30.0
 
     def __post_init__(self):
-        if not 0.0 <= self.p <= 1.0:
-            raise ValueError(f"p={self.p}: expected a number in [0, 1]")
+        _in_unit_interval(self, ("p",))
         if not 0.0 < self.k_min <= self.k_max:
             raise ValueError(f"k_min={self.k_min}, k_max={self.k_max}: expected 0 < k_min <= k_max")
 
