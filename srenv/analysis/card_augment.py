@@ -50,13 +50,12 @@ class SpectralAugment:
     """The card's spectrum: probability per card of the low-pass and the range of its corner harmonic K."""
 
     p: float = 0.0
-    k_min: float = 6.0
-    k_max: float = 30.0
+    k_range: tuple[float, float] = (6.0, 30.0)  # K log-uniform in it (run 6: fixed a priori, not tuned)
 
     def __post_init__(self):
         _in_unit_interval(self, ("p",))
-        if not 0.0 < self.k_min <= self.k_max:
-            raise ValueError(f"k_min={self.k_min}, k_max={self.k_max}: expected 0 < k_min <= k_max")
+        if not 0.0 < self.k_range[0] <= self.k_range[1]:
+            raise ValueError(f"k_range={self.k_range}: expected 0 < low <= high")
 
 
 def spectral_lowpass(y: np.ndarray, k_corner: float) -> np.ndarray:
@@ -102,7 +101,7 @@ def augment(position: np.ndarray, load: np.ndarray, rng: np.random.Generator,
     an option the draws and the arrays are unchanged)."""
     x, y = _field_like(position, load, rng, instrument)
     if spectral is not None:
-        apply, k_corner = rng.uniform(), float(np.exp(rng.uniform(np.log(spectral.k_min), np.log(spectral.k_max))))
+        apply, k_corner = rng.uniform(), float(np.exp(rng.uniform(*np.log(spectral.k_range))))
         if apply < spectral.p:
             return spectral_lowpass(x, k_corner), spectral_lowpass(y, k_corner)
     return x, y

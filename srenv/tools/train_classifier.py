@@ -158,7 +158,7 @@ def main(argv: list[str] | None = None) -> int:
                                         "position_lag_p": inst.position_lag_p,
                                         "max_lag_of_period": inst.max_lag_of_period}
     if spec is not None:
-        report["spectral_augment"] = {"p": spec.p, "k_min": spec.k_min, "k_max": spec.k_max}
+        report["spectral_augment"] = {"p": spec.p, "k_range": list(spec.k_range)}
     best, best_acc = None, -1.0
     tr = split_idx["train"]
     pools = {}  # AUG_COPIES augmented versions of every training card (or the clean cards), drawn once
