@@ -2,7 +2,8 @@
 
 The model file (``srenv/models/classifier.npz``, written by ``python -m srenv.tools.train_classifier``)
 holds ``labels``, the feature scaling ``mean``/``std`` and layers ``w0, b0, w1, b1, ...`` (ReLU between,
-softmax at the end). Trained on simulated cards only (docs/conditions.md).
+softmax at the end), and since run P1 optionally ``card_type`` (``surface`` or ``pump``: the card it reads; a file
+without it is a surface model, as every file before). Trained on simulated cards only (docs/conditions.md).
 """
 
 from __future__ import annotations
@@ -12,12 +13,14 @@ from pathlib import Path
 import numpy as np
 
 from ..physics.conditions import LABELS
-from .card_shape import N_FEATURES, features
+from .card_shape import CARD_TYPES, N_FEATURES, features
 
 DEFAULT_MODEL = Path(__file__).resolve().parents[1] / "models" / "classifier.npz"
 # run 2's weights, pinned: srenv/SuckerRod-v2's observation carries its probabilities, so v2 keeps its numbers
 # whatever model ``srenv classify`` ships (docs/conditions.md, run 4)
 V2_MODEL = DEFAULT_MODEL.with_name("classifier_run2.npz")
+# the pump (downhole) card model of run P1 (`srenv classify --card pump`)
+PUMP_MODEL = DEFAULT_MODEL.with_name("classifier_pump.npz")
 MAX_LAYERS = 8
 MAX_WIDTH = 4096
 
@@ -26,9 +29,19 @@ class BadModel(ValueError):
     """A model file that is not a classifier of this shape (or not data at all)."""
 
 
+def _card_type(data: dict) -> str:
+    """The model file's card type: one string (stored as a one-item array), absent = surface (files before P1)."""
+    if "card_type" not in data:
+        return "surface"
+    ct = data["card_type"]
+    return str(ct.reshape(-1)[0]) if ct.size == 1 and ct.dtype.kind == "U" else repr(ct.tolist())
+
+
 class CardClassifier:
-    def __init__(self, labels: tuple[str, ...], mean: np.ndarray, std: np.ndarray, layers: list):
+    def __init__(self, labels: tuple[str, ...], mean: np.ndarray, std: np.ndarray, layers: list,
+                 card_type: str = "surface"):
         self.labels, self.mean, self.std, self.layers = labels, mean, std, layers
+        self.card_type = card_type
 
     @classmethod
     def load(cls, path: str | Path = DEFAULT_MODEL) -> CardClassifier:
@@ -39,6 +52,7 @@ class CardClassifier:
             raise BadModel(f"model file {path}: not a readable NPZ of arrays ({exc})") from None
         try:
             labels = tuple(str(x) for x in data["labels"])
+            card_type = _card_type(data)
             mean, std = data["mean"].astype(np.float64), data["std"].astype(np.float64)
             layers = []
             for i in range(MAX_LAYERS):
@@ -47,8 +61,10 @@ class CardClassifier:
                 layers.append((data[f"w{i}"].astype(np.float64), data[f"b{i}"].astype(np.float64)))
         except KeyError as exc:
             raise BadModel(f"model file {path}: missing array {exc}") from None
+        if card_type not in CARD_TYPES:
+            raise BadModel(f"model file {path}: card_type {card_type!r}, expected one of {CARD_TYPES}")
         cls._check(path, labels, mean, std, layers)
-        return cls(labels, mean, std, layers)
+        return cls(labels, mean, std, layers, card_type)
 
     @staticmethod
     def _check(path, labels, mean, std, layers) -> None:
@@ -79,5 +95,5 @@ class CardClassifier:
 
     def classify(self, position, load) -> tuple[str, dict[str, float]]:
         """(label, probabilities of all twelve) of one card; raises card_shape.BadCard."""
-        p = self.proba_features(features(position, load))[0]
+        p = self.proba_features(features(position, load, self.card_type))[0]
         return self.labels[int(np.argmax(p))], {k: float(v) for k, v in zip(self.labels, p)}

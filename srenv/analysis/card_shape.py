@@ -11,6 +11,10 @@ Time order: the polished rod does positive work over a stroke (the loop integral
 positive: the up branch carries the higher load), so a card whose loop integral is negative was stored
 with its time reversed (some field exports are) and is read backwards. Every simulated card has positive
 work, so this changes no training card.
+
+Pump (downhole) cards (``card="pump"``, run P1): the same numbers, except the load ratio, set to 0: pump cards come
+in true or effective loads (the buoyancy convention moves the zero) and digitised ones on any axis, so the ratio
+would carry the convention, not the condition.
 """
 
 from __future__ import annotations
@@ -21,10 +25,15 @@ N_GRID = 32
 GRID = np.linspace(0.02, 0.98, N_GRID)
 N_FEATURES = 2 * N_GRID + 1
 MIN_POINTS = 8
+CARD_TYPES = ("surface", "pump")  # which card a model reads: the polished rod's or the pump's (downhole)
 
 
 class BadCard(ValueError):
     """A card the representation cannot read (too few points, no stroke, no load variation, not finite)."""
+
+
+class FlatLoad(BadCard):
+    """A card with a stroke but no load variation (a pump card of a string that carries nothing: parted rods)."""
 
 
 def _branch(x: np.ndarray, y: np.ndarray) -> np.ndarray:
@@ -37,8 +46,8 @@ def _branch(x: np.ndarray, y: np.ndarray) -> np.ndarray:
     return np.interp(GRID, xm[keep], y[keep])
 
 
-def features(position, load) -> np.ndarray:
-    """The representation of one card (N_FEATURES numbers); raises BadCard."""
+def features(position, load, card: str = "surface") -> np.ndarray:
+    """The representation of one card (N_FEATURES numbers; ``card`` one of CARD_TYPES); raises BadCard."""
     x = np.asarray(position, dtype=np.float64)
     y = np.asarray(load, dtype=np.float64)
     if x.ndim != 1 or x.shape != y.shape or len(x) < MIN_POINTS:
@@ -49,7 +58,7 @@ def features(position, load) -> np.ndarray:
     if xr <= 1e-12 * max(1.0, abs(float(x.max()))):
         raise BadCard("the card's position does not vary (no stroke)")
     if yr <= 1e-12 * max(1.0, abs(float(y.max()))):
-        raise BadCard("the card's load does not vary")
+        raise FlatLoad("the card's load does not vary")
     xc, yc = np.concatenate((x, x[:1])), np.concatenate((y, y[:1]))
     if float(np.sum(0.5 * (yc[1:] + yc[:-1]) * np.diff(xc))) < 0.0:  # stored with time reversed
         x, y = x[::-1], y[::-1]
@@ -67,7 +76,7 @@ def features(position, load) -> np.ndarray:
         raise BadCard("the card has no up or no down branch")
     up = _branch(up_x, up_y)
     down = _branch(1.0 - dn_x, dn_y)[::-1]  # read at the same GRID positions, bottom to top
-    return np.concatenate((up, down, [ratio]))
+    return np.concatenate((up, down, [ratio if card == "surface" else 0.0]))
 
 
 def features_batch(positions: np.ndarray, loads: np.ndarray) -> np.ndarray:

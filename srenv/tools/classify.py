@@ -1,4 +1,5 @@
-"""``srenv classify CARD.csv|DIR [--config WELL] [--json] [--model M.npz]``: name the pump condition of surface cards.
+"""``srenv classify CARD.csv|DIR [--config WELL] [--json] [--model M.npz] [--card surface|pump]``: name the pump
+condition of surface cards, or (``--card pump``, run P1) of pump (downhole) cards.
 
 A card is a CSV with the columns ``polished_rod_position_m,polished_rod_load_n`` (one stroke, equally spaced
 in time, any units: the classifier normalises both) or srenv's own simulate CSV (``t_s`` and those columns;
@@ -7,6 +8,11 @@ every ``*.csv`` in it is classified (sorted by name). Output: one line per card 
 with ``file``, ``label`` and ``probabilities`` of all twelve labels). Every card is read and checked before
 any answer: an unreadable or degenerate card, or a model file that is not a classifier's data, prints
 one line and exits 2.
+
+``--card pump`` reads the same CSVs as pump cards (the plunger's position and the load at the rod string's bottom,
+in any units and either load convention) with the pump model (``srenv/models/classifier_pump.npz``); a model
+trained on the other card type is refused. A pump card with a stroke but no load variation is called
+``parted_rods`` by rule (docs/conditions.md, run P1; ``"rule": true`` in its JSON line).
 """
 
 from __future__ import annotations
@@ -29,7 +35,10 @@ def add_parser(sub) -> None:
     c.add_argument("path", help="a card CSV or a directory of *.csv")
     c.add_argument("--config", help="the well's config (checked; the shipped model reads the card alone)")
     c.add_argument("--json", action="store_true", help="one JSON line per card")
-    c.add_argument("--model", help="model file (default: the shipped srenv/models/classifier.npz)")
+    c.add_argument("--model", help="model file (default: the shipped srenv/models/classifier.npz, "
+                   "with --card pump srenv/models/classifier_pump.npz)")
+    c.add_argument("--card", choices=("surface", "pump"), default="surface",
+                   help="the card type of the CSVs: the polished rod's (surface, default) or the pump's (downhole)")
     c.set_defaults(func=main)
 
 
@@ -111,33 +120,53 @@ def card_files(path: str) -> list[Path]:
     return [p]
 
 
-def main(args: argparse.Namespace) -> int:
-    from ..analysis.card_classifier import DEFAULT_MODEL, BadModel, CardClassifier
-    from ..analysis.card_shape import BadCard, features
+def load_model(model: str | None, card: str):
+    """The classifier for ``card`` (``model`` or the shipped one); a file of the other card type is refused."""
+    from ..analysis.card_classifier import DEFAULT_MODEL, PUMP_MODEL, BadModel, CardClassifier
     from ..errors import ConfigError
 
+    path = model or str(PUMP_MODEL if card == "pump" else DEFAULT_MODEL)
+    try:
+        clf = CardClassifier.load(path)
+    except BadModel as exc:
+        raise ConfigError("--model", path, f"a classifier's data ({exc})") from None
+    if clf.card_type != card:
+        raise ConfigError("--card", card, f"{clf.card_type}, the card type model {path} was trained on")
+    return clf
+
+
+def _features_or_rule(x: np.ndarray, y: np.ndarray, f: Path, card: str) -> np.ndarray | None:
+    """The card's features; None for a pump card with a stroke and no load (run P1's rule: parted rods)."""
+    from ..analysis.card_shape import BadCard, FlatLoad, features
+
+    try:
+        return features(x, y, card)
+    except FlatLoad as exc:
+        if card == "pump":
+            return None
+        raise _bad(f, f"a readable card ({exc})") from None
+    except BadCard as exc:
+        raise _bad(f, f"a readable card ({exc})") from None
+
+
+def main(args: argparse.Namespace) -> int:
     if args.config:
         from ..config import load_config
 
         load_config(args.config)
     files = card_files(args.path)
-    try:
-        clf = CardClassifier.load(args.model or DEFAULT_MODEL)
-    except BadModel as exc:
-        raise ConfigError("--model", args.model or str(DEFAULT_MODEL), f"a classifier's data ({exc})") from None
-    rows = []
-    for f in files:
-        x, y = read_card(f)
-        try:
-            rows.append(features(x, y))
-        except BadCard as exc:
-            raise _bad(f, f"a readable card ({exc})") from None
-    proba = clf.proba_features(np.array(rows))
-    for f, p in zip(files, proba):
+    clf = load_model(args.model, args.card)
+    rows = [_features_or_rule(*read_card(f), f, args.card) for f in files]
+    readable = [r for r in rows if r is not None]
+    proba = iter(clf.proba_features(np.array(readable)) if readable else [])
+    rule = np.array([lab == "parted_rods" for lab in clf.labels], dtype=np.float64)
+    for f, r in zip(files, rows):
+        p = rule if r is None else next(proba)
         label = clf.labels[int(np.argmax(p))]
         if args.json:
-            print(json.dumps({"file": str(f), "label": label,
-                              "probabilities": {k: round(float(v), 6) for k, v in zip(clf.labels, p)}}))
+            row = {"file": str(f), "label": label,
+                   "probabilities": {k: round(float(v), 6) for k, v in zip(clf.labels, p)}}
+            print(json.dumps({**row, "rule": True} if r is None else row))
         else:
-            print(f"{f}\t{label}\t{float(p.max()):.3f}")
+            print(f"{f}\t{label}\t{float(p.max()):.3f}" + ("\t(rule: no load variation)" if r is None else ""))
     return 0

@@ -1,13 +1,19 @@
 """Train the condition classifier on simulated cards only (docs/conditions.md).
 
     python -m srenv.tools.train_classifier --cards DIR [DIR ...] --out srenv/models/classifier.npz \
-        [--report docs/classifier_report.json] [--epochs 30] [--seed 0] [--candidates ...] [--compare M.npz ...]
+        [--report docs/classifier_report.json] [--epochs 30] [--seed 0] [--candidates ...] [--compare M.npz ...] \
+        [--card surface|pump]
 
 Reads the card sets written by ``srenv cards`` (their ``train`` split to fit, ``validation`` to choose the
 model; the ``test`` split is scored once at the end, for the docs), fits each candidate of CANDIDATES on
 AUG_COPIES augmented versions of every training card (srenv.analysis.card_augment), picks the one with the best
 accuracy on augmented validation cards, and writes its weights as data (NPZ, no pickle). No real card is
 read here. Needs torch (a training-time dependency; inference is numpy only).
+
+``--card pump`` (run P1) trains on the sets' pump (downhole) cards instead, with the load ratio set to 0
+(card_shape), and records ``card_type`` in the model file; a clean pump card the representation cannot read is
+*degenerate*: left out of the training pool and the validation scoring, counted, and on the test split called
+``parted_rods`` by rule (docs/conditions.md, run P1). The default, ``surface``, is runs 1-6's path bit for bit.
 """
 
 from __future__ import annotations
@@ -20,7 +26,7 @@ from pathlib import Path
 import numpy as np
 
 from ..analysis.card_augment import InstrumentAugment, SpectralAugment, augment
-from ..analysis.card_shape import BadCard, features
+from ..analysis.card_shape import CARD_TYPES, BadCard, features
 from ..cli_types import OneLineParser
 from ..physics.conditions import LABELS
 from ..task.card_set import load_cards
@@ -31,16 +37,23 @@ CANDIDATES = {"mlp_aug": ((128, 128), True), "mlp_clean": ((128, 128), False), "
 VALIDATION_DRAWS = 3  # augmented copies of each validation card
 AUG_COPIES = 6  # augmented copies of each training card (the training pool)
 BATCH = 512
+# the card set's (position, load) arrays of each card type (docs/cards_dataset.md)
+CARD_ARRAYS = {"surface": ("polished_rod_position_m", "polished_rod_load_n"), "pump": ("pump_position_m", "pump_load_n")}
+DEGENERATE_RULE = "parted_rods"  # a degenerate pump card's label by rule (run P1, fixed a priori)
 
 
-def load_sets(dirs: list[str]) -> dict[str, np.ndarray]:
+def load_sets(dirs: list[str], card: str = "surface") -> dict[str, np.ndarray]:
+    """The sets' columns; ``position`` and ``load`` are the card type's arrays."""
     sets = [load_cards(str(Path(d) / "cards.npz")) for d in dirs]
-    keys = ("polished_rod_position_m", "polished_rod_load_n", "label", "split", "well_seed")
-    return {k: np.concatenate([s[k] for s in sets]) for k in keys}
+    keys = (*CARD_ARRAYS[card], "label", "split", "well_seed")
+    data = {k: np.concatenate([s[k] for s in sets]) for k in keys}
+    data["position"], data["load"] = (data[k] for k in CARD_ARRAYS[card])
+    return data
 
 
 def featurise(x: np.ndarray, y: np.ndarray, labels: np.ndarray, rng, aug: bool, draws: int = 1,
-              instrument: InstrumentAugment | None = None, spectral: SpectralAugment | None = None):
+              instrument: InstrumentAugment | None = None, spectral: SpectralAugment | None = None,
+              card: str = "surface"):
     """Feature rows and labels (cards the representation cannot read are dropped and counted)."""
     rows, out = [], []
     for _ in range(draws):
@@ -48,7 +61,7 @@ def featurise(x: np.ndarray, y: np.ndarray, labels: np.ndarray, rng, aug: bool, 
             if aug:
                 p, q = augment(p, q, rng, instrument, spectral)
             try:
-                rows.append(features(p, q))
+                rows.append(features(p, q, card))
             except BadCard:
                 continue
             out.append(lab)
@@ -89,20 +102,40 @@ def fit(f0: np.ndarray, t0: np.ndarray, widths: tuple, epochs: int, seed: int) -
     return weights
 
 
+def degenerate(data: dict, card: str) -> np.ndarray:
+    """Cards whose clean card the representation cannot read (run P1's rule; always none for surface cards, whose
+    path stays runs 1-6's)."""
+    bad = np.zeros(len(data["label"]), dtype=bool)
+    if card == "surface":
+        return bad
+    for i, (p, q) in enumerate(zip(data["position"], data["load"])):
+        try:
+            features(p, q, card)
+        except BadCard:
+            bad[i] = True
+    return bad
+
+
 def evaluate(weights: dict, data: dict, idx: np.ndarray, aug: bool, seed: int,
              instrument: InstrumentAugment | None = None,
-             spectral: SpectralAugment | None = None) -> tuple[float, np.ndarray]:
+             spectral: SpectralAugment | None = None, card: str = "surface",
+             ruled: np.ndarray | None = None) -> tuple[float, np.ndarray]:
+    """Accuracy and confusion on cards idx (augmented: VALIDATION_DRAWS versions each); ``ruled``: labels of
+    degenerate cards, called DEGENERATE_RULE by rule, counted once per draw."""
     from ..analysis.card_classifier import CardClassifier
 
     clf = CardClassifier(tuple(str(s) for s in weights["labels"]), weights["mean"], weights["std"],
                          [(weights[f"w{i}"], weights[f"b{i}"]) for i in range(8) if f"w{i}" in weights])
     rng = np.random.default_rng(seed)
-    f, t = featurise(data["polished_rod_position_m"][idx], data["polished_rod_load_n"][idx], data["label"][idx],
-                     rng, aug, VALIDATION_DRAWS if aug else 1, instrument, spectral)
+    f, t = featurise(data["position"][idx], data["load"][idx], data["label"][idx],
+                     rng, aug, VALIDATION_DRAWS if aug else 1, instrument, spectral, card)
     pred = np.argmax(clf.proba_features(f), axis=1)
     cm = np.zeros((len(LABELS), len(LABELS)), dtype=np.int64)
     np.add.at(cm, (t, pred), 1)
-    return float(np.mean(pred == t)), cm
+    if ruled is None or not len(ruled):
+        return float(np.mean(pred == t)), cm
+    np.add.at(cm, (ruled, LABELS.index(DEGENERATE_RULE)), VALIDATION_DRAWS if aug else 1)
+    return float(np.trace(cm) / cm.sum()), cm
 
 
 def _read_weights(path: str) -> dict:
@@ -146,13 +179,27 @@ def main(argv: list[str] | None = None) -> int:
                     "position transducer lagging the load by up to 3 %% of the period (run 5; default 0)")
     ap.add_argument("--spectral-p", type=_probability, default=0.0, help="augmentation: probability of the card's "
                     "zero-phase low-pass exp(-(k/K)^2), K log-uniform in [6, 30] (run 6; default 0: runs 1-5)")
+    ap.add_argument("--card", choices=CARD_TYPES, default="surface", help="the card to train on: the polished "
+                    "rod's (surface, default: runs 1-6) or the pump's (downhole; run P1, the load ratio set to 0)")
     a = ap.parse_args(argv)
+    if a.card == "pump" and (a.synth_position_p > 0.0 or a.position_lag_p > 0.0):
+        ap.error("--synth-position-p/--position-lag-p: the instrument effects belong to the surface unit's "
+                 "position channel, expected 0 with --card pump")
     inst = (InstrumentAugment(a.synth_position_p, a.position_lag_p)
             if a.synth_position_p > 0.0 or a.position_lag_p > 0.0 else None)
     spec = SpectralAugment(a.spectral_p) if a.spectral_p > 0.0 else None
-    data = load_sets(a.cards)
+    data = load_sets(a.cards, a.card)
+    bad = degenerate(data, a.card)
     split_idx = {s: np.flatnonzero(data["split"] == s) for s in ("train", "validation", "test")}
     report: dict = {"n_cards": {s: len(i) for s, i in split_idx.items()}, "candidates": {}}
+    if a.card == "pump":
+        report["card"] = a.card
+        report["degenerate"] = {s: {lab: int(np.sum(bad[i] & (data["label"][i] == k)))
+                                    for k, lab in enumerate(LABELS) if np.any(bad[i] & (data["label"][i] == k))}
+                                for s, i in split_idx.items()}
+        report["degenerate_rule"] = DEGENERATE_RULE
+    ruled = data["label"][split_idx["test"][bad[split_idx["test"]]]]
+    split_idx = {s: i[~bad[i]] for s, i in split_idx.items()}  # the model reads only readable cards
     if inst is not None:
         report["instrument_augment"] = {"synth_position_p": inst.synth_position_p,
                                         "position_lag_p": inst.position_lag_p,
@@ -163,26 +210,27 @@ def main(argv: list[str] | None = None) -> int:
     tr = split_idx["train"]
     pools = {}  # AUG_COPIES augmented versions of every training card (or the clean cards), drawn once
     for aug in {CANDIDATES[c][1] for c in a.candidates}:
-        pools[aug] = featurise(data["polished_rod_position_m"][tr], data["polished_rod_load_n"][tr],
-                               data["label"][tr], np.random.default_rng(a.seed), aug, AUG_COPIES if aug else 1, inst,
-                               spec)
+        pools[aug] = featurise(data["position"][tr], data["load"][tr], data["label"][tr],
+                               np.random.default_rng(a.seed), aug, AUG_COPIES if aug else 1, inst, spec, a.card)
     models = {name: (lambda widths=widths, aug=aug: fit(*pools[aug], widths, a.epochs, a.seed))
               for name, (widths, aug) in CANDIDATES.items() if name in a.candidates}
     models.update({path: (lambda path=path: _read_weights(path)) for path in a.compare})  # trained before
     for name, make in models.items():
         w = make()
-        acc_aug, _ = evaluate(w, data, split_idx["validation"], True, a.seed + 1, inst, spec)
-        acc_clean, _ = evaluate(w, data, split_idx["validation"], False, a.seed + 1)
+        acc_aug, _ = evaluate(w, data, split_idx["validation"], True, a.seed + 1, inst, spec, a.card)
+        acc_clean, _ = evaluate(w, data, split_idx["validation"], False, a.seed + 1, card=a.card)
         report["candidates"][name] = {"validation_accuracy_augmented": acc_aug,
                                       "validation_accuracy_clean": acc_clean}
         print(json.dumps({name: report["candidates"][name]}), file=sys.stderr)
         if acc_aug > best_acc:
             best, best_acc, report["chosen"] = w, acc_aug, name
     for aug in (True, False):
-        acc, cm = evaluate(best, data, split_idx["test"], aug, a.seed + 2, inst, spec)
+        acc, cm = evaluate(best, data, split_idx["test"], aug, a.seed + 2, inst, spec, a.card, ruled)
         key = "augmented" if aug else "clean"
         report[f"test_accuracy_{key}"], report[f"test_confusion_{key}"] = acc, cm.tolist()
     report["labels"] = list(LABELS)
+    if a.card != "surface":  # a surface model's file stays runs 1-6's (no entry = surface)
+        best = {**best, "card_type": np.array(a.card)}
     write_model(a.out, best)
     if a.report:
         Path(a.report).write_text(json.dumps(report, indent=1) + "\n")
