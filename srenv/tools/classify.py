@@ -12,7 +12,9 @@ one line and exits 2.
 ``--card pump`` reads the same CSVs as pump cards (the plunger's position and the load at the rod string's bottom,
 in any units and either load convention) with the pump model (``srenv/models/classifier_pump.npz``); a model
 trained on the other card type is refused. A pump card with a stroke but no load variation is called
-``parted_rods`` by rule (docs/conditions.md, run P1; ``"rule": true`` in its JSON line).
+``parted_rods`` by rule (docs/conditions.md, run P1; ``"rule": true`` in its JSON line). With ``--config WELL`` the
+CSVs are *surface* cards in SI units (one stroke at the well's stroke rate): each is diagnosed first (``srenv
+diagnose``'s Gibbs method, true loads) and its pump card classified.
 """
 
 from __future__ import annotations
@@ -33,7 +35,8 @@ BOTTOM_BAND = 0.02  # share of the stroke: samples this close to the lowest posi
 def add_parser(sub) -> None:
     c = sub.add_parser("classify", help="name the pump condition of surface cards (CSV or a directory)")
     c.add_argument("path", help="a card CSV or a directory of *.csv")
-    c.add_argument("--config", help="the well's config (checked; the shipped model reads the card alone)")
+    c.add_argument("--config", help="the well's config (checked; with --card pump the cards are surface cards in SI "
+                   "units, diagnosed to pump cards first; the surface model reads the card alone)")
     c.add_argument("--json", action="store_true", help="one JSON line per card")
     c.add_argument("--model", help="model file (default: the shipped srenv/models/classifier.npz, "
                    "with --card pump srenv/models/classifier_pump.npz)")
@@ -149,14 +152,28 @@ def _features_or_rule(x: np.ndarray, y: np.ndarray, f: Path, card: str) -> np.nd
         raise _bad(f, f"a readable card ({exc})") from None
 
 
+def diagnosed(cfg, x: np.ndarray, y: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The pump card of one surface card (SI, one stroke equally spaced in time at the well's stroke rate)."""
+    from ..analysis.diagnose import diagnose_card
+    from ..config_checks import run_spm
+
+    period = 60.0 / run_spm(cfg)
+    card = diagnose_card(cfg, np.arange(len(x)) * (period / len(x)), x, y, period_s=period)
+    return card.pump_position_m, card.pump_load_n
+
+
 def main(args: argparse.Namespace) -> int:
+    cfg = None
     if args.config:
         from ..config import load_config
 
-        load_config(args.config)
+        cfg = load_config(args.config)
     files = card_files(args.path)
     clf = load_model(args.model, args.card)
-    rows = [_features_or_rule(*read_card(f), f, args.card) for f in files]
+    cards = [read_card(f) for f in files]
+    if cfg is not None and args.card == "pump":  # surface cards of a described well: diagnose them first
+        cards = [diagnosed(cfg, x, y) for x, y in cards]
+    rows = [_features_or_rule(x, y, f, args.card) for f, (x, y) in zip(files, cards)]
     readable = [r for r in rows if r is not None]
     proba = iter(clf.proba_features(np.array(readable)) if readable else [])
     rule = np.array([lab == "parted_rods" for lab in clf.labels], dtype=np.float64)

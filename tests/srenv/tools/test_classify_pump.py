@@ -215,3 +215,18 @@ def test_simulated_pump_cards_of_other_conditions_are_named(tmp_path, capsys) ->
     assert main(["classify", str(tmp_path), "--card", "pump", "--json"]) == 0
     got = {Path(r["file"]).stem: r["label"] for r in map(json.loads, capsys.readouterr().out.splitlines())}
     assert got == {k: k for k in cards}
+
+
+def test_surface_cards_of_a_described_well_are_diagnosed_then_classified(tmp_path, capsys) -> None:
+    """--config WELL --card pump: the surface card (SI, one stroke) is diagnosed to its pump card first."""
+    from srenv.analysis.condition_card import condition_config, simulate_card
+    from srenv.config import load_config
+
+    well = load_config("paper_fig3_vertical")
+    for k in ("full", "fluid_pound", "tagging_down"):
+        c = simulate_card(condition_config(well, k, 0.0 if k == "full" else 0.7))
+        _write(tmp_path / f"{k}.csv", c.polished_rod_position_m[:-1], c.polished_rod_load_n[:-1])
+    assert main(["classify", str(tmp_path), "--config", "paper_fig3_vertical", "--card", "pump", "--json"]) == 0
+    got = {Path(r["file"]).stem: r["label"] for r in map(json.loads, capsys.readouterr().out.splitlines())}
+    assert got["fluid_pound"] == "fluid_pound" and got["tagging_down"] == "tagging_down"
+    assert got["full"] in RECTANGLES  # the diagnosed full pump card is the rectangle (parted_rods 0.41 measured)
