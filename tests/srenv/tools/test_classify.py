@@ -91,23 +91,22 @@ def test_field_export_headers_name_the_columns(tmp_path, capsys) -> None:
 
 @pytest.mark.parametrize("name", sorted(REFERENCE))
 def test_reference_cards(name, tmp_path, capsys, request) -> None:
-    if name in MISSED:
-        request.applymarker(pytest.mark.xfail(strict=True, reason=MISSED[name]))
+    _reference_card_check(name, tmp_path, capsys, request, MISSED, "surface")
+
+
+def _reference_card_check(name, tmp_path, capsys, request, missed: dict[str, str], card_type: str) -> None:
+    if name in missed:
+        request.applymarker(pytest.mark.xfail(strict=True, reason=missed[name]))
     card = json.loads(DATA.read_text())["cards"][name]
     write_card(tmp_path / f"{name}.csv", card["position"], card["load"])
-    got = classify_dir(tmp_path, capsys)
+    got = classify_dir(tmp_path, capsys, card_type)
     assert got[f"{name}.csv"]["label"] == REFERENCE[name]
 
 
 @pytest.mark.parametrize("name", sorted(REFERENCE))
 def test_reference_cards_as_pump_cards(name, tmp_path, capsys, request) -> None:
     """The plate's cards are drawn as downhole card shapes (a rectangle for normal): the pump model's reading."""
-    if name in MISSED_PUMP:
-        request.applymarker(pytest.mark.xfail(strict=True, reason=MISSED_PUMP[name]))
-    card = json.loads(DATA.read_text())["cards"][name]
-    write_card(tmp_path / f"{name}.csv", card["position"], card["load"])
-    got = classify_dir(tmp_path, capsys, card="pump")
-    assert got[f"{name}.csv"]["label"] == REFERENCE[name]
+    _reference_card_check(name, tmp_path, capsys, request, MISSED_PUMP, "pump")
 
 
 def test_reference_file_names_its_source_and_licence() -> None:
