@@ -29,7 +29,7 @@ class BadModel(ValueError):
     """A model file that is not a classifier of this shape (or not data at all)."""
 
 
-def _card_type(data: dict) -> str:
+def card_type_of_file(data: dict) -> str:
     """The model file's card type: one string (stored as a one-item array), absent = surface (files before P1)."""
     if "card_type" not in data:
         return "surface"
@@ -52,7 +52,7 @@ class CardClassifier:
             raise BadModel(f"model file {path}: not a readable NPZ of arrays ({exc})") from None
         try:
             labels = tuple(str(x) for x in data["labels"])
-            card_type = _card_type(data)
+            card_type = card_type_of_file(data)
             mean, std = data["mean"].astype(np.float64), data["std"].astype(np.float64)
             layers = []
             for i in range(MAX_LAYERS):

@@ -143,6 +143,15 @@ def _read_weights(path: str) -> dict:
         return {k: z[k] for k in z.files}
 
 
+def _card_type_of(path: str) -> str:
+    from ..analysis.card_classifier import card_type_of_file
+
+    try:
+        return card_type_of_file(_read_weights(path))
+    except (OSError, ValueError, EOFError):
+        return "unreadable"
+
+
 def write_model(path: str, weights: dict) -> None:
     from ..task.card_set import write_npz
 
@@ -185,6 +194,11 @@ def main(argv: list[str] | None = None) -> int:
     if a.card == "pump" and (a.synth_position_p > 0.0 or a.position_lag_p > 0.0):
         ap.error("--synth-position-p/--position-lag-p: the instrument effects belong to the surface unit's "
                  "position channel, expected 0 with --card pump")
+    for path in a.compare:  # a model of the other card type would be scored on cards it cannot read
+        kind = _card_type_of(path)
+        if kind != a.card:
+            ap.error(f"--compare {path}: " + ("not a readable model file" if kind == "unreadable" else
+                                              f"a {kind} card model") + f", expected a {a.card} card model")
     inst = (InstrumentAugment(a.synth_position_p, a.position_lag_p)
             if a.synth_position_p > 0.0 or a.position_lag_p > 0.0 else None)
     spec = SpectralAugment(a.spectral_p) if a.spectral_p > 0.0 else None

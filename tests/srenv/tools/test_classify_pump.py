@@ -230,3 +230,13 @@ def test_surface_cards_of_a_described_well_are_diagnosed_then_classified(tmp_pat
     got = {Path(r["file"]).stem: r["label"] for r in map(json.loads, capsys.readouterr().out.splitlines())}
     assert got["fluid_pound"] == "fluid_pound" and got["tagging_down"] == "tagging_down"
     assert got["full"] in RECTANGLES  # the diagnosed full pump card is the rectangle (parted_rods 0.41 measured)
+
+
+def test_trainer_refuses_to_compare_a_model_of_the_other_card_type(capsys) -> None:
+    from srenv.analysis.card_classifier import DEFAULT_MODEL
+    from srenv.tools.train_classifier import main as train
+
+    with pytest.raises(SystemExit) as exc:
+        train(["--cards", "nowhere", "--out", "m.npz", "--card", "pump", "--compare", str(DEFAULT_MODEL)])
+    err = capsys.readouterr().err
+    assert exc.value.code == 2 and err.count("\n") == 1 and "a surface card model, expected a pump" in err
