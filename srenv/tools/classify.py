@@ -41,7 +41,9 @@ def add_parser(sub) -> None:
     c.add_argument("--model", help="model file (default: the shipped srenv/models/classifier.npz, "
                    "with --card pump srenv/models/classifier_pump.npz)")
     c.add_argument("--card", choices=("surface", "pump"), default="surface",
-                   help="the card type of the CSVs: the polished rod's (surface, default) or the pump's (downhole)")
+                   help="the card type of the CSVs: the polished rod's (surface, default) or the pump's (downhole); "
+                   "on pump cards full, parted rods, flowing and heavy oil share one normalised shape (run P1): "
+                   "read those four on surface cards")
     c.set_defaults(func=main)
 
 
@@ -152,13 +154,19 @@ def _features_or_rule(x: np.ndarray, y: np.ndarray, f: Path, card: str) -> np.nd
         raise _bad(f, f"a readable card ({exc})") from None
 
 
-def diagnosed(cfg, x: np.ndarray, y: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """The pump card of one surface card (SI, one stroke equally spaced in time at the well's stroke rate)."""
+def diagnosed(cfg, x: np.ndarray, y: np.ndarray, f: Path) -> tuple[np.ndarray, np.ndarray]:
+    """The pump card of one surface card (SI, one stroke equally spaced in time at the well's stroke rate); a card
+    the diagnosis cannot read (wrong units for this well, say) is refused in one line naming the file."""
     from ..analysis.diagnose import diagnose_card
     from ..config_checks import run_spm
 
     period = 60.0 / run_spm(cfg)
-    card = diagnose_card(cfg, np.arange(len(x)) * (period / len(x)), x, y, period_s=period)
+    try:
+        card = diagnose_card(cfg, np.arange(len(x)) * (period / len(x)), x, y, period_s=period)
+    except (ValueError, ArithmeticError, np.linalg.LinAlgError) as exc:
+        raise _bad(f, f"a surface card in SI units of well {cfg.name} that srenv diagnose reads ({exc})") from None
+    if not (np.all(np.isfinite(card.pump_position_m)) and np.all(np.isfinite(card.pump_load_n))):
+        raise _bad(f, f"a surface card in SI units of well {cfg.name} (its diagnosed pump card is not finite)")
     return card.pump_position_m, card.pump_load_n
 
 
@@ -172,7 +180,7 @@ def main(args: argparse.Namespace) -> int:
     clf = load_model(args.model, args.card)
     cards = [read_card(f) for f in files]
     if cfg is not None and args.card == "pump":  # surface cards of a described well: diagnose them first
-        cards = [diagnosed(cfg, x, y) for x, y in cards]
+        cards = [diagnosed(cfg, x, y, f) for f, (x, y) in zip(files, cards)]
     rows = [_features_or_rule(x, y, f, args.card) for f, (x, y) in zip(files, cards)]
     readable = [r for r in rows if r is not None]
     proba = iter(clf.proba_features(np.array(readable)) if readable else [])

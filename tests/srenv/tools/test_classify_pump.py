@@ -240,3 +240,25 @@ def test_trainer_refuses_to_compare_a_model_of_the_other_card_type(capsys) -> No
         train(["--cards", "nowhere", "--out", "m.npz", "--card", "pump", "--compare", str(DEFAULT_MODEL)])
     err = capsys.readouterr().err
     assert exc.value.code == 2 and err.count("\n") == 1 and "a surface card model, expected a pump" in err
+
+
+@pytest.mark.parametrize("failure", ["raises", "not_finite"])
+def test_a_surface_card_the_diagnosis_cannot_read_is_refused_in_one_line(tmp_path, capsys, monkeypatch,
+                                                                          failure) -> None:
+    """--config --card pump: a card diagnose cannot turn into a finite pump card (wrong units for the well, say)
+    exits 2 with one line naming the file, before any answer."""
+    import srenv.analysis.diagnose as diag
+
+    def broken(cfg, t, x, y, **kw):
+        if failure == "raises":
+            raise ValueError("singular march")
+        return type("Card", (), {"pump_position_m": x * np.nan, "pump_load_n": y})()
+
+    monkeypatch.setattr(diag, "diagnose_card", broken)
+    x = np.linspace(0.0, 1.0, 64)
+    np.savetxt(tmp_path / "c.csv", np.c_[np.r_[x, x[::-1]], np.r_[x * 0 + 2e4, x * 0 + 1e4]], delimiter=",",
+               header="polished_rod_position_m,polished_rod_load_n", comments="")
+    assert main(["classify", str(tmp_path / "c.csv"), "--config", "paper_fig3_vertical", "--card", "pump"]) == 2
+    cap = capsys.readouterr()
+    assert cap.out == "" and len(cap.err.strip().splitlines()) == 1
+    assert "c.csv" in cap.err and "SI units" in cap.err
