@@ -173,9 +173,7 @@ def run_compiled(sim, res, f, period: float, n_total: float, done: float, t_end:
     while True:
         why, ran_now = repeat_strokes(acc, p, a, grid, z)
         ran = ran or ran_now
-        sim.time_s = float(acc[TIME])
-        if ann is not None:
-            ann.volume_m3, ann.last_time_s = float(acc[VOLUME]), float(acc[LAST])
+        sim.fast_forwarded(float(acc[TIME]), float(acc[VOLUME]), float(acc[LAST]))
         if why != DRIFTED:
             break
         sim.replan_upstroke(period)  # as the Python loop: the coming upstroke's liquid, exact strokes due
