@@ -16,6 +16,10 @@ Env steps/s of srenv/SuckerRod-v1 with the acceptance's protocol (train scenario
 ``--fast-stepping`` makes the after side's env with ``fast_stepping=True`` (the before side cannot take it):
 
     python scripts/bench_interleaved.py /tmp/srenv-acceptance/old-91adcce . --env --fast-stepping --repeats 3
+
+The same for v2 against a checkout that has it (``--env-id``, both sides):
+
+    python scripts/bench_interleaved.py /tmp/main . --env --env-id srenv/SuckerRod-v2 --repeats 10
 """
 import argparse
 import json
@@ -32,6 +36,8 @@ ap.add_argument("--env", action="store_true", help="env steps/s of srenv/SuckerR
 ap.add_argument("--kernel", action="store_true",
                 help="srenv bench's kernel block (µs/step, the floor's, floor_ratio) instead of strokes/s")
 ap.add_argument("--fast-stepping", action="store_true", help="the after side's env with fast_stepping=True")
+ap.add_argument("--env-id", default="srenv/SuckerRod-v1", help="the env of --env (both sides: e.g. srenv/SuckerRod-v2 "
+                "against a checkout that has it)")
 args = ap.parse_args()
 reps, strokes = args.repeats, args.strokes
 code = r'''
@@ -53,12 +59,13 @@ env_code = r'''
 import sys, time, json, warnings
 warnings.filterwarnings("ignore")
 import numpy as np, gymnasium as gym
-from srenv import ENV_ID_V1  # importing srenv registers the envs
+import srenv  # noqa: F401  (registers the envs)
 kw = {"fast_stepping": True} if sys.argv[2] == "fast" else {}
+env_id = sys.argv[3]
 out = {}
 for label, a0 in (("full_speed", 1.0), ("vsd_minimum", -0.6)):
     a = np.array([a0, 1.0], np.float32)
-    env = gym.make(ENV_ID_V1, scenario="train", **kw); env.reset(seed=3); env.step(a)
+    env = gym.make(env_id, scenario="train", **kw); env.reset(seed=3); env.step(a)
     n, t0 = 0, time.process_time()
     for seed in (11, 12):
         env.reset(seed=seed)
@@ -78,7 +85,8 @@ res = {k: [] for k in trees}
 for r in range(reps):
     for side in (("before", "after") if r % 2 == 0 else ("after", "before")):
         mode = "fast" if side == "after" and args.fast_stepping else "plain"
-        argv = [sys.executable, "-c", env_code, "0", mode] if args.env else [sys.executable, "-c", code, str(strokes)]
+        argv = [sys.executable, "-c", env_code, "0", mode, args.env_id] if args.env else \
+            [sys.executable, "-c", code, str(strokes)]
         if args.kernel:
             argv = [sys.executable, "-c", kernel_code]
         p = subprocess.run(argv, env={"PYTHONPATH": trees[side], "PATH": "/usr/bin"}, capture_output=True, text=True,

@@ -38,6 +38,7 @@ PARTS = (  # (module, qualified name): the step's Python, timed by self time wit
     ("srenv.analysis.card_features", "impact_speed_m_s"),
     ("srenv.analysis.card_shape", "features"),
     ("srenv.task.interval", "IntervalRunner._repeat_stroke"),
+    ("srenv.task.fast_forward", "run_compiled"),  # the fast-forward's loop compiled (§2e; absent before it)
     ("srenv.task.interval", "stroke_figures"),
     ("srenv.analysis.stroke_summary", "summarize"),
     ("srenv.surface_unit.surface", "SurfaceMotion.gearbox_report"),
@@ -47,6 +48,7 @@ PARTS = (  # (module, qualified name): the step's Python, timed by self time wit
     ("srenv.simulation.pump_cycle", "PumpCycle.fast_forward"),
     ("srenv.envs.sucker_rod_v1", "SuckerRodV1Env.reset"),
     ("srenv.config", "load_config"),
+    ("srenv.config", "config_from_dict"),
     ("srenv.envs.sucker_rod_v2", "SuckerRodV2Env._card_probabilities"),
     ("srenv.envs.sucker_rod_v2", "SuckerRodV2Env._observe"),
     ("srenv.envs.sucker_rod_v1", "SuckerRodV1Env.step"),
@@ -62,7 +64,10 @@ class SelfTimer:
         self._stack: list[float] = []
 
     def wrap(self, module: str, qualname: str) -> None:
-        mod = importlib.import_module(module)
+        try:
+            mod = importlib.import_module(module)
+        except ModuleNotFoundError:  # an older tree without it
+            return
         *path, name = qualname.split(".")
         owner = functools.reduce(getattr, path, mod)
         fn = getattr(owner, name, None)

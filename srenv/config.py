@@ -83,32 +83,43 @@ def _type_hints(cls: type) -> dict:
     return typing.get_type_hints(cls)
 
 
+@functools.cache
+def _plan(cls: type) -> tuple[dict, tuple]:
+    """A section's fields as ``_parse`` walks them, resolved once per class (the reset of a well not seen parses
+    two configs: docs/speed.md §2e): (the fields by name, (name, type, origin, a section, required, metadata) in
+    order)."""
+    hints = _type_hints(cls)
+    fields = {f.name: f for f in dataclasses.fields(cls)}
+    rows = tuple((name, hints[name], typing.get_origin(hints[name]), _is_dataclass_type(hints[name]),
+                  f.default is dataclasses.MISSING and f.default_factory is dataclasses.MISSING, dict(f.metadata))
+                 for name, f in fields.items())
+    return fields, rows
+
+
 def _parse(cls: type, data: Any, path: str) -> Any:
     if not isinstance(data, dict):
         raise ConfigError(path or "<root>", data, f"a mapping of {cls.__name__} fields")
-    hints = _type_hints(cls)
-    fields = {f.name: f for f in dataclasses.fields(cls)}
+    fields, rows = _plan(cls)
     unknown = [k for k in data if k not in fields]
     if unknown:
         key = unknown[0]
         where = f"{path}.{key}" if path else str(key)
         raise ConfigError(where, data[key], "no such field; known fields: " + ", ".join(fields))
     kwargs = {}
-    for name, f in fields.items():
+    for name, tp, origin, section, required, meta in rows:
         where = f"{path}.{name}" if path else name
         if name not in data:
-            if f.default is dataclasses.MISSING and f.default_factory is dataclasses.MISSING:
+            if required:
                 raise ConfigError(where, None, "a value (this field is required)"
-                                  + (f" in {f.metadata['unit']}" if "unit" in f.metadata else ""))
+                                  + (f" in {meta['unit']}" if "unit" in meta else ""))
             continue
-        tp, value = hints[name], data[name]
-        origin = typing.get_origin(tp)
+        value = data[name]
         if origin is tuple:
             (item_tp, _ellipsis) = typing.get_args(tp)
             if not isinstance(value, list):
                 raise ConfigError(where, value, f"a list of {item_tp.__name__} entries")
             kwargs[name] = tuple(_parse(item_tp, v, f"{where}[{i}]") for i, v in enumerate(value))
-        elif _is_dataclass_type(tp):
+        elif section:
             kwargs[name] = _parse(tp, value, where)
         elif origin in (typing.Union, types.UnionType):
             # an optional field (``float | None``) or section (``Section | None``): null is "not given"
@@ -118,9 +129,9 @@ def _parse(cls: type, data: Any, path: str) -> Any:
             elif _is_dataclass_type(inner):
                 kwargs[name] = _parse(inner, value, where)
             else:
-                kwargs[name] = _parse_scalar(inner, value, where, dict(f.metadata))
+                kwargs[name] = _parse_scalar(inner, value, where, meta)
         else:
-            kwargs[name] = _parse_scalar(tp, value, where, dict(f.metadata))
+            kwargs[name] = _parse_scalar(tp, value, where, meta)
     return cls(**kwargs)
 
 

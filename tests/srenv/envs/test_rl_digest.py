@@ -41,3 +41,22 @@ def test_the_digest_sees_a_changed_bit() -> None:
     env_id, kwargs = mod.CASES["v2"]
     assert mod.digest(env_id, kwargs, "random", seeds=(1,), steps=2) \
         != mod.digest(env_id, kwargs, "random", seeds=(2,), steps=2)
+
+
+# The acceptance's speed protocol (acceptance/speed: warm-up step on seed 3, then seeds 11 and 12, 12 steps each at
+# a constant action), computed by scripts/rl_digest.py on a checkout of 67d2e08 (main before issue 25's fifth round,
+# docs/speed.md §2e): its fast paths move no result of v1 or v2.
+AT_67D2E08 = {
+    "v1/acceptance_full_speed": "2f9954d13483b2540627f83b222ef997760cdfa3326cb413d2c75380ed9aefa0",
+    "v1/acceptance_vsd_minimum": "79bd8cfa6b2bd36182ce19b3698c24bf6280f210ea1c62e81c157846269097ab",
+    "v2/acceptance_full_speed": "41f179cfc7076d6ca68d616d0865f08c1001254fe22226fb6539b817581ab553",
+    "v2/acceptance_vsd_minimum": "43dec696259b827da09d5dbc862d0e69d1712451083a6c354fb90ce26504c9ea",
+}
+
+
+@pytest.mark.parametrize("case", sorted(AT_67D2E08))
+def test_acceptance_protocol_is_that_of_67d2e08_to_the_bit(case: str) -> None:
+    mod = _digest_module()
+    name, protocol = case.split("/")
+    a0 = mod.ACCEPTANCE_ACTIONS[protocol.removeprefix("acceptance_")]
+    assert mod.acceptance_digest(f"srenv/SuckerRod-{name}", a0) == AT_67D2E08[case]
