@@ -134,7 +134,7 @@ def test_cli_names_the_bad_field_in_one_line(tmp_path):
     p = tmp_path / "bad.yaml"
     p.write_text(yaml.safe_dump(raw))
     r = subprocess.run([sys.executable, "-m", "agents", "benchmark", str(p), "--out-dir", str(tmp_path / "o")],
-                       capture_output=True, text=True, cwd=REPO, timeout=120)
+                       check=False, capture_output=True, text=True, cwd=REPO, timeout=120)
     assert r.returncode == 2 and "Traceback" not in r.stderr
     assert "teacher.params.horizon = -3" in r.stderr.strip().splitlines()[-1]
 
