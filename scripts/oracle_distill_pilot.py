@@ -8,8 +8,9 @@ return / 144 intervals), beside the causal oracle's figures from --oracle-jsonl 
 
     nice -n 8 python scripts/oracle_distill_pilot.py --out runs/oracle_distill \\
         --iterations 3 --episodes 30 --workers 2 --oracle-jsonl /work/lead/causal_pilot.jsonl
-    # refit a student of another residual scale on the same labels, no new rollouts (the reach check):
+    # refit a student of another residual scale on the same labels, no new rollouts:
     python scripts/oracle_distill_pilot.py --out runs/oracle_distill --refit-scale 2.0
+    # evaluate a distilled student again (no distillation): add --evaluate-only
 """
 
 from __future__ import annotations
@@ -89,6 +90,12 @@ def table(eps: dict, oracle_jsonl: Path | None) -> dict:
                 res["paired_usd_h"][f"{a} - {b}"] = {"mean": m, "ci95": [lo, hi], "wins": int(np.sum(ra > rb)),
                                                      "n": len(ra)}
     res["per_episode"] = {k: v.tolist() for k, v in rewards.items()}
+    # the reward's terms and the mean operating point (SPM, stroke, ...) per policy: what each does differently
+    res["terms_usd_h"] = {k: {t: float(np.mean([e[t] for e in v])) / INTERVALS for t in sorted(v[0])
+                              if t.startswith(("reward_", "cost_"))} for k, v in eps.items()}
+    res["operating_point"] = {k: {t: float(np.mean([e[t] for e in v])) for t in sorted(v[0]) if t.startswith("mean_")}
+                              for k, v in eps.items()}
+    res["episodes"] = eps
     return res
 
 
@@ -104,6 +111,7 @@ def main() -> None:
     ap.add_argument("--scale", type=float, default=0.5)
     ap.add_argument("--workers", type=int, default=2)
     ap.add_argument("--refit-scale", type=float, default=None)
+    ap.add_argument("--evaluate-only", action="store_true", help="evaluate OUT/student.zip, no distillation")
     ap.add_argument("--oracle-jsonl", type=Path, default=None)
     ap.add_argument("--val-episodes", type=int, default=None, help="the first N validation episodes (smoke runs)")
     a = ap.parse_args()
@@ -112,7 +120,10 @@ def main() -> None:
     pk = load_train_config(a.train_config).policy_kwargs
     a.out.mkdir(parents=True, exist_ok=True)
     summary_path = a.out / "distill.json"
-    if a.refit_scale is None:
+    if a.evaluate_only:
+        spec = {"path": str(a.out / "student.zip"), "obs_norm": str(a.out / "student_obs_norm.npz")}
+        residual, name = setup["residual"], "student"
+    elif a.refit_scale is None:
         teacher = {"kind": "causal_oracle", "iterations": a.iterations, "episodes": a.episodes}
         seeds = list(range(a.seed_start, a.seed_start + a.iterations * a.episodes))
         with Runner(a.workers) as runner:
