@@ -10,7 +10,8 @@ return / 144 intervals), beside the causal oracle's figures from --oracle-jsonl 
         --iterations 3 --episodes 30 --workers 2 --oracle-jsonl /work/lead/causal_pilot.jsonl
     # refit a student of another residual scale on the same labels, no new rollouts:
     python scripts/oracle_distill_pilot.py --out runs/oracle_distill --refit-scale 2.0
-    # evaluate a distilled student again (no distillation): add --evaluate-only
+    # evaluate a distilled student again (no distillation): add --evaluate-only; a seed ensemble of several runs'
+    # students: --evaluate-only --members DIR1 DIR2 DIR3
 """
 
 from __future__ import annotations
@@ -112,6 +113,8 @@ def main() -> None:
     ap.add_argument("--workers", type=int, default=2)
     ap.add_argument("--refit-scale", type=float, default=None)
     ap.add_argument("--evaluate-only", action="store_true", help="evaluate OUT/student.zip, no distillation")
+    ap.add_argument("--members", type=Path, nargs="*", default=None,
+                    help="with --evaluate-only: the seed ensemble of these runs' students (their mean correction)")
     ap.add_argument("--oracle-jsonl", type=Path, default=None)
     ap.add_argument("--val-episodes", type=int, default=None, help="the first N validation episodes (smoke runs)")
     a = ap.parse_args()
@@ -136,6 +139,11 @@ def main() -> None:
         spec = refit(a.out, a.refit_scale, a.seed, pk)
         residual, name = {**setup["residual"], "scale": a.refit_scale}, f"student_scale{a.refit_scale:g}"
     specs = {name: {"kind": "agent", "path": spec["path"], "obs_norm": spec["obs_norm"], "residual": residual}}
+    if a.members:
+        name = "student_ensemble"
+        specs = {name: {"kind": "ensemble", "residual": residual,
+                        "members": [{"path": str(d / "student.zip"), "obs_norm": str(d / "student_obs_norm.npz")}
+                                    for d in a.members]}}
     for b in ("fillage_pi", "pump_off"):
         specs[b] = {"kind": "baseline", "name": b, "params": setup["tuned"][b]}
     res = table(evaluate(setup, specs, a.workers), a.oracle_jsonl)
