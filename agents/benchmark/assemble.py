@@ -86,9 +86,10 @@ def policy_records(cfg: dict[str, Any], tuned: dict[str, Any], agent_specs: dict
                        "models": [model_ref(sp["path"]) for sp in specs], "episodes": eps}
         training["runs"][a] = _run_record(runs[a], specs, per_seed, val, pick, shipped)
         if runs[a].get("teacher"):
+            oracle = a not in teachers  # a causal-oracle teacher (agents/training/oracle_distill.py): no model
             training["runs"][a]["teacher"] = {
-                **runs[a]["teacher"], "observation": "privileged",
-                "models": [model_ref(t["path"]) for t in teachers[a]],
+                **runs[a]["teacher"], "observation": "true env state" if oracle else "privileged",
+                "models": [] if oracle else [model_ref(t["path"]) for t in teachers[a]],
                 "distill": [{"seed": sp["train_summary"]["seed"], "iterations": sp["distill"]}
                             for sp in specs]}
     return policies, training

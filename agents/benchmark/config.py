@@ -185,6 +185,9 @@ def _check_teacher(algo: str, run: dict[str, Any], runs: dict[str, Any], held: s
 
     key = f"benchmark config: agents.runs.{algo}.teacher"
     t = run["teacher"]
+    if isinstance(t, dict) and "kind" in t:
+        _check_oracle_teacher(key, run, t, held)
+        return
     if not isinstance(t, dict) or set(t) - DISTILL_KEYS or not {"students_from", "iterations", "episodes",
                                                                   "seed_start"} <= set(t):
         raise BenchmarkConfigError(f"{key} = {str(t)[:120]!r}: expected {{students_from: RUN, iterations: N, "
@@ -212,6 +215,48 @@ def _check_teacher(algo: str, run: dict[str, Any], runs: dict[str, Any], held: s
         check_scales(res.get("scale"), t.get("idle_scale"))
     except ValueError as exc:
         raise BenchmarkConfigError(f"{key}.{str(exc).removeprefix('residual.')}") from None
+    used = {s for seed in run["seeds"] for s in distill_seeds(t, seed)}
+    if used & held:
+        raise BenchmarkConfigError(f"{key}.seed_start = {t['seed_start']!r}: its episodes share seeds "
+                                   f"{sorted(used & held)[:5]} with tuning or validation: expected disjoint seeds")
+
+
+def _check_oracle_teacher(key: str, run: dict[str, Any], t: dict[str, Any], held: set[int]) -> None:
+    """``teacher: {kind: causal_oracle, params: {horizon, replan_every[, steps]}, iterations, episodes,
+    seed_start[, beta0]}`` (agents/training/oracle_distill.py): a fresh student, no PPO teacher."""
+    from ..training.distill import SEED_STRIDE
+    from ..training.oracle_distill import ORACLE_KIND, ORACLE_PARAM_KEYS, ORACLE_TEACHER_KEYS
+
+    if t["kind"] != ORACLE_KIND:
+        raise BenchmarkConfigError(f"{key}.kind = {t['kind']!r}: expected {ORACLE_KIND} (or no kind: PPO teachers)")
+    extra = set(t) - ORACLE_TEACHER_KEYS
+    if extra:
+        raise BenchmarkConfigError(f"{key}: unknown key(s) {sorted(extra)}: expected {sorted(ORACLE_TEACHER_KEYS)}")
+    for name, lo, hi in (("iterations", 1, 20), ("episodes", 1, 500), ("seed_start", 0, 10**9)):
+        if not _int_in(t.get(name), lo, hi):
+            raise BenchmarkConfigError(f"{key}.{name} = {t.get(name)!r}: expected an integer in [{lo}, {hi}]")
+    if t["iterations"] * t["episodes"] > SEED_STRIDE:
+        raise BenchmarkConfigError(f"{key}: iterations x episodes = {t['iterations'] * t['episodes']}: expected "
+                                   f"at most {SEED_STRIDE}")
+    beta = t.get("beta0", 0.5)
+    if isinstance(beta, bool) or not isinstance(beta, (int, float)) or not 0.0 <= beta <= 1.0:
+        raise BenchmarkConfigError(f"{key}.beta0 = {beta!r}: expected a number in [0, 1] (the oracle's share "
+                                   "of the acting corrections in iteration 0)")
+    params = t.setdefault("params", {})
+    if not isinstance(params, dict) or set(params) - ORACLE_PARAM_KEYS:
+        raise BenchmarkConfigError(f"{key}.params = {str(params)[:80]!r}: expected a mapping of "
+                                   f"{sorted(ORACLE_PARAM_KEYS)}")
+    for name in ("horizon", "replan_every"):
+        if name in params and not _int_in(params[name], 1, 144):
+            raise BenchmarkConfigError(f"{key}.params.{name} = {params[name]!r}: expected an integer in [1, 144] "
+                                       "(intervals)")
+    steps = params.get("steps", [0.3])
+    if not (isinstance(steps, list) and steps and all(isinstance(v, (int, float)) and not isinstance(v, bool)
+                                                       and 0 < v <= 2 for v in steps)):
+        raise BenchmarkConfigError(f"{key}.params.steps = {steps!r}: expected a list of numbers in (0, 2]")
+    if not run.get("residual"):
+        raise BenchmarkConfigError(f"{key}: expected a residual run (the label is the oracle's action as a "
+                                   "correction of the run's residual base)")
     used = {s for seed in run["seeds"] for s in distill_seeds(t, seed)}
     if used & held:
         raise BenchmarkConfigError(f"{key}.seed_start = {t['seed_start']!r}: its episodes share seeds "

@@ -142,3 +142,31 @@ def distill_jobs(runs: dict[str, Any], teachers: dict[str, list[dict[str, Any]]]
                          "iterations": t["iterations"], "dest": str(models_dir / f"{a}_v1_seed{seed}.zip"),
                          "teacher_summaries": [s["train_summary"] for s in tspecs]})
     return jobs
+
+
+# ------------------------------------------------------------------------ causal-oracle teachers
+def is_oracle_run(run: dict[str, Any]) -> bool:
+    """A run whose teacher is the causal oracle (agents/training/oracle_distill.py): no PPO training job."""
+    t = run.get("teacher")
+    return isinstance(t, dict) and t.get("kind") is not None
+
+
+def oracle_student(cfg: dict[str, Any], runner: Any, algo: str, seed: int, tuned: dict[str, Any],
+                   res: dict[str, Any], models_dir: Path) -> dict[str, Any]:
+    """One student of a causal-oracle run: DAgger on training-split episodes from the true env state; the
+    oracle weighs the tuned pump_off and fillage_pi as the benchmark's causal-oracle reference does."""
+    from ..training.config import load_train_config
+    from ..training.oracle_distill import ORACLE_POLICIES, distill_oracle
+    from .config import distill_seeds
+
+    run = cfg["agents"]["runs"][algo]
+    t = run["teacher"]
+    oracle = {**t.get("params", {}), "policies": [[b, tuned[b]["params"]] for b in ORACLE_POLICIES]}
+    pk = load_train_config(run["config"], run.get("overrides")).policy_kwargs
+    spec = distill_oracle(runner, t, oracle, res, cfg["env_id"], {**cfg["env_kwargs"], "scenario": "train"}, pk,
+                          distill_seeds(t, seed), seed, models_dir / f"{algo}_v1_seed{seed}.zip",
+                          log=lambda m: print(m, file=sys.stderr, flush=True))
+    spec["residual"] = res
+    spec["train_summary"] = {"num_timesteps": spec["distill"][-1]["labels"], "wall_time_s": spec["wall_time_s"],
+                             "seed": seed, "best_eval_mean_reward": None}
+    return spec

@@ -23,7 +23,9 @@ from .runs import (
     _policy_part,
     distill_jobs,
     export_model,
+    is_oracle_run,
     model_name,
+    oracle_student,
     residual_spec,
     train_job,
     training_overrides,
@@ -120,7 +122,7 @@ def train_agents(cfg: dict[str, Any], runner: Runner, tuned: dict[str, Any], wor
     residuals = {a: residual_spec(r, tuned) for a, r in runs.items()}
     jobs = [{"algo": a, "seed": s, "config": r["config"], "out": str(workdir / f"{a}_seed{s}"),
              "overrides": {**r.get("overrides", {}), **training_overrides(r, residuals[a], cfg)}}
-            for a, r in runs.items() for s in r["seeds"]]
+            for a, r in runs.items() if not is_oracle_run(r) for s in r["seeds"]]
     summaries = _mapped(runner, jobs, "training", train_job) if jobs else []
     agent_specs: dict[str, list[dict[str, Any]]] = {}
     teachers: dict[str, list[dict[str, Any]]] = {}
@@ -142,6 +144,9 @@ def train_agents(cfg: dict[str, Any], runner: Runner, tuned: dict[str, Any], wor
                                  "wall_time_s": t_wall + spec["wall_time_s"], "seed": job["seed"],
                                  "best_eval_mean_reward": None}
         agent_specs.setdefault(job["algo"], []).append(spec)
+    # causal-oracle teachers (agents/training/oracle_distill.py): no PPO training, a fresh student per seed
+    for a in [a for a, r in runs.items() if is_oracle_run(r)]:
+        agent_specs[a] = [oracle_student(cfg, runner, a, s, tuned, residuals[a], models_dir) for s in runs[a]["seeds"]]
     # seed ensembles (agents/policies/ensemble.py): the mean action of every seed's model, one more policy
     for a in [a for a in agent_specs if runs[a].get("ensemble")]:
         agent_specs[f"{a}_ensemble"] = [{**ensemble_spec(agent_specs[a]), "of": a}]
