@@ -7,7 +7,7 @@ then the student (deterministic), fillage_pi and pump_off play the pilot's valid
 return / 144 intervals), beside the causal oracle's figures from --oracle-jsonl if given. No test split.
 
     nice -n 8 python scripts/oracle_distill_pilot.py --out runs/oracle_distill \\
-        --iterations 3 --episodes 30 --workers 2 --oracle-jsonl /work/lead/causal_pilot.jsonl
+        --iterations 3 --episodes 30 --workers 2 --oracle-jsonl docs/archive/causal_oracle_pilot.jsonl
     # refit a student of another residual scale on the same labels, no new rollouts:
     python scripts/oracle_distill_pilot.py --out runs/oracle_distill --refit-scale 2.0
     # evaluate a distilled student again (no distillation): add --evaluate-only; a seed ensemble of several runs'
