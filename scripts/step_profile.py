@@ -38,7 +38,6 @@ PARTS = (  # (module, qualified name): the step's Python, timed by self time wit
     ("srenv.analysis.card_features", "impact_speed_m_s"),
     ("srenv.analysis.card_shape", "features"),
     ("srenv.task.interval", "IntervalRunner._repeat_stroke"),
-    ("srenv.task.fast_forward", "run_compiled"),  # the fast-forward's loop compiled (§2e; absent before it)
     ("srenv.task.interval", "stroke_figures"),
     ("srenv.analysis.stroke_summary", "summarize"),
     ("srenv.surface_unit.surface", "SurfaceMotion.gearbox_report"),

@@ -192,14 +192,6 @@ class PumpCycle:
         self.time_s = until_s
         return taken
 
-    def fast_forwarded(self, until_s: float, volume_m3: float, booked_s: float) -> None:
-        """Strokes not simulated, booked by the interval's compiled fast-forward (srenv/task/fast_forward.py: the
-        same arithmetic as :meth:`fast_forward` stroke after stroke): the clock moves to `until_s`, the annulus
-        holds `volume_m3` booked to `booked_s`."""
-        self.time_s = until_s
-        if self.annulus is not None:
-            self.annulus.volume_m3, self.annulus.last_time_s = volume_m3, booked_s
-
     def upstroke_s(self, period_s: float) -> float:
         """How long the standing valve stays open in a stroke of `period_s`: the last measured upstroke (the
         plunger rests at both ends, so it is shorter than half the period), half the period before there is one."""

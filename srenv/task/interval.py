@@ -33,7 +33,6 @@ from ..analysis.stroke_summary import summarize
 from ..physics.pump import plunger_area_m2
 from ..simulation.simulator import RunResult, Simulator
 from . import reuse
-from .fast_forward import compiled_applies, run_compiled
 
 # the fast option (IntervalRunner(reuse_periodic=True)): how far the intake pressure may move the plunger's
 # fluid load, as a fraction of the reused stroke's PPRL, and how many setpoints' strokes are kept
@@ -278,16 +277,10 @@ class IntervalRunner:
         same sums to the bit), kept in locals for the loop (it ran ~60 times an env step at 12 SPM)."""
         sim, tol = self.sim, self.task.fast_forward_fillage_tol
         disp, m = f.displacement_m3, f.summary
-        up_s = sim.upstroke_s(period) if self.draw_at_top else None
-        room = n_exact < max(exact_max, 1)
-        if compiled_applies(sim):  # the same loop compiled, the same bits (srenv/task/fast_forward.py)
-            done, need_exact, ran = run_compiled(sim, res, f, period, n_total, done, t_end, up_s, tol, room,
-                                                 n_exact < exact_max, need_exact)
-            if ran:
-                self._add_peaks(res, m)
-            return done, need_exact
         in_barrel = max(m["pump_stroke_m"], 0.0)
         gas = sim.gas is not None
+        up_s = sim.upstroke_s(period) if self.draw_at_top else None
+        room = n_exact < max(exact_max, 1)
         strokes, lifted, displaced, work = res.strokes, res.lifted_m3, res.displaced_m3, res.work_j
         damage, stick, imp_sq, imp = res.damage, res.stick_slip_j, res.impact_sq_sum, res.impact_sum
         ff = res.fast_forward_strokes
