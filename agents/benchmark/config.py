@@ -181,7 +181,7 @@ def _int_in(value: Any, lo: int, hi: int) -> bool:
 def _check_teacher(algo: str, run: dict[str, Any], runs: dict[str, Any], held: set[int]) -> None:
     """A teacher-student run (agents/training/distill.py): its teachers are this run's seeds on the privileged
     observation, its students start from ``students_from``'s models of the same seeds."""
-    from ..training.distill import DISTILL_KEYS, SEED_STRIDE
+    from ..training.distill import DISTILL_KEYS
 
     key = f"benchmark config: agents.runs.{algo}.teacher"
     t = run["teacher"]
@@ -204,27 +204,17 @@ def _check_teacher(algo: str, run: dict[str, Any], runs: dict[str, Any], held: s
     if src["seeds"] != run["seeds"]:
         raise BenchmarkConfigError(f"{key}.students_from = {t['students_from']!r}: its seeds {src['seeds']} "
                                    f"differ from this run's {run['seeds']}: expected the same (one student each)")
-    for name, lo, hi in (("iterations", 1, 20), ("episodes", 1, 500), ("seed_start", 0, 10**9)):
-        if not _int_in(t[name], lo, hi):
-            raise BenchmarkConfigError(f"{key}.{name} = {t[name]!r}: expected an integer in [{lo}, {hi}]")
-    if t["iterations"] * t["episodes"] > SEED_STRIDE:
-        raise BenchmarkConfigError(f"{key}: iterations x episodes = {t['iterations'] * t['episodes']}: expected "
-                                   f"at most {SEED_STRIDE} (each student's episodes are seeds "
-                                   f"seed_start + {SEED_STRIDE} x seed + 0, 1, ...)")
+    _check_schedule(key, t)
     try:
         check_scales(res.get("scale"), t.get("idle_scale"))
     except ValueError as exc:
         raise BenchmarkConfigError(f"{key}.{str(exc).removeprefix('residual.')}") from None
-    used = {s for seed in run["seeds"] for s in distill_seeds(t, seed)}
-    if used & held:
-        raise BenchmarkConfigError(f"{key}.seed_start = {t['seed_start']!r}: its episodes share seeds "
-                                   f"{sorted(used & held)[:5]} with tuning or validation: expected disjoint seeds")
+    _check_disjoint(key, run, t, held)
 
 
 def _check_oracle_teacher(key: str, run: dict[str, Any], t: dict[str, Any], held: set[int]) -> None:
     """``teacher: {kind: causal_oracle, params: {horizon, replan_every[, steps]}, iterations, episodes,
     seed_start[, beta0]}`` (agents/training/oracle_distill.py): a fresh student, no PPO teacher."""
-    from ..training.distill import SEED_STRIDE
     from ..training.oracle_distill import ORACLE_KIND, ORACLE_PARAM_KEYS, ORACLE_TEACHER_KEYS
 
     if t["kind"] != ORACLE_KIND:
@@ -232,12 +222,7 @@ def _check_oracle_teacher(key: str, run: dict[str, Any], t: dict[str, Any], held
     extra = set(t) - ORACLE_TEACHER_KEYS
     if extra:
         raise BenchmarkConfigError(f"{key}: unknown key(s) {sorted(extra)}: expected {sorted(ORACLE_TEACHER_KEYS)}")
-    for name, lo, hi in (("iterations", 1, 20), ("episodes", 1, 500), ("seed_start", 0, 10**9)):
-        if not _int_in(t.get(name), lo, hi):
-            raise BenchmarkConfigError(f"{key}.{name} = {t.get(name)!r}: expected an integer in [{lo}, {hi}]")
-    if t["iterations"] * t["episodes"] > SEED_STRIDE:
-        raise BenchmarkConfigError(f"{key}: iterations x episodes = {t['iterations'] * t['episodes']}: expected "
-                                   f"at most {SEED_STRIDE}")
+    _check_schedule(key, t)
     beta = t.get("beta0", 0.5)
     if isinstance(beta, bool) or not isinstance(beta, (int, float)) or not 0.0 <= beta <= 1.0:
         raise BenchmarkConfigError(f"{key}.beta0 = {beta!r}: expected a number in [0, 1] (the oracle's share "
@@ -257,6 +242,24 @@ def _check_oracle_teacher(key: str, run: dict[str, Any], t: dict[str, Any], held
     if not run.get("residual"):
         raise BenchmarkConfigError(f"{key}: expected a residual run (the label is the oracle's action as a "
                                    "correction of the run's residual base)")
+    _check_disjoint(key, run, t, held)
+
+
+def _check_schedule(key: str, t: dict[str, Any]) -> None:
+    """A teacher's DAgger schedule (either kind): iterations x episodes from seed_start, within one seed stride."""
+    from ..training.distill import SEED_STRIDE
+
+    for name, lo, hi in (("iterations", 1, 20), ("episodes", 1, 500), ("seed_start", 0, 10**9)):
+        if not _int_in(t.get(name), lo, hi):
+            raise BenchmarkConfigError(f"{key}.{name} = {t.get(name)!r}: expected an integer in [{lo}, {hi}]")
+    if t["iterations"] * t["episodes"] > SEED_STRIDE:
+        raise BenchmarkConfigError(f"{key}: iterations x episodes = {t['iterations'] * t['episodes']}: expected "
+                                   f"at most {SEED_STRIDE} (each student's episodes are seeds "
+                                   f"seed_start + {SEED_STRIDE} x seed + 0, 1, ...)")
+
+
+def _check_disjoint(key: str, run: dict[str, Any], t: dict[str, Any], held: set[int]) -> None:
+    """The students' training episodes share no seed with tuning or validation."""
     used = {s for seed in run["seeds"] for s in distill_seeds(t, seed)}
     if used & held:
         raise BenchmarkConfigError(f"{key}.seed_start = {t['seed_start']!r}: its episodes share seeds "
