@@ -26,6 +26,8 @@ from pathlib import Path
 
 import numpy as np
 
+from ..analysis.card_shape import CARD_TYPES
+
 MAX_CARD_BYTES = 64 * 1024 * 1024
 MAX_FILES = 100_000
 POS, LOAD = "polished_rod_position_m", "polished_rod_load_n"
@@ -40,7 +42,7 @@ def add_parser(sub) -> None:
     c.add_argument("--json", action="store_true", help="one JSON line per card")
     c.add_argument("--model", help="model file (default: the shipped srenv/models/classifier.npz, "
                    "with --card pump srenv/models/classifier_pump.npz)")
-    c.add_argument("--card", choices=("surface", "pump"), default="surface",
+    c.add_argument("--card", choices=CARD_TYPES, default="surface",
                    help="the card type of the CSVs: the polished rod's (surface, default) or the pump's (downhole); "
                    "on pump cards full, parted rods, flowing and heavy oil share one normalised shape (run P1): "
                    "read those four on surface cards")
