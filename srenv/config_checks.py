@@ -128,6 +128,9 @@ def _check_pump_inputs(cfg: WellConfig) -> None:
 def _check_tubing(cfg: WellConfig) -> None:
     p = cfg.pump
     tb = cfg.tubing
+    if tb.anchored and tb.stiffness_n_m > 0:
+        raise ConfigError("tubing.stiffness_n_m", tb.stiffness_n_m, "0 with anchored tubing (the free tubing's "
+                          "stiffness; set tubing.anchored: false)")
     if not tb.anchored:
         if tb.inner_diameter_mm >= tb.outer_diameter_mm:
             raise ConfigError("tubing.inner_diameter_mm", tb.inner_diameter_mm,

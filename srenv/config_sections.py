@@ -308,6 +308,10 @@ class TubingConfig:
     youngs_modulus_pa: float = num(2.07e11, unit="Pa", lo=1.0e9, hi=1.0e12)
     anchor_depth_m: float = num(0.0, unit="m", check="nonneg", hi=2.0e4,
                                 doc="MD of a tubing anchor above the pump; 0 = none (free from the surface)")
+    stiffness_n_m: float = num(0.0, unit="N/m", check="nonneg", hi=1.0e10,
+                               doc="with anchored false: the free tubing's stiffness at the pump where it is known "
+                                   "otherwise than from its size (read off a diagnosed pump card's load transfer, "
+                                   "docs/realism.md); 0 = E A / free length")
 
 
 @dataclass(frozen=True)

@@ -109,7 +109,8 @@ class Simulator(PumpCycle):
         self.tubing_stiffness_n_m = 0.0  # anchored: the barrel does not move
         if not tb.anchored:  # the free tubing between the anchor (or the surface) and the pump, as a spring
             area = math.pi / 4 * ((tb.outer_diameter_mm * 1e-3) ** 2 - (tb.inner_diameter_mm * 1e-3) ** 2)
-            self.tubing_stiffness_n_m = tb.youngs_modulus_pa * area / (cfg.rod_length_m - tb.anchor_depth_m)
+            free_m = cfg.rod_length_m - tb.anchor_depth_m  # its stiffness given (docs/realism.md) or from its size
+            self.tubing_stiffness_n_m = tb.stiffness_n_m or tb.youngs_modulus_pa * area / free_m
         if self.gas is None and cfg.pump.liquid_compressibility_per_pa > 0:  # the liquid in series (mode 2)
             self.tubing_stiffness_n_m = series_stiffness_n_m(
                 self.tubing_stiffness_n_m, liquid_stiffness_n_m(cfg.pump, self.surface.stroke_length_m(
