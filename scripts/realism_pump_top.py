@@ -80,12 +80,13 @@ def ring_figures(out: dict, rec, result, pa_n: float) -> dict:
 
 
 def round_trip(rec, result, pa_n: float) -> dict:
-    """The diagnosis's resolution of a transfer: srenv's own predicted surface card (a rigid transfer),
-    sampled like the record and diagnosed like it; the transfer travels of the model's and that diagnosis's
-    pump cards."""
+    """Two checks of the diagnosis, with validate's model of the record: (1) its resolution of a transfer:
+    srenv's own predicted surface card (a rigid transfer), sampled like the record and diagnosed like it; the
+    transfer travels of the model's and of that diagnosis's pump cards; (2) a synthesised position channel
+    (11708328) is not what makes the top climb: the measured loads diagnosed on the record's unit's motion."""
     from srenv.analysis.diagnose import diagnose_card
     from srenv.config import config_from_dict
-    from srenv.tools.validate import pump_state
+    from srenv.tools.validate import _card_motion, pump_state
 
     tr, n, period = result.trace, len(rec.load_n), result.duration_s
     x = resample_stroke(tr["t_s"], tr["polished_rod_position_m"], period, n)
@@ -98,8 +99,17 @@ def round_trip(rec, result, pa_n: float) -> dict:
         cfg = config_from_dict(well_config(rec, csv, st["intake_pressure_pa"], st["fillage"],
                                            st["plunger_friction_n"]))
         card = diagnose_card(cfg, np.arange(n) * period / n, x - x.min(), f, period_s=period)
-    return {"model": transfer_travel_m(tr["pump_position_m"], tr["pump_load_n"] + pa_n),
-            "diagnosed_from_the_model_card": transfer_travel_m(card.pump_position_m, card.pump_load_n + pa_n)}
+        moved = _card_motion(rec)
+        on_unit = None if moved is rec else diagnose_card(cfg, moved.t_s, moved.position_m, moved.load_n,
+                                                          period_s=rec.period_s)
+    out = {"model": transfer_travel_m(tr["pump_position_m"], tr["pump_load_n"] + pa_n),
+           "diagnosed_from_the_model_card": transfer_travel_m(card.pump_position_m, card.pump_load_n + pa_n)}
+    if on_unit is not None:
+        xu, fu = on_unit.pump_position_m, on_unit.pump_load_n + pa_n
+        out["measured_card_diagnosed_on_the_units_motion"] = {
+            "max_effective_load_n": float(fu.max()), "tag": tag_from_diagnosis(xu, fu),
+            "transfer_travel_m": transfer_travel_m(xu, fu), "plateaus_n": plateaus(xu, fu)}
+    return out
 
 
 def what_ifs(rec, base: dict, diag_x: np.ndarray, diag_f: np.ndarray) -> dict:
@@ -163,7 +173,11 @@ def run_well(w: str, ax_cards, ax_ring) -> dict:
             "diagnosed_transfer_travel_m": transfer_travel_m(dx, df),
             "series_stiffness_read_n_m": series_stiffness_n_m(dx, df),
             "free_tubing_stiffness_n_m": 2.07e11 * TUBING_AREA_M2 / rec.rod_length_m,
-            "diagnosis_round_trip_transfer_travel_m": round_trip(rec, res, pa),
+            "diagnosis_checks": round_trip(rec, res, pa),
+            # the most a pump can carry hydraulically: the model's upstroke plateau with the chamber emptied to 0
+            "hydraulic_ceiling_n": plateaus(res.trace["pump_position_m"], res.trace["pump_load_n"] + pa)[0]
+            + base["pump_state"]["intake_pressure_pa"] * math.pi / 4 * rec.plunger_diameter_m ** 2,
+            "diagnosed_top_n": None if tag is None else tag["plateau_n"] + tag["climb_n"],
             "vendor_transfer_travel_m": transfer_travel_m(rec.pump_position_m, rec.pump_load_n),
             "pump_state": base["pump_state"], "model_fillage": base["model"]["fillage"]}
 
