@@ -41,14 +41,15 @@ def add_parser(sub) -> None:
     c = sub.add_parser("classify", help="name the pump condition of surface cards (CSV or a directory)")
     c.add_argument("path", help="a card CSV or a directory of *.csv")
     c.add_argument("--config", help="the well's config (checked; with --card pump the cards are surface cards in SI "
-                   "units, diagnosed to pump cards first; the surface model reads the card alone)")
+                   "units, diagnosed to pump cards first and read with their load level against the well's fluid "
+                   "load (run P2's model); the surface model reads the card alone)")
     c.add_argument("--json", action="store_true", help="one JSON line per card")
     c.add_argument("--model", help="model file (default: the shipped srenv/models/classifier.npz, "
-                   "with --card pump srenv/models/classifier_pump.npz)")
+                   "with --card pump srenv/models/classifier_pump.npz, with --config too classifier_pump_level.npz)")
     c.add_argument("--card", choices=CARD_TYPES, default="surface",
                    help="the card type of the CSVs: the polished rod's (surface, default) or the pump's (downhole); "
-                   "on pump cards full, parted rods, flowing and heavy oil share one normalised shape (run P1): "
-                   "read those four on surface cards")
+                   "without --config full, parted rods, flowing and heavy oil share one normalised pump card shape "
+                   "(run P1): give the well's config, or read those four on surface cards")
     c.set_defaults(func=main)
 
 

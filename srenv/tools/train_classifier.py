@@ -199,13 +199,14 @@ def _check_args(ap, a) -> None:
                  "position channel, expected 0 with --card pump")
     if a.level and a.card != "pump":
         ap.error(f"--level: the load level is a pump card's feature, expected --card pump (got --card {a.card})")
-    want = FEATURE_SET_LEVEL if a.level else "shape"
-    for path in a.compare:  # a model of the other card type would be scored on cards it cannot read
+    want = FEATURE_SET_LEVEL if a.level else FEATURE_SETS[0]
+    for path in a.compare:  # a model of the other card type (or features) would be scored on cards it cannot read
         kind, fset = _card_type_of(path)
-        if kind != a.card or (kind != "unreadable" and fset != want):
+        if kind != a.card:
             ap.error(f"--compare {path}: " + ("not a readable model file" if kind == "unreadable" else
-                                              f"a {kind} card model with features {fset}")
-                     + f", expected a {a.card} card model with features {want}")
+                                              f"a {kind} card model") + f", expected a {a.card} card model")
+        if fset != want:
+            ap.error(f"--compare {path}: a model with features {fset}, expected features {want}")
 
 
 def _pump_report(data: dict, bad: np.ndarray, split_idx: dict, level: bool) -> dict:
