@@ -61,14 +61,12 @@ def _card_set(path: Path, rng: np.random.Generator) -> None:
     n = 48
     label = np.array([LABELS.index("full"), LABELS.index("parted_rods")] * (n // 2))
     x, y = _rect(256)
-    pos = np.tile(x, (n, 1))
-    load = np.array([(1.0 if k == 0 else 0.03) * 1.5e4 * y for k in label]) + rng.normal(0, 20.0, (n, 256))
-    split = np.array(["train"] * 32 + ["validation"] * 8 + ["test"] * 8)
-    seeds = np.full(n, 10_000_000)
-    cols = {"pump_position_m": pos, "pump_load_n": load, "label": label, "split": split, "well_seed": seeds,
-            "polished_rod_position_m": pos, "polished_rod_load_n": load + 9.0}
+    scale = np.where(label == 0, 1.5e4, 450.0)[:, None]
+    cards = {"position_m": np.tile(x, (n, 1)), "load_n": scale * y + rng.normal(0, 20.0, (n, 256))}
     path.mkdir()
-    write_npz(str(path / "cards.npz"), cols)
+    both = {f"{kind}_{k}": v for kind in ("pump", "polished_rod") for k, v in cards.items()}
+    write_npz(str(path / "cards.npz"), {**both, "label": label, "well_seed": np.full(n, 10_000_000),
+                                        "split": np.repeat(["train", "validation", "test"], [32, 8, 8])})
 
 
 def test_trainer_trains_a_level_model_that_tells_full_from_parted(tmp_path) -> None:
