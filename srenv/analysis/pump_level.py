@@ -59,18 +59,3 @@ def with_level(shape_features: np.ndarray, load_n, fluid_load_n: float) -> np.nd
     out[-1] = level(load_n, fluid_load_n)
     return out
 
-
-def card_set_fluid_loads_n(well_seeds: np.ndarray) -> np.ndarray:
-    """F_desc of each card of a set written by ``srenv cards``, from its well seed: the family well in the *full*
-    condition (the description an engineer holds: the well and the liquid over its pump, not its condition)."""
-    from ..task.well_family import draw_params, spec_from_params
-    from .condition_card import condition_config
-
-    cache: dict[int, float] = {}
-    out = np.empty(len(well_seeds))
-    for i, s in enumerate(int(v) for v in well_seeds):
-        if s not in cache:
-            well = spec_from_params(draw_params(s), f"card{s}").cfg
-            cache[s] = described_fluid_load_n(condition_config(well, "full", 0.0))
-        out[i] = cache[s]
-    return out

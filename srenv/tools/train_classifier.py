@@ -29,10 +29,10 @@ import numpy as np
 
 from ..analysis.card_augment import InstrumentAugment, SpectralAugment, augment
 from ..analysis.card_shape import CARD_TYPES, BadCard, features
-from ..analysis.pump_level import DESCRIPTION_ERROR, FEATURE_SETS, card_set_fluid_loads_n, with_level
+from ..analysis.pump_level import DESCRIPTION_ERROR, FEATURE_SETS, with_level
 from ..cli_types import OneLineParser
 from ..physics.conditions import LABELS
-from ..task.card_set import load_cards
+from ..task.card_set import described_fluid_loads_n, load_cards
 
 # name -> (hidden widths, augmented training); chosen on augmented validation accuracy
 CANDIDATES = {"mlp_aug": ((128, 128), True), "mlp_clean": ((128, 128), False), "linear_aug": ((), True),
@@ -53,7 +53,7 @@ def load_sets(dirs: list[str], card: str = "surface", level: bool = False) -> di
     keys = (*CARD_ARRAYS[card], "label", "split", "well_seed")
     data = {k: np.concatenate([s[k] for s in sets]) for k in keys}
     data["position"], data["load"] = (data[k] for k in CARD_ARRAYS[card])
-    data["fluid_load"] = card_set_fluid_loads_n(data["well_seed"]) if level else None
+    data["fluid_load"] = described_fluid_loads_n(data["well_seed"]) if level else None
     return data
 
 
