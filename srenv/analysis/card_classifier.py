@@ -3,7 +3,9 @@
 The model file (``srenv/models/classifier.npz``, written by ``python -m srenv.tools.train_classifier``)
 holds ``labels``, the feature scaling ``mean``/``std`` and layers ``w0, b0, w1, b1, ...`` (ReLU between,
 softmax at the end), and since run P1 optionally ``card_type`` (``surface`` or ``pump``: the card it reads; a file
-without it is a surface model, as every file before). Trained on simulated cards only (docs/conditions.md).
+without it is a surface model, as every file before), since run P2 optionally ``feature_set`` (``shape+level``: the
+pump card's 65th entry is its load level against a described well's fluid load, so the model needs a config; a file
+without it is ``shape``, read as before). Trained on simulated cards only (docs/conditions.md).
 """
 
 from __future__ import annotations
@@ -14,6 +16,7 @@ import numpy as np
 
 from ..physics.conditions import LABELS
 from .card_shape import CARD_TYPES, N_FEATURES, features
+from .pump_level import FEATURE_SETS, with_level
 
 DEFAULT_MODEL = Path(__file__).resolve().parents[1] / "models" / "classifier.npz"
 # run 2's weights, pinned: srenv/SuckerRod-v2's observation carries its probabilities, so v2 keeps its numbers
@@ -21,6 +24,8 @@ DEFAULT_MODEL = Path(__file__).resolve().parents[1] / "models" / "classifier.npz
 V2_MODEL = DEFAULT_MODEL.with_name("classifier_run2.npz")
 # the pump (downhole) card model of run P1 (`srenv classify --card pump`)
 PUMP_MODEL = DEFAULT_MODEL.with_name("classifier_pump.npz")
+# run P2's pump model with the load level (`srenv classify --config WELL --card pump`), if shipped
+PUMP_LEVEL_MODEL = DEFAULT_MODEL.with_name("classifier_pump_level.npz")
 MAX_LAYERS = 8
 MAX_WIDTH = 4096
 
@@ -31,17 +36,32 @@ class BadModel(ValueError):
 
 def card_type_of_file(data: dict) -> str:
     """The model file's card type: one string (stored as a one-item array), absent = surface (files before P1)."""
-    if "card_type" not in data:
-        return "surface"
-    ct = data["card_type"]
-    return str(ct.reshape(-1)[0]) if ct.size == 1 and ct.dtype.kind == "U" else repr(ct.tolist())
+    return _one_string(data, "card_type", "surface")
+
+
+def _one_string(data: dict, key: str, absent: str) -> str:
+    """A one-item string array entry of a model file; ``absent`` if the file has none."""
+    if key not in data:
+        return absent
+    v = data[key]
+    return str(v.reshape(-1)[0]) if v.size == 1 and v.dtype.kind == "U" else repr(v.tolist())
+
+
+def feature_set_of_file(data: dict) -> str:
+    """The model file's feature set, absent = shape (files before P2)."""
+    return _one_string(data, "feature_set", FEATURE_SETS[0])
 
 
 class CardClassifier:
     def __init__(self, labels: tuple[str, ...], mean: np.ndarray, std: np.ndarray, layers: list,
-                 card_type: str = "surface"):
+                 card_type: str = "surface", feature_set: str = FEATURE_SETS[0]):
         self.labels, self.mean, self.std, self.layers = labels, mean, std, layers
-        self.card_type = card_type
+        self.card_type, self.feature_set = card_type, feature_set
+
+    @property
+    def needs_level(self) -> bool:
+        """True: the model reads the load level, so a well config (its described fluid load) is needed."""
+        return self.feature_set != FEATURE_SETS[0]
 
     @classmethod
     def load(cls, path: str | Path = DEFAULT_MODEL) -> CardClassifier:
@@ -52,7 +72,7 @@ class CardClassifier:
             raise BadModel(f"model file {path}: not a readable NPZ of arrays ({exc})") from None
         try:
             labels = tuple(str(x) for x in data["labels"])
-            card_type = card_type_of_file(data)
+            card_type, feature_set = card_type_of_file(data), feature_set_of_file(data)
             mean, std = data["mean"].astype(np.float64), data["std"].astype(np.float64)
             layers = []
             for i in range(MAX_LAYERS):
@@ -63,8 +83,11 @@ class CardClassifier:
             raise BadModel(f"model file {path}: missing array {exc}") from None
         if card_type not in CARD_TYPES:
             raise BadModel(f"model file {path}: card_type {card_type!r}, expected one of {CARD_TYPES}")
+        if feature_set not in FEATURE_SETS or (feature_set != FEATURE_SETS[0] and card_type != "pump"):
+            raise BadModel(f"model file {path}: feature_set {feature_set!r} with card_type {card_type!r}, expected "
+                           f"{FEATURE_SETS[0]!r} (or {FEATURE_SETS[1]!r} for a pump model)")
         cls._check(path, labels, mean, std, layers)
-        return cls(labels, mean, std, layers, card_type)
+        return cls(labels, mean, std, layers, card_type, feature_set)
 
     @staticmethod
     def _check(path, labels, mean, std, layers) -> None:
@@ -93,7 +116,17 @@ class CardClassifier:
         e = np.exp(h)
         return e / e.sum(axis=1, keepdims=True)
 
-    def classify(self, position, load) -> tuple[str, dict[str, float]]:
-        """(label, probabilities of all twelve) of one card; raises card_shape.BadCard."""
-        p = self.proba_features(features(position, load, self.card_type))[0]
+    def card_features(self, position, load, fluid_load_n: float | None = None) -> np.ndarray:
+        """The model's features of one card (``fluid_load_n``: the described fluid load, N, for a level model;
+        ignored by the others); raises card_shape.BadCard, pump_level.BadLevel."""
+        f = features(position, load, self.card_type)
+        if not self.needs_level:
+            return f
+        if fluid_load_n is None:
+            raise ValueError(f"this model's features are {self.feature_set}: it needs a described fluid load")
+        return with_level(f, load, fluid_load_n)
+
+    def classify(self, position, load, fluid_load_n: float | None = None) -> tuple[str, dict[str, float]]:
+        """(label, probabilities of all twelve) of one card; raises card_shape.BadCard, pump_level.BadLevel."""
+        p = self.proba_features(self.card_features(position, load, fluid_load_n))[0]
         return self.labels[int(np.argmax(p))], {k: float(v) for k, v in zip(self.labels, p)}

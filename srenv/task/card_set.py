@@ -244,3 +244,21 @@ def load_cards(path: str) -> dict[str, np.ndarray]:
     """Read a card set (data only, no pickled objects)."""
     with np.load(path, allow_pickle=False) as z:
         return {k: z[k] for k in z.files}
+
+
+def described_fluid_loads_n(well_seeds: np.ndarray) -> np.ndarray:
+    """The described fluid load (srenv.analysis.pump_level) of each card's well, from its well seed: the family well
+    in the *full* condition (the description an engineer holds: the well and the liquid over its pump, not its
+    condition); run P2's level (``train_classifier --card pump --level``)."""
+    from ..analysis.condition_card import condition_config
+    from ..analysis.pump_level import described_fluid_load_n
+    from .well_family import draw_params, spec_from_params
+
+    cache: dict[int, float] = {}
+    out = np.empty(len(well_seeds))
+    for i, s in enumerate(int(v) for v in well_seeds):
+        if s not in cache:
+            well = spec_from_params(draw_params(s), f"card{s}").cfg
+            cache[s] = described_fluid_load_n(condition_config(well, "full", 0.0))
+        out[i] = cache[s]
+    return out

@@ -14,7 +14,10 @@ in any units and either load convention) with the pump model (``srenv/models/cla
 trained on the other card type is refused. A pump card with a stroke but no load variation is called
 ``parted_rods`` by rule (docs/conditions.md, run P1; ``"rule": true`` in its JSON line). With ``--config WELL`` the
 CSVs are *surface* cards in SI units (one stroke at the well's stroke rate): each is diagnosed first (``srenv
-diagnose``'s Gibbs method, true loads) and its pump card classified.
+diagnose``'s Gibbs method, true loads) and its pump card classified — by run P2's model, if shipped, whose 65th
+feature is the pump card's load level against the described well's fluid load (srenv.analysis.pump_level): on a pump
+card only the level tells full, parted rods, flowing and heavy oil apart. Without a config ``--card pump`` keeps run
+P1's model; a level model is refused without a config.
 """
 
 from __future__ import annotations
@@ -38,14 +41,15 @@ def add_parser(sub) -> None:
     c = sub.add_parser("classify", help="name the pump condition of surface cards (CSV or a directory)")
     c.add_argument("path", help="a card CSV or a directory of *.csv")
     c.add_argument("--config", help="the well's config (checked; with --card pump the cards are surface cards in SI "
-                   "units, diagnosed to pump cards first; the surface model reads the card alone)")
+                   "units, diagnosed to pump cards first and read with their load level against the well's fluid "
+                   "load (run P2's model); the surface model reads the card alone)")
     c.add_argument("--json", action="store_true", help="one JSON line per card")
     c.add_argument("--model", help="model file (default: the shipped srenv/models/classifier.npz, "
-                   "with --card pump srenv/models/classifier_pump.npz)")
+                   "with --card pump srenv/models/classifier_pump.npz, with --config too classifier_pump_level.npz)")
     c.add_argument("--card", choices=CARD_TYPES, default="surface",
                    help="the card type of the CSVs: the polished rod's (surface, default) or the pump's (downhole); "
-                   "on pump cards full, parted rods, flowing and heavy oil share one normalised shape (run P1): "
-                   "read those four on surface cards")
+                   "without --config full, parted rods, flowing and heavy oil share one normalised pump card shape "
+                   "(run P1): give the well's config, or read those four on surface cards")
     c.set_defaults(func=main)
 
 
@@ -127,32 +131,59 @@ def card_files(path: str) -> list[Path]:
     return [p]
 
 
-def load_model(model: str | None, card: str):
-    """The classifier for ``card`` (``model`` or the shipped one); a file of the other card type is refused."""
-    from ..analysis.card_classifier import DEFAULT_MODEL, PUMP_MODEL, BadModel, CardClassifier
+def default_model(card: str, with_config: bool) -> str:
+    """The shipped model: surface; pump (P1) without a config; with one, P2's level model if shipped, else P1."""
+    from ..analysis.card_classifier import DEFAULT_MODEL, PUMP_LEVEL_MODEL, PUMP_MODEL
+
+    if card != "pump":
+        return str(DEFAULT_MODEL)
+    return str(PUMP_LEVEL_MODEL if with_config and PUMP_LEVEL_MODEL.is_file() else PUMP_MODEL)
+
+
+def load_model(model: str | None, card: str, with_config: bool = False):
+    """The classifier for ``card`` (``model`` or the shipped one); a file of the other card type is refused, and a
+    level model (run P2) without a config."""
+    from ..analysis.card_classifier import BadModel, CardClassifier
     from ..errors import ConfigError
 
-    path = model or str(PUMP_MODEL if card == "pump" else DEFAULT_MODEL)
+    path = model or default_model(card, with_config)
     try:
         clf = CardClassifier.load(path)
     except BadModel as exc:
         raise ConfigError("--model", path, f"a classifier's data ({exc})") from None
     if clf.card_type != card:
         raise ConfigError("--card", card, f"{clf.card_type}, the card type model {path} was trained on")
+    if clf.needs_level and not with_config:
+        raise ConfigError("--config", None, f"a well config: model {path} reads the pump card's load level against "
+                          "the described fluid load")
     return clf
 
 
-def _features_or_rule(x: np.ndarray, y: np.ndarray, f: Path, card: str) -> np.ndarray | None:
+def described_fluid_load(cfg) -> float:
+    """The config's fluid load (N) for the level; a description without one (0, or not finite) in one line."""
+    from ..analysis.pump_level import BadLevel, check_fluid_load, described_fluid_load_n
+    from ..errors import ConfigError
+
+    # the config loader refuses P- <= P+ given as loads, the simulator an intake pressure at or above the discharge
+    # pressure (one line each); what passes both and still lifts no finite load is refused here
+    try:
+        return check_fluid_load(described_fluid_load_n(cfg), f"well {cfg.name}")
+    except BadLevel as exc:
+        raise ConfigError("--config", cfg.name, f"a well whose pump lifts a fluid load ({exc})") from None
+
+
+def _features_or_rule(clf, x: np.ndarray, y: np.ndarray, f: Path, fluid_load_n: float | None) -> np.ndarray | None:
     """The card's features; None for a pump card with a stroke and no load (run P1's rule: parted rods)."""
-    from ..analysis.card_shape import BadCard, FlatLoad, features
+    from ..analysis.card_shape import BadCard, FlatLoad
+    from ..analysis.pump_level import BadLevel
 
     try:
-        return features(x, y, card)
+        return clf.card_features(x, y, fluid_load_n)
     except FlatLoad as exc:
-        if card == "pump":
+        if clf.card_type == "pump":
             return None
         raise _bad(f, f"a readable card ({exc})") from None
-    except BadCard as exc:
+    except (BadCard, BadLevel) as exc:
         raise _bad(f, f"a readable card ({exc})") from None
 
 
@@ -179,11 +210,12 @@ def main(args: argparse.Namespace) -> int:
 
         cfg = load_config(args.config)
     files = card_files(args.path)
-    clf = load_model(args.model, args.card)
+    clf = load_model(args.model, args.card, cfg is not None)
+    fluid = described_fluid_load(cfg) if clf.needs_level else None
     cards = [read_card(f) for f in files]
     if cfg is not None and args.card == "pump":  # surface cards of a described well: diagnose them first
         cards = [diagnosed(cfg, x, y, f) for f, (x, y) in zip(files, cards)]
-    rows = [_features_or_rule(x, y, f, args.card) for f, (x, y) in zip(files, cards)]
+    rows = [_features_or_rule(clf, x, y, f, fluid) for f, (x, y) in zip(files, cards)]
     readable = [r for r in rows if r is not None]
     proba = iter(clf.proba_features(np.array(readable)) if readable else [])
     rule = np.array([lab == "parted_rods" for lab in clf.labels], dtype=np.float64)

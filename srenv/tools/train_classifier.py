@@ -14,6 +14,8 @@ read here. Needs torch (a training-time dependency; inference is numpy only).
 (card_shape), and records ``card_type`` in the model file; a clean pump card the representation cannot read is
 *degenerate*: left out of the training pool and the validation scoring, counted, and on the test split called
 ``parted_rods`` by rule (docs/conditions.md, run P1). The default, ``surface``, is runs 1-6's path bit for bit.
+``--card pump --level`` (run P2) puts the load level against each card's described fluid load (pump_level) in the
+65th entry, with a description error on augmented cards, and records ``feature_set: shape+level``.
 """
 
 from __future__ import annotations
@@ -27,9 +29,10 @@ import numpy as np
 
 from ..analysis.card_augment import InstrumentAugment, SpectralAugment, augment
 from ..analysis.card_shape import CARD_TYPES, BadCard, features
+from ..analysis.pump_level import DESCRIPTION_ERROR, FEATURE_SETS, with_level
 from ..cli_types import OneLineParser
 from ..physics.conditions import LABELS
-from ..task.card_set import load_cards
+from ..task.card_set import described_fluid_loads_n, load_cards
 
 # name -> (hidden widths, augmented training); chosen on augmented validation accuracy
 CANDIDATES = {"mlp_aug": ((128, 128), True), "mlp_clean": ((128, 128), False), "linear_aug": ((), True),
@@ -39,29 +42,44 @@ AUG_COPIES = 6  # augmented copies of each training card (the training pool)
 BATCH = 512
 # the card set's (position, load) arrays of each card type (docs/cards_dataset.md)
 CARD_ARRAYS = {"surface": ("polished_rod_position_m", "polished_rod_load_n"), "pump": ("pump_position_m", "pump_load_n")}
+FEATURE_SET_LEVEL = FEATURE_SETS[1]  # run P2's model file entry
 DEGENERATE_RULE = "parted_rods"  # a degenerate pump card's label by rule (run P1, fixed a priori)
 
 
-def load_sets(dirs: list[str], card: str = "surface") -> dict[str, np.ndarray]:
-    """The sets' columns; ``position`` and ``load`` are the card type's arrays."""
+def load_sets(dirs: list[str], card: str = "surface", level: bool = False) -> dict[str, np.ndarray]:
+    """The sets' columns; ``position`` and ``load`` are the card type's arrays; ``fluid_load``: with ``level`` each
+    card's described fluid load from its well seed (run P2), else None."""
     sets = [load_cards(str(Path(d) / "cards.npz")) for d in dirs]
     keys = (*CARD_ARRAYS[card], "label", "split", "well_seed")
     data = {k: np.concatenate([s[k] for s in sets]) for k in keys}
     data["position"], data["load"] = (data[k] for k in CARD_ARRAYS[card])
+    data["fluid_load"] = described_fluid_loads_n(data["well_seed"]) if level else None
     return data
+
+
+def _row(p: np.ndarray, q: np.ndarray, card: str, fluid_load: float | None, rng, aug: bool) -> np.ndarray:
+    """One card's features; with a described fluid load the level in the 65th entry (augmented: times the
+    description error, drawn after the card's augmentation so the runs without the level draw what they drew)."""
+    f = features(p, q, card)
+    if fluid_load is None:
+        return f
+    err = rng.uniform(1.0 - DESCRIPTION_ERROR, 1.0 + DESCRIPTION_ERROR) if aug else 1.0
+    return with_level(f, q, fluid_load * err)
 
 
 def featurise(x: np.ndarray, y: np.ndarray, labels: np.ndarray, rng, aug: bool, draws: int = 1,
               instrument: InstrumentAugment | None = None, spectral: SpectralAugment | None = None,
-              card: str = "surface"):
-    """Feature rows and labels (cards the representation cannot read are dropped and counted)."""
+              card: str = "surface", fluid_load: np.ndarray | None = None):
+    """Feature rows and labels (cards the representation cannot read are dropped and counted); ``fluid_load``:
+    each card's described fluid load (run P2's level), None without the level."""
     rows, out = [], []
+    loads = [None] * len(labels) if fluid_load is None else fluid_load
     for _ in range(draws):
-        for p, q, lab in zip(x, y, labels):
+        for p, q, lab, fl in zip(x, y, labels, loads):
             if aug:
                 p, q = augment(p, q, rng, instrument, spectral)
             try:
-                rows.append(features(p, q, card))
+                rows.append(_row(p, q, card, fl, rng, aug))
             except BadCard:
                 continue
             out.append(lab)
@@ -127,8 +145,9 @@ def evaluate(weights: dict, data: dict, idx: np.ndarray, aug: bool, seed: int,
     clf = CardClassifier(tuple(str(s) for s in weights["labels"]), weights["mean"], weights["std"],
                          [(weights[f"w{i}"], weights[f"b{i}"]) for i in range(8) if f"w{i}" in weights])
     rng = np.random.default_rng(seed)
+    fl = None if data.get("fluid_load") is None else data["fluid_load"][idx]
     f, t = featurise(data["position"][idx], data["load"][idx], data["label"][idx],
-                     rng, aug, VALIDATION_DRAWS if aug else 1, instrument, spectral, card)
+                     rng, aug, VALIDATION_DRAWS if aug else 1, instrument, spectral, card, fl)
     pred = np.argmax(clf.proba_features(f), axis=1)
     cm = np.zeros((len(LABELS), len(LABELS)), dtype=np.int64)
     np.add.at(cm, (t, pred), 1)
@@ -143,13 +162,15 @@ def _read_weights(path: str) -> dict:
         return {k: z[k] for k in z.files}
 
 
-def _card_type_of(path: str) -> str:
-    from ..analysis.card_classifier import card_type_of_file
+def _card_type_of(path: str) -> tuple[str, str]:
+    """(card type, feature set) of a model file; ("unreadable", "") if it is not one."""
+    from ..analysis.card_classifier import card_type_of_file, feature_set_of_file
 
     try:
-        return card_type_of_file(_read_weights(path))
+        w = _read_weights(path)
+        return card_type_of_file(w), feature_set_of_file(w)
     except (OSError, ValueError, EOFError):
-        return "unreadable"
+        return "unreadable", ""
 
 
 def write_model(path: str, weights: dict) -> None:
@@ -172,6 +193,34 @@ class _Parser(OneLineParser):
     tool = "train_classifier"  # a bad flag: one line, exit 2, no usage dump
 
 
+def _check_args(ap, a) -> None:
+    if a.card == "pump" and (a.synth_position_p > 0.0 or a.position_lag_p > 0.0):
+        ap.error("--synth-position-p/--position-lag-p: the instrument effects belong to the surface unit's "
+                 "position channel, expected 0 with --card pump")
+    if a.level and a.card != "pump":
+        ap.error(f"--level: the load level is a pump card's feature, expected --card pump (got --card {a.card})")
+    want = FEATURE_SET_LEVEL if a.level else FEATURE_SETS[0]
+    for path in a.compare:  # a model of the other card type (or features) would be scored on cards it cannot read
+        kind, fset = _card_type_of(path)
+        if kind != a.card:
+            ap.error(f"--compare {path}: " + ("not a readable model file" if kind == "unreadable" else
+                                              f"a {kind} card model") + f", expected a {a.card} card model")
+        if fset != want:
+            ap.error(f"--compare {path}: a model with features {fset}, expected features {want}")
+
+
+def _pump_report(data: dict, bad: np.ndarray, split_idx: dict, level: bool) -> dict:
+    """The pump run's report entries: degenerate counts per split and label, the rule; P2's feature set."""
+    out = {"card": "pump", "degenerate": {s: {lab: int(np.sum(bad[i] & (data["label"][i] == k)))
+                                              for k, lab in enumerate(LABELS)
+                                              if np.any(bad[i] & (data["label"][i] == k))}
+                                          for s, i in split_idx.items()},
+           "degenerate_rule": DEGENERATE_RULE}
+    if level:
+        out.update({"feature_set": FEATURE_SET_LEVEL, "description_error": DESCRIPTION_ERROR})
+    return out
+
+
 def main(argv: list[str] | None = None) -> int:
     ap = _Parser(prog="python -m srenv.tools.train_classifier", description=__doc__.splitlines()[0])
     ap.add_argument("--cards", nargs="+", required=True, help="directories written by `srenv cards`")
@@ -190,28 +239,19 @@ def main(argv: list[str] | None = None) -> int:
                     "zero-phase low-pass exp(-(k/K)^2), K log-uniform in [6, 30] (run 6; default 0: runs 1-5)")
     ap.add_argument("--card", choices=CARD_TYPES, default="surface", help="the card to train on: the polished "
                     "rod's (surface, default: runs 1-6) or the pump's (downhole; run P1, the load ratio set to 0)")
+    ap.add_argument("--level", action="store_true", help="with --card pump: the load level against each card's "
+                    "described fluid load in the 65th entry (run P2; the model then needs a well config)")
     a = ap.parse_args(argv)
-    if a.card == "pump" and (a.synth_position_p > 0.0 or a.position_lag_p > 0.0):
-        ap.error("--synth-position-p/--position-lag-p: the instrument effects belong to the surface unit's "
-                 "position channel, expected 0 with --card pump")
-    for path in a.compare:  # a model of the other card type would be scored on cards it cannot read
-        kind = _card_type_of(path)
-        if kind != a.card:
-            ap.error(f"--compare {path}: " + ("not a readable model file" if kind == "unreadable" else
-                                              f"a {kind} card model") + f", expected a {a.card} card model")
+    _check_args(ap, a)
     inst = (InstrumentAugment(a.synth_position_p, a.position_lag_p)
             if a.synth_position_p > 0.0 or a.position_lag_p > 0.0 else None)
     spec = SpectralAugment(a.spectral_p) if a.spectral_p > 0.0 else None
-    data = load_sets(a.cards, a.card)
+    data = load_sets(a.cards, a.card, a.level)
     bad = degenerate(data, a.card)
     split_idx = {s: np.flatnonzero(data["split"] == s) for s in ("train", "validation", "test")}
     report: dict = {"n_cards": {s: len(i) for s, i in split_idx.items()}, "candidates": {}}
     if a.card == "pump":
-        report["card"] = a.card
-        report["degenerate"] = {s: {lab: int(np.sum(bad[i] & (data["label"][i] == k)))
-                                    for k, lab in enumerate(LABELS) if np.any(bad[i] & (data["label"][i] == k))}
-                                for s, i in split_idx.items()}
-        report["degenerate_rule"] = DEGENERATE_RULE
+        report.update(_pump_report(data, bad, split_idx, a.level))
     ruled = data["label"][split_idx["test"][bad[split_idx["test"]]]]
     split_idx = {s: i[~bad[i]] for s, i in split_idx.items()}  # the model reads only readable cards
     if inst is not None:
@@ -225,7 +265,8 @@ def main(argv: list[str] | None = None) -> int:
     pools = {}  # AUG_COPIES augmented versions of every training card (or the clean cards), drawn once
     for aug in {CANDIDATES[c][1] for c in a.candidates}:
         pools[aug] = featurise(data["position"][tr], data["load"][tr], data["label"][tr],
-                               np.random.default_rng(a.seed), aug, AUG_COPIES if aug else 1, inst, spec, a.card)
+                               np.random.default_rng(a.seed), aug, AUG_COPIES if aug else 1, inst, spec, a.card,
+                               None if data["fluid_load"] is None else data["fluid_load"][tr])
     models = {name: (lambda widths=widths, aug=aug: fit(*pools[aug], widths, a.epochs, a.seed))
               for name, (widths, aug) in CANDIDATES.items() if name in a.candidates}
     models.update({path: (lambda path=path: _read_weights(path)) for path in a.compare})  # trained before
@@ -245,6 +286,8 @@ def main(argv: list[str] | None = None) -> int:
     report["labels"] = list(LABELS)
     if a.card != "surface":  # a surface model's file stays runs 1-6's (no entry = surface)
         best = {**best, "card_type": np.array(a.card)}
+    if a.level:  # P1's file has no entry (= shape)
+        best = {**best, "feature_set": np.array(FEATURE_SET_LEVEL)}
     write_model(a.out, best)
     if a.report:
         Path(a.report).write_text(json.dumps(report, indent=1) + "\n")

@@ -229,7 +229,8 @@ def test_surface_cards_of_a_described_well_are_diagnosed_then_classified(tmp_pat
     assert main(["classify", str(tmp_path), "--config", "paper_fig3_vertical", "--card", "pump", "--json"]) == 0
     got = {Path(r["file"]).stem: r["label"] for r in map(json.loads, capsys.readouterr().out.splitlines())}
     assert got["fluid_pound"] == "fluid_pound" and got["tagging_down"] == "tagging_down"
-    assert got["full"] in RECTANGLES  # the diagnosed full pump card is the rectangle (parted_rods 0.41 measured)
+    # with a config run P2's level model reads it (P1's model read the rectangle parted_rods 0.41)
+    assert got["full"] == "full"
 
 
 def test_trainer_refuses_to_compare_a_model_of_the_other_card_type(capsys) -> None:
