@@ -329,3 +329,11 @@ def test_evaluate_only_plays_the_report_it_is_given(tmp_path):
     argv[-1] = str(tmp_path / "missing.json")
     assert main(argv) == 2 and not bad.exists()
     assert main(["benchmark", str(cfg), "--report", str(given)]) == 2  # --report only with --evaluate-only
+
+
+def test_env_tag_names_the_version():
+    from agents.envs import env_tag
+
+    assert env_tag("srenv/SuckerRod-v1") == "v1" and env_tag("srenv/SuckerRod-v2") == "v2"
+    with pytest.raises(ValueError, match="env_id"):
+        env_tag("srenv/SuckerRod")
