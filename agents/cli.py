@@ -120,6 +120,8 @@ def build_parser() -> argparse.ArgumentParser:
     b.add_argument("--episodes", type=_flag("benchmark", "--episodes"), help="--evaluate-only: number of fresh wells")
     b.add_argument("--workers", type=_flag("benchmark", "--workers"),
                    help="--evaluate-only: processes (default the config's)")
+    b.add_argument("--report", help="--evaluate-only: the benchmark report whose tuned baselines and agents are "
+                   "evaluated, models read next to it (default: the shipped v1 report, models/MANIFEST.json)")
 
     r = sub.add_parser("replay", help="re-run a benchmark report's test episodes from its own record (v1); "
                        "exit 1 if a return differs")
@@ -208,13 +210,13 @@ def cmd_quickstart(args: argparse.Namespace) -> dict:
 
 
 def cmd_benchmark(args: argparse.Namespace) -> dict:
-    if args.evaluate_only or args.fresh_seed is not None or args.episodes:
+    if args.evaluate_only or args.fresh_seed is not None or args.episodes or args.report is not None:
         if not (args.evaluate_only and args.fresh_seed is not None and args.episodes and not args.quick):
             raise ValueError("--evaluate-only, --fresh-seed S and --episodes N go together (and without --quick)")
         from .benchmark.fresh import evaluate_fresh
 
         return evaluate_fresh(args.config, args.fresh_seed, args.episodes, args.out_dir or "runs/fresh",
-                              args.workers)
+                              args.workers, report=args.report)
     from .benchmark.run import benchmark_main
 
     return benchmark_main(args.config, args.quick, args.out_dir)

@@ -11,7 +11,7 @@ from typing import Any
 from srenv import ENV_ID as ENV_ID_V0
 from srenv import ENV_ID_V1, ENV_ID_V2
 
-__all__ = ["ENV_ID_V0", "ENV_ID_V1", "ENV_ID_V2", "make_env"]
+__all__ = ["ENV_ID_V0", "ENV_ID_V1", "ENV_ID_V2", "env_tag", "make_env"]
 
 
 def make_env(env_id: str = ENV_ID_V1, **kwargs: Any) -> Any:
@@ -19,3 +19,12 @@ def make_env(env_id: str = ENV_ID_V1, **kwargs: Any) -> Any:
     import gymnasium as gym
 
     return gym.make(env_id, **kwargs)
+
+
+def env_tag(env_id: str) -> str:
+    """The version tag a benchmark's model files carry (``ppo_v1_seed0.zip``, ``oracle_distilled_v2_seed0.zip``):
+    the id's ``-vN`` suffix, so a v2 model is never named as a v1 one."""
+    tag = env_id.rsplit("-", 1)[-1]
+    if not (tag.startswith("v") and tag[1:].isdigit()):
+        raise ValueError(f"env_id = {env_id!r}: expected an id ending in -vN, e.g. srenv/SuckerRod-v2")
+    return tag

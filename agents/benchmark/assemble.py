@@ -10,6 +10,7 @@ from typing import Any
 
 import numpy as np
 
+from ..envs import env_tag
 from ..policies.factory import benchmark_baselines
 from .report import _average_episodes, iqm
 from .runs import _algo_of
@@ -31,12 +32,12 @@ def _ensemble_record(spec: dict[str, Any], runs: dict[str, Any], eps: list[dict[
             "episodes": eps}
 
 
-def _ship(specs: list[dict[str, Any]], pick: int, a: str, models_dir: Path) -> Path:
+def _ship(specs: list[dict[str, Any]], pick: int, a: str, models_dir: Path, tag: str) -> Path:
     """The shipped single model of run ``a``: the validation pick (training wells), else seed 0."""
-    shipped = models_dir / f"{a}_v1.zip"
+    shipped = models_dir / f"{a}_{tag}.zip"
     shutil.copyfile(specs[pick]["path"], shipped)
     if specs[pick].get("obs_norm"):
-        shutil.copyfile(specs[pick]["obs_norm"], shipped.with_name(f"{a}_v1_obs_norm.npz"))
+        shutil.copyfile(specs[pick]["obs_norm"], shipped.with_name(f"{a}_{tag}_obs_norm.npz"))
     return shipped
 
 
@@ -80,7 +81,7 @@ def policy_records(cfg: dict[str, Any], tuned: dict[str, Any], agent_specs: dict
             eps, how = per_seed[pick], f"best_on_validation: seed {specs[pick]['train_summary']['seed']}"
         else:
             eps, how = _average_episodes(per_seed), "mean over training seeds' models, per test episode"
-        shipped = _ship(specs, pick, a, models_dir)
+        shipped = _ship(specs, pick, a, models_dir, env_tag(cfg["env_id"]))
         policies[a] = {"kind": "agent", "algo": _algo_of(runs[a]), "selection": how,
                        "residual_on": specs[0].get("residual"),
                        "models": [model_ref(sp["path"]) for sp in specs], "episodes": eps}

@@ -29,7 +29,8 @@ from typing import Any
 
 import numpy as np
 
-from ..evaluation.replay import load_report, policy_specs
+from ..envs import ENV_ID_V1
+from ..evaluation.replay import ReplayError, load_report, policy_specs
 from ..evaluation.rollout import Runner, _cached_env, run_episode
 from ..evaluation.v1_view import build_policy_any
 from .report import _atomic_write, _json_clean, build_report, markdown_tables, verdict
@@ -96,15 +97,20 @@ def check_out_dir(flag: str, out: Path, names: tuple[str, ...]) -> None:
 
 
 def evaluate_fresh(config: str, fresh_seed: int, episodes: int, out_dir: str | Path,
-                   workers: int | None = None) -> dict[str, Any]:
+                   workers: int | None = None, report: str | Path | None = None) -> dict[str, Any]:
+    """``report``: the benchmark report whose tuned baselines and agents are played (``--report``; its models
+    are read next to it), by default the shipped v1 report."""
     from ..evaluation.shipped import shipped_report
     from .config import load_benchmark_config
 
     t0 = time.perf_counter()
-    check_out_dir("--out-dir", Path(out_dir), ("benchmark.json", "benchmark.md"))
     cfg = load_benchmark_config(config)
-    path = shipped_report("v1")
-    rep = load_report(path)
+    path = Path(report) if report is not None else shipped_report("v1")
+    rep = load_report(path)  # data only (JSON, schema and fields checked), before the output folder is made
+    if rep["env_id"] not in (cfg["env_id"], ENV_ID_V1):
+        raise ReplayError(f"--report {path}: env_id = {rep['env_id']!r}, expected {cfg['env_id']!r} (the config's) "
+                          f"or {ENV_ID_V1!r} (v1 agents on v1's part of the observation)")
+    check_out_dir("--out-dir", Path(out_dir), ("benchmark.json", "benchmark.md"))
     specs = _specs(cfg, rep, path.resolve().parent)
     wells = fresh_wells(fresh_seed, episodes)
     jobs, owner = [], []

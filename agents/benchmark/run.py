@@ -16,7 +16,7 @@ The protocol (one YAML under ``configs/benchmark/``; :func:`load_benchmark_confi
 3. **Test** every policy on the same test episodes: ``reset(seed=S)`` on ``scenario="test"`` for the test
    seeds (disjoint from every tuning and validation seed).
 4. **Report**: ``OUT/benchmark.json`` (schema in :func:`build_report`), ``OUT/benchmark.md`` (tables,
-   verdict, figure ``OUT/figures/benchmark_v1.png``), models in ``OUT/models/<algo>_v1*.zip`` with the
+   verdict, figure ``OUT/figures/benchmark_v1.png``), models in ``OUT/models/<algo>_<vN>*.zip`` (vN the env's version) with the
    observation normalisation as ``.npz`` (the shipped run, ``OUT`` = docs: in the repository's ``models/``
    with its ``MANIFEST.json``). Files are written atomically, nothing partial is left behind.
 

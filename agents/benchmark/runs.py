@@ -1,6 +1,6 @@
 """The benchmark's agents: one training run per (algo, seed) in a worker, model export, residual runs.
 
-A run's model is copied to ``OUT/models/<name>_v1_seed<k>.zip`` with its observation statistics as plain
+A run's model is copied to ``OUT/models/<name>_<vN>_seed<k>.zip`` (``vN`` the env's version) with its observation statistics as plain
 arrays (``<stem>_obs_norm.npz``); a residual run (``residual: {base, scale}``) trains on
 :class:`agents.training.residual_env.ResidualEnv` around a tuned field baseline.
 """
@@ -13,6 +13,7 @@ import sys
 from pathlib import Path
 from typing import Any
 
+from ..envs import env_tag
 from ..evaluation.normalizer import ObsNormalizer
 from ..policies.residual import RESIDUAL_BASES
 from ..training.tuning import refuse_test_split
@@ -139,7 +140,7 @@ def distill_jobs(runs: dict[str, Any], teachers: dict[str, list[dict[str, Any]]]
             jobs.append({"algo": a, "seed": seed, "teachers": [_policy_part(s) for s in tspecs],
                          "student_init": _policy_part(init), "residual": residuals[a], "env_id": env_id,
                          "env_kwargs": train_kwargs, "seeds": distill_seeds(t, seed),
-                         "iterations": t["iterations"], "dest": str(models_dir / f"{a}_v1_seed{seed}.zip"),
+                         "iterations": t["iterations"], "dest": str(models_dir / f"{a}_{env_tag(env_id)}_seed{seed}.zip"),
                          "teacher_summaries": [s["train_summary"] for s in tspecs]})
     return jobs
 
@@ -164,7 +165,7 @@ def oracle_student(cfg: dict[str, Any], runner: Any, algo: str, seed: int, tuned
     oracle = {**t.get("params", {}), "policies": [[b, tuned[b]["params"]] for b in ORACLE_POLICIES]}
     pk = load_train_config(run["config"], run.get("overrides")).policy_kwargs
     spec = distill_oracle(runner, t, oracle, res, cfg["env_id"], {**cfg["env_kwargs"], "scenario": "train"}, pk,
-                          distill_seeds(t, seed), seed, models_dir / f"{algo}_v1_seed{seed}.zip",
+                          distill_seeds(t, seed), seed, models_dir / f"{algo}_{env_tag(cfg['env_id'])}_seed{seed}.zip",
                           log=lambda m: print(m, file=sys.stderr, flush=True))
     spec["residual"] = res
     spec["train_summary"] = {"num_timesteps": spec["distill"][-1]["labels"], "wall_time_s": spec["wall_time_s"],

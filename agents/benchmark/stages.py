@@ -13,7 +13,7 @@ from typing import Any
 
 import numpy as np
 
-from ..envs import make_env
+from ..envs import env_tag, make_env
 from ..evaluation.rollout import Runner, episode_jobs
 from ..policies.ensemble import ensemble_spec
 from ..policies.factory import SEARCHED_BASELINES, benchmark_baselines
@@ -128,7 +128,7 @@ def train_agents(cfg: dict[str, Any], runner: Runner, tuned: dict[str, Any], wor
     teachers: dict[str, list[dict[str, Any]]] = {}
     for job, summ in zip(jobs, summaries):
         run = runs[job["algo"]]
-        spec = export_model(summ, models_dir / f"{model_name(job['algo'], run)}_v1_seed{job['seed']}.zip")
+        spec = export_model(summ, models_dir / f"{model_name(job['algo'], run)}_{env_tag(cfg['env_id'])}_seed{job['seed']}.zip")
         if residuals[job["algo"]]:
             spec["residual"] = residuals[job["algo"]]
         spec["train_summary"] = {k: summ[k] for k in ("num_timesteps", "wall_time_s", "seed",

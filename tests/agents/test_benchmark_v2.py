@@ -296,3 +296,44 @@ def test_pilot_config_plays_the_validation_split_and_names_its_env_in_the_report
     assert report["test"]["scenario"] == "validation" and report["env_id"] == "srenv/SuckerRod-v2"
     write_markdown(report, tmp_path / "b.md", None)
     assert (tmp_path / "b.md").read_text().splitlines()[0].endswith("(srenv/SuckerRod-v2)")
+
+
+def test_evaluate_only_plays_the_report_it_is_given(tmp_path):
+    """``--report``: the tuned baselines (and agents) of a benchmark run that is not the shipped one, e.g. a v2
+    run's own report for its fresh-split headline; a report of another env is refused before any work."""
+    from agents.benchmark.fresh import evaluate_fresh
+    from agents.cli import main
+
+    rep = json.loads(shipped_report().read_text())
+    rep["env_id"] = "srenv/SuckerRod-v2"
+    tuned = {**rep["policies"]["pump_off"]["params"], "threshold": 0.5}  # not the shipped report's
+    rep["policies"] = {n: rep["policies"][n] for n in ("installed", "best_constant", "pump_off", "fillage_pi")}
+    rep["policies"]["pump_off"] = {**rep["policies"]["pump_off"], "params": tuned}
+    (tmp_path / "run").mkdir()
+    given = tmp_path / "run" / "benchmark.json"
+    given.write_text(json.dumps(rep))
+    cfg = tmp_path / "fresh.yaml"
+    cfg.write_text("env_id: srenv/SuckerRod-v2\nenv_kwargs: {observation: field, episode_hours: 0.25}\n"
+                   "workers: 1\ntuning: {scenario: train, seeds: [0]}\ntest: {seeds: [100000]}\n"
+                   "evaluate_only: {agents: [], references: {}}\n")
+    out = tmp_path / "out"
+    evaluate_fresh(str(cfg), 5, 1, out, report=given)
+    got = json.loads((out / "benchmark.json").read_text())
+    assert got["shipped_report"] == str(given) and got["policies"]["pump_off"]["params"] == tuned
+    v1 = tmp_path / "v1.yaml"  # a v2 report cannot be played on v1: one line, exit 2, nothing written
+    v1.write_text(cfg.read_text().replace("SuckerRod-v2", "SuckerRod-v1"))
+    bad = tmp_path / "bad"
+    argv = ["benchmark", str(v1), "--evaluate-only", "--fresh-seed", "5", "--episodes", "1",
+            "--out-dir", str(bad), "--report", str(given)]
+    assert main(argv) == 2 and not bad.exists()
+    argv[-1] = str(tmp_path / "missing.json")
+    assert main(argv) == 2 and not bad.exists()
+    assert main(["benchmark", str(cfg), "--report", str(given)]) == 2  # --report only with --evaluate-only
+
+
+def test_env_tag_names_the_version():
+    from agents.envs import env_tag
+
+    assert env_tag("srenv/SuckerRod-v1") == "v1" and env_tag("srenv/SuckerRod-v2") == "v2"
+    with pytest.raises(ValueError, match="env_id"):
+        env_tag("srenv/SuckerRod")

@@ -170,3 +170,7 @@ def test_quick_run_trains_the_student_and_reports_it(tmp_path):
     assert t["kind"] == "causal_oracle" and t["observation"] == "true env state" and t["models"] == []
     assert t["distill"][0]["iterations"][0]["labels"] == 6  # one 30 min episode of 5 min intervals
     assert (tmp_path / "out/benchmark.json").exists()
+    # a v2 run's models carry v2's tag, never v1's (they were named *_v1_* before)
+    assert pol["models"] == ["models/oracle_distilled_v2_seed0.zip"]
+    assert rep["training"]["runs"]["oracle_distilled"]["shipped_model"] == "models/oracle_distilled_v2.zip"
+    assert not list((tmp_path / "out/models").glob("*_v1*"))
