@@ -143,3 +143,37 @@ def test_design_config_keeps_v2s_splits_baselines_and_protocol():
     g = cfg["guarded"]
     check_guard(g["guard"])
     assert g["fallback"] == "alarm_pump_off" and 0.0 <= g["scale"] <= 2.0
+
+
+def test_test_stage_plays_the_named_baselines_and_a_guarded_design(student):
+    """stages.run_test_episodes(policies=...): only the baselines a look's judge reads, beside the design."""
+    from agents.benchmark.stages import run_test_episodes
+    from agents.evaluation.rollout import Runner
+
+    cfg = {"env_id": ENV, "env_kwargs": KW, "test": {"scenario": "validation", "seeds": [0, 1]}}
+    tuned = {"fillage_pi": {"params": FPI}, "alarm_pump_off": {"params": APO}, "pump_off": {"params": {}}}
+    design = {**guarded_spec(student, "alarm_pump_off", APO, ALWAYS), "of": "oracle_distilled"}
+    with Runner(1) as runner:
+        by = run_test_episodes(cfg, runner, tuned, {"oracle_distilled_guarded": [design]}, -1,
+                               policies=["alarm_pump_off"])
+    assert set(by) == {("alarm_pump_off", -1), ("oracle_distilled_guarded", 0)}
+    assert [e["reward"] for e in by[("oracle_distilled_guarded", 0)]] == [e["reward"] for e in by[("alarm_pump_off", -1)]]
+
+
+@pytest.mark.parametrize("change, match", [
+    ({"fallback": "oracle"}, r"guarded.fallback = 'oracle': expected a tuned field baseline"),
+    ({"scale": -0.1}, r"guarded.scale = -0.1: expected a number in \[0, 2\]"),
+    ({"guard": {"hold_intervals": 200}}, r"guarded.guard.hold_intervals = 200"),
+    ({"limits": {}}, r"guarded = .*: expected \{fallback: BASELINE"),
+])
+def test_config_refuses_a_bad_guarded_block(tmp_path, change, match):
+    import yaml
+
+    from agents.benchmark.config import BenchmarkConfigError
+
+    raw = yaml.safe_load(CONFIG.read_text())
+    raw["guarded"] = {**raw["guarded"], **change}
+    bad = tmp_path / "bad.yaml"
+    bad.write_text(yaml.safe_dump(raw))
+    with pytest.raises(BenchmarkConfigError, match=match):
+        load_benchmark_config(bad)
