@@ -151,7 +151,10 @@ def test_a_card_whose_level_is_not_finite_is_refused_in_one_line(tmp_path, capsy
 
     c = simulate_card(condition_config(load_config(WELL), "full", 0.0))
     f = _write(tmp_path / "c.csv", c.polished_rod_position_m[:-1], c.polished_rod_load_n[:-1])
-    monkeypatch.setattr(pump_level, "described_fluid_load_n", lambda cfg: 1e-320)  # finite, > 0: level inf
+    from srenv.simulation import described
+
+    # finite, > 0: level inf
+    monkeypatch.setattr(described, "described_pump", lambda cfg: described.DescribedPump(1e-320, 1e-320, 0.0))
     assert main(["classify", str(f), "--config", WELL, "--card", "pump",
                  "--model", str(_level_model(tmp_path))]) == 2
     cap = capsys.readouterr()
@@ -188,8 +191,10 @@ def test_the_shipped_level_model_is_run_p2s_data() -> None:
 def test_with_a_config_the_level_splits_the_rectangle_group_end_to_end(tmp_path, capsys, monkeypatch) -> None:
     """--config WELL --card pump: the full, flowing and parted-rods cards of one well, diagnosed; run P1 read the
     full one parted_rods (0.41) and flowing parted_rods (0.46). Dropping the level (its entry 0) changes the answer."""
+    from srenv.analysis.card_classifier import PUMP_LEVEL_MODEL
+
     d = _surface_cards(tmp_path, ("full", "flowing", "parted_rods"))
-    argv = ["classify", str(d), "--config", WELL, "--card", "pump", "--json"]
+    argv = ["classify", str(d), "--config", WELL, "--card", "pump", "--json", "--model", str(PUMP_LEVEL_MODEL)]
     got = _labels(capsys, argv)
     assert got["full"] == "full" and got["flowing"] == "flowing" and got["parted_rods"] != got["full"]
     monkeypatch.setattr(pump_level, "level", lambda load, fluid: 0.0)  # the feature dropped
