@@ -40,13 +40,6 @@ def described_fluid_load_n(cfg) -> float:
     return described_pump(cfg).fluid_load_n
 
 
-def described_downstroke_load_n(cfg) -> float:
-    """P+_desc (N) of a well config as a true load at the rod string's bottom (run P3's offset)."""
-    from ..simulation.described import described_pump
-
-    return described_pump(cfg).downstroke_true_n
-
-
 def check_fluid_load(fluid_load_n: float, where: str) -> float:
     f = float(fluid_load_n)
     if not (math.isfinite(f) and f > 0.0):

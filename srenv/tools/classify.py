@@ -14,13 +14,13 @@ in any units and either load convention) with the pump model (``srenv/models/cla
 trained on the other card type is refused. A pump card with a stroke but no load variation is called
 ``parted_rods`` by rule (docs/conditions.md, run P1; ``"rule": true`` in its JSON line). With ``--config WELL`` the
 CSVs are *surface* cards in SI units (one stroke at the well's stroke rate): each is diagnosed first (``srenv
-diagnose``'s Gibbs method, true loads) and its pump card classified — by run P2's model, if shipped, whose 65th
-feature is the pump card's load level against the described well's fluid load (srenv.analysis.pump_level): on a pump
-card only the level tells full, parted rods, flowing and heavy oil apart. Without a config ``--card pump`` keeps run
-P1's model; a level model is refused without a config. Run P3's model (``classifier_pump_p3.npz``), if shipped, is
-the default with a config: trained on *diagnosed* pump cards, it reads a 66th entry, the card's lower plateau against
-the described plunger's downstroke load P+ (a true load; srenv.simulation.described): a parted string diagnosed
-through the described intact string sits about the missing rods' weight below it.
+diagnose``'s Gibbs method, true loads) and its pump card classified by run P3's model (``classifier_pump_p3.npz``;
+else run P2's, else P1's): trained on pump cards *diagnosed* the same way, so train and use match. Its 65th feature is
+the pump card's load level against the described well's fluid load (run P2, srenv.analysis.pump_level: on a pump card
+only the level tells full, parted rods, flowing and heavy oil apart), its 66th the lower plateau against the described
+plunger's downstroke load P+ as a true load (srenv.simulation.described): a parted string diagnosed through the
+described intact string sits about the missing rods' weight below it. Without a config ``--card pump`` keeps run P1's
+model; a level model is refused without a config.
 """
 
 from __future__ import annotations
@@ -45,10 +45,10 @@ def add_parser(sub) -> None:
     c.add_argument("path", help="a card CSV or a directory of *.csv")
     c.add_argument("--config", help="the well's config (checked; with --card pump the cards are surface cards in SI "
                    "units, diagnosed to pump cards first and read with their load level against the well's fluid "
-                   "load (run P2's model); the surface model reads the card alone)")
+                   "load and P+ (run P3's model); the surface model reads the card alone)")
     c.add_argument("--json", action="store_true", help="one JSON line per card")
     c.add_argument("--model", help="model file (default: the shipped srenv/models/classifier.npz, "
-                   "with --card pump srenv/models/classifier_pump.npz, with --config too classifier_pump_level.npz)")
+                   "with --card pump srenv/models/classifier_pump.npz, with --config too classifier_pump_p3.npz)")
     c.add_argument("--card", choices=CARD_TYPES, default="surface",
                    help="the card type of the CSVs: the polished rod's (surface, default) or the pump's (downhole); "
                    "without --config full, parted rods, flowing and heavy oil share one normalised pump card shape "
