@@ -89,7 +89,7 @@ class PumpCycle:
             if ub_max - min(self._top_ub, ub_min) <= min_travel:
                 return fillage
             if self.annulus is not None:
-                self.law = self._valve()
+                self.law = self.valve_law_now()
                 valve["lo_n"] = -self.law.up_eq_n
                 valve["void_until_m"] = self._plan_upstroke(ub_max, time_s, period_s)
                 valve["void"] = 1

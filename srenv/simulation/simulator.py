@@ -118,12 +118,12 @@ class Simulator(PumpCycle):
         self.f1_hz = first_natural_frequency_hz(mesh, cfg.rod.mass_matrix)
         self._check_convexity()
 
-    def _valve(self) -> ValveLaw:
+    def valve_law_now(self) -> ValveLaw:
+        """The valve law (equivalent rod-end loads) at the intake pressure now (srenv.simulation.described)."""
         p_in = self.annulus.intake_pressure_pa() if self.annulus is not None else None
         law = valve_law(self.cfg.pump, self.p_pump_pa, self.area_bottom_m2, p_in)
         if not law.up_eq_n > law.down_eq_n:
-            raise ConfigError("pump.intake_pressure_pa", p_in if p_in is not None else
-                              self.cfg.pump.intake_pressure_pa,
+            raise ConfigError("pump.intake_pressure_pa", self.cfg.pump.intake_pressure_pa if p_in is None else p_in,
                               f"an intake pressure in Pa below the discharge pressure {self.p_pump_pa:.4g} Pa "
                               "(the upstroke load must exceed the downstroke load)")
         return law
@@ -168,7 +168,7 @@ class Simulator(PumpCycle):
         n = self.n_free
         if self.annulus is not None:
             self.annulus.reset(self.cfg.inflow.initial_fluid_level_m if fluid_level_m is None else fluid_level_m)
-        self.law = self._valve()
+        self.law = self.valve_law_now()
         kd, ko = self._k
         rhs = self._f_all[1:].copy()
         rhs[-1] += self.law.down_eq_n  # the plunger pulls down with P+_eq
@@ -230,7 +230,7 @@ class Simulator(PumpCycle):
         self._assemble()
         if keep_annulus and ann is not None and self.annulus is not None:
             self.annulus = ann
-        self.law = self._valve()
+        self.law = self.valve_law_now()
         if (self.gas is not None, self.tubing_stiffness_n_m > 0) != had:
             self._gas_init()
 
