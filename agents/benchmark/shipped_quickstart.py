@@ -6,7 +6,8 @@ parameters. The quick start plays the best shipped agent and the report's tuned 
 best on its test wells, and pump-off with a field controller's alarms; v1: pump-off) on the report's first N test
 episodes (default 3, 2 worker processes), takes the other policies (the installed operating point, ...; v1's
 clairvoyant oracle, which re-plans for minutes per episode) from the report's own records of the same episodes
-(baselines replay to 1e-9), and prints
+(baselines replay to 1e-9); v2's report played no oracle, so the causal oracle (the true well model, no future: the
+fair top of v2's normalised score; specified by the fresh-split report beside it) plays the same wells now. It prints
 
 1. a table: each policy's mean reward rate (USD/h), normalised score (0 installed, 1 oracle), mean
    constraint cost, and how far its returns are from the report's record of the same episodes;
@@ -32,7 +33,7 @@ from typing import Any
 
 import numpy as np
 
-from ..evaluation.replay import load_report, policy_specs
+from ..evaluation.replay import ReplayError, load_report, policy_specs
 from ..evaluation.rollout import Runner, episode_jobs
 from .figure import figure
 from .report import _atomic_write, _json_clean, build_report, verdict
@@ -43,6 +44,9 @@ from .report import _atomic_write, _json_clean, build_report, verdict
 # would only cost time
 LIVE_BASELINES = {"v1": ("pump_off",), "v2": ("fillage_pi", "alarm_pump_off")}
 FROM_RECORD = {"v1": ("installed", "fillage_pi", "oracle"), "v2": ("installed", "pump_off")}
+# played now on the same wells as the top of the normalised score where the shipped report has none: v2's causal
+# oracle (the true well model, no future; ~30 s of CPU an episode), as the fresh-split report beside it specifies it
+REFERENCE = {"v2": "causal_oracle"}
 
 
 def best_agent(rep: dict[str, Any]) -> str:
@@ -56,7 +60,7 @@ def quickstart_shipped(out_dir: str | Path, episodes: int = 3, agent: str | None
     """Run the shipped agent of env ``version`` and its tuned baselines on ``episodes`` test episodes; print the
     table and the verdicts."""
     from ..evaluation.shipped import shipped_report
-    from .fresh import check_out_dir
+    from .fresh import _renormalise, check_out_dir
 
     t0 = time.perf_counter()
     check_out_dir("--out", Path(out_dir), ("quickstart.json", "episode.png"))
@@ -66,17 +70,11 @@ def quickstart_shipped(out_dir: str | Path, episodes: int = 3, agent: str | None
     baselines = baselines or LIVE_BASELINES[version]
     recorded = tuple(n for n in FROM_RECORD[version] if n in rep["policies"])
     agent = agent or best_agent(rep)
-    live = (agent, *baselines)
-    specs = {n: policy_specs(rep, n, root) for n in live}  # every model checked before any episode
+    ref = _reference_specs(rep, path, version)  # the longest episodes: queued first
+    specs = {**ref, **{n: policy_specs(rep, n, root) for n in (agent, *baselines)}}  # all checked before any episode
+    live = tuple(specs)
     seeds = rep["test"]["seeds"][:episodes]
-    kwargs = {**rep["env_kwargs"], "scenario": "test"}
-    jobs, owner = [], []
-    for n in live:
-        for k, sp in enumerate(specs[n]):
-            for j in episode_jobs(rep["env_id"], kwargs, sp, seeds):
-                j["trace"] = j["seed"] == seeds[0] and k == 0
-                jobs.append(j)
-                owner.append(n)
+    jobs, owner = _jobs(rep, specs, seeds)
     print(f"quickstart: {agent} (shipped) vs {', '.join(baselines)} (tuned) on {len(seeds)} test wells of "
           f"{path}, {len(jobs)} episodes in {workers} processes ...", file=sys.stderr, flush=True)
     with Runner(workers) as runner:
@@ -84,11 +82,12 @@ def quickstart_shipped(out_dir: str | Path, episodes: int = 3, agent: str | None
     policies, traces = _policies(rep, live, recorded, owner, recs, seeds)
     mini = build_report({"source": str(path), "env_id": rep["env_id"], "env_kwargs": rep["env_kwargs"]},
                         policies, {"test": {"scenario": "test", "seeds": seeds}}, {}, {}, {})
+    _renormalise(mini)  # to the causal oracle where it ran
     interval_s = float(rep.get("env_kwargs", {}).get("interval_s", 300.0))
     fig_traces = {n: {**traces[n], "interval_s": interval_s} for n in (agent, _best(mini, baselines)) if n in traces}
     out = Path(out_dir)
     figure(mini, fig_traces, out / "episode.png")
-    diffs = {n: _record_diff(rep, n, policies[n]["episodes"]) for n in live}
+    diffs = {n: _record_diff(rep, n, policies[n]["episodes"]) for n in live if n in rep["policies"]}
     result = {"report": str(path), "agent": agent, "seeds": seeds, "wall_time_s": time.perf_counter() - t0,
               "record_max_rel_diff": diffs, **_agreement(rep, mini, agent, baselines, seeds),
               "summary": mini["summary"], "paired": mini["paired"],
@@ -107,6 +106,34 @@ def quickstart_shipped(out_dir: str | Path, episodes: int = 3, agent: str | None
     print(f"Files: {out / 'quickstart.json'} (records), {out / 'episode.png'} (one episode: agent vs best baseline)",
           flush=True)
     return result
+
+
+def _reference_specs(rep: dict[str, Any], path: Path, version: str) -> dict[str, list[dict[str, Any]]]:
+    """The reference policy's spec (v2: the causal oracle) from the fresh-split report beside the shipped one,
+    checked to weigh exactly the shipped report's tuned baselines; {} where there is none."""
+    name, fresh = REFERENCE.get(version), path.with_name("fresh.json")
+    if name is None or not fresh.is_file() or name in rep["policies"]:
+        return {}
+    specs = policy_specs(load_report(fresh), name, fresh.resolve().parent)
+    for base, params in specs[0]["params"]["policies"]:
+        if rep["policies"].get(base, {}).get("params") != params:
+            raise ReplayError(f"{fresh}: {name} weighs {base} {params}, expected the shipped report's tuned "
+                              f"{rep['policies'].get(base, {}).get('params')}")
+    return {name: specs}
+
+
+def _jobs(rep: dict[str, Any], specs: dict[str, list[dict[str, Any]]],
+          seeds: list[int]) -> tuple[list[dict[str, Any]], list[str]]:
+    """One episode job per (policy, model, seed), each policy's first model tracing the first well."""
+    kwargs = {**rep["env_kwargs"], "scenario": "test"}
+    jobs, owner = [], []
+    for n, sps in specs.items():
+        for k, sp in enumerate(sps):
+            for j in episode_jobs(rep["env_id"], kwargs, sp, seeds):
+                j["trace"] = j["seed"] == seeds[0] and k == 0
+                jobs.append(j)
+                owner.append(n)
+    return jobs, owner
 
 
 def cost_note(report: dict[str, Any]) -> str:
@@ -142,7 +169,8 @@ def _policies(rep: dict[str, Any], live: tuple[str, ...], recorded: tuple[str, .
             if "trace" in r:
                 traces[n] = {k: r[k] for k in ("well_id", "seed", "reward")} | {"trace": r.pop("trace")}
         eps = per_model[0] if len(per_model) == 1 else _average_episodes(per_model)
-        policies[n] = {"kind": rep["policies"][n]["kind"], "source": "ran now", "episodes": eps}
+        kind = rep["policies"][n]["kind"] if n in rep["policies"] else "baseline"  # the reference: no record
+        policies[n] = {"kind": kind, "source": "ran now", "episodes": eps}
     return policies, traces
 
 

@@ -89,3 +89,14 @@ def test_every_model_of_the_shipped_report_is_found_in_models(tmp_path: Path) ->
         except ReplayError:
             continue
         raise AssertionError(f"{bad} was found")
+
+
+def test_evaluate_only_plays_the_shipped_report_that_holds_the_configs_agents() -> None:
+    """The team evaluates the shipped v2 agent on fresh wells with the v2 design's config and no --report."""
+    from agents.benchmark.config import load_benchmark_config
+    from agents.benchmark.fresh import default_report
+
+    v2od = load_benchmark_config(REPO / "configs/benchmark/v2_oracle_distilled.yaml")
+    assert default_report(v2od) == shipped.shipped_report("v2")
+    v2 = load_benchmark_config(REPO / "configs/benchmark/v2.yaml")  # names v1's agents, played on v2
+    assert default_report(v2) == shipped.shipped_report("v1")

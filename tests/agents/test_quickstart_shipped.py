@@ -36,6 +36,11 @@ def test_quickstart_v2_plays_the_shipped_v2_agent_and_says_the_fresh_split_cost_
     assert res["record_max_rel_diff"][res["agent"]] <= 0.02 and res["agrees_with_report"]
     table = "\n".join(out[:-5])
     assert "| installed | report record |" in table and "| pump_off | report record |" in table
+    # the test look played no oracle: the causal oracle plays the same well now, the top of the normalised score
+    assert "| causal_oracle | ran now | " in table and " | 1.00 | " in table.split("causal_oracle")[1].split("\n")[0]
+    assert res["summary"]["causal_oracle"]["normalised_score"] == 1.0
+    assert 0.0 < res["summary"][res["agent"]]["normalised_score"] < 1.5
+    assert "(0 installed, 1 causal_oracle)" in out[-4]
     assert out[-4].startswith("This run (1 test wells): ") and "Constraint cost per episode" in out[-4]
     assert out[-3].startswith("The shipped report (100 test episodes")
     assert "+10.91 USD/h" in out[-3] and "vs fillage_pi 10.10 (LOWER" in out[-3]
