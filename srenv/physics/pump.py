@@ -70,12 +70,40 @@ STANDARD_PRESSURE_PA = 101325.0
 
 def liquid_stiffness_n_m(pump: PumpConfig, nominal_stroke_m: float) -> float:
     """The liquid-full chamber at the top of the stroke (clearance + swept volume V) as a spring on the
-    plunger: A_pl^2 / (c V); the load transfers over the travel (fluid load) / k. inf when incompressible."""
+    plunger: A_pl^2 / (c V); the downstroke's load transfer (p_in -> p_d) takes the travel (fluid load) / k.
+    inf when incompressible."""
     c = pump.liquid_compressibility_per_pa
     a = plunger_area_m2(pump)
     if not c > 0:
         return math.inf
     return a / (c * (1.0 + pump.clearance_volume_fraction) * nominal_stroke_m)
+
+
+def liquid_bottom_stiffness_n_m(pump: PumpConfig, nominal_stroke_m: float) -> float:
+    """The liquid-full chamber at the bottom of the stroke, the clearance V_d alone, as a spring on the
+    plunger: A_pl^2 / (c V_d); the upstroke's transfer (p_d -> p_in) takes (fluid load) / k, a clearance
+    fraction's share of the downstroke's. ``liquid_chamber_volume: top_of_stroke`` keeps the earlier law
+    (the top's chamber for both transfers, ~20x too long a travel here; the classifier's card sets)."""
+    if pump.liquid_chamber_volume == "top_of_stroke":
+        return liquid_stiffness_n_m(pump, nominal_stroke_m)
+    c = pump.liquid_compressibility_per_pa
+    if not c > 0:
+        return math.inf
+    return plunger_area_m2(pump) / (c * pump.clearance_volume_fraction * nominal_stroke_m)
+
+
+def chamber_spring_n_m(pump: PumpConfig, nominal_stroke_m: float, tubing_n_m: float, gas: bool
+                       ) -> tuple[float, float]:
+    """The spring on the plunger without free gas (the valve law's mode 2, laws/gas_spring.tubing_spring):
+    (stiffness of the upstroke's transfer at the bottom, of the downstroke's at the top; 0 = the first for
+    both). Unanchored tubing's stretch (``tubing_n_m``, 0 anchored) in series with the chamber's liquid,
+    whose volume differs between the two: the clearance at the bottom, clearance + swept at the top. With free
+    gas the chamber law (mode 1) keeps its own volumes and only the tubing is returned."""
+    if gas or not pump.liquid_compressibility_per_pa > 0:
+        return tubing_n_m, 0.0
+    bottom = series_stiffness_n_m(tubing_n_m, liquid_bottom_stiffness_n_m(pump, nominal_stroke_m))
+    top = series_stiffness_n_m(tubing_n_m, liquid_stiffness_n_m(pump, nominal_stroke_m))
+    return bottom, (0.0 if top == bottom else top)
 
 
 def series_stiffness_n_m(k1: float, k2: float) -> float:

@@ -131,6 +131,7 @@ class PumpCycle:
             rec["gas_mode"] = 2
             rec["u0_m"], rec["p0"] = self._gas[1], self._gas[3]
             rec["k"], rec["area_m2"] = self.tubing_stiffness_n_m, 0.0
+            rec["k_top"] = self.tubing_top_stiffness_n_m  # the downstroke's transfer (0: k)
         return rec
 
     def _cond_reset(self) -> None:

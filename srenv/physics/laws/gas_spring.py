@@ -25,7 +25,10 @@ GAS_FIELDS = [("gas_mode", "i8"), ("gas_on", "i8"), ("u0_m", "f8"), ("gas_m3", "
               ("lin_dk", "f8"), ("lin_shift_n", "f8"), ("u_tilde_m", "f8"),
               # the liquid's compressibility (1/Pa, pump.liquid_compressibility_per_pa; 0: incompressible) and
               # unanchored tubing's compliance seen by the chamber, A_pl^2 / k_t (m^3/Pa; 0: anchored)
-              ("liq_c", "f8"), ("tub_c", "f8")]
+              ("liq_c", "f8"), ("tub_c", "f8"),
+              # mode 2: the stiffness of the downstroke's transfer at the top when it differs from k, the
+              # upstroke's at the bottom (the chamber's liquid: clearance + swept there; 0: k for both)
+              ("k_top", "f8")]
 
 
 @njit(cache=True, inline="always")
@@ -72,13 +75,26 @@ def spring(params, ub):
 def tubing_spring(params, ub):
     """Unanchored tubing: centre = c0 + k_t (u_B - u0) between the valve law's bounds [lo_n, hi_n]."""
     p = params[0]
-    c = p.p0 + p.k * (ub - p.u0_m)
+    k = tubing_k(params)
+    c = p.p0 + k * (ub - p.u0_m)
     lo = fluid_clamp(params)
     if c <= lo:
         return lo, 0.0
     if c >= p.hi_n:
         return p.hi_n, 0.0
-    return c, p.k
+    return c, k
+
+
+@njit(cache=True, inline="always")
+def tubing_k(params):
+    """Mode 2's stiffness for the transfer under way: the reference p0 is the bound the spring was last held
+    at, so below the downstroke bound hi_n it left the top (the fluid load) and the downstroke's transfer
+    k_top applies; at hi_n (the bottom, and the start) the upstroke's, k. Fixed within a step (the reference
+    moves only between steps, in ``valves``), so each step stays the same convex problem."""
+    p = params[0]
+    if p.k_top > 0.0 and p.p0 < p.hi_n:
+        return p.k_top
+    return p.k
 
 
 @njit(cache=True, inline="always")
@@ -99,7 +115,7 @@ def valves(params, ub):
     mixture (gas and liquid in the proportion it holds at p_d). Both valves closed: nothing changes."""
     p = params[0]
     if p.area_m2 == 0.0:  # unanchored tubing: the plunger slid in its barrel, the spring re-references
-        c = p.p0 + p.k * (ub - p.u0_m)
+        c = p.p0 + tubing_k(params) * (ub - p.u0_m)
         lo = fluid_clamp(params)
         if c <= lo or c >= p.hi_n:
             p.p0 = min(max(c, lo), p.hi_n)
