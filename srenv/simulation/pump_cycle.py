@@ -123,6 +123,7 @@ class PumpCycle:
             rec["p_out_pa"], rec["gas_friction_n"] = self.p_pump_pa, cfg.pump.plunger_friction_n
             rec["p_d_full_pa"], rec["p_out_full_pa"] = rec["p_d_pa"], rec["p_out_pa"]  # a tubing leak drains them
             rec["liq_c"] = cfg.pump.liquid_compressibility_per_pa
+            rec["gas_keep_m3"] = self.gas.kept_m3
             if self.tubing_stiffness_n_m > 0:  # unanchored: the barrel's travel in series with the chamber
                 rec["tub_c"] = self.gas.area_m2 ** 2 / self.tubing_stiffness_n_m
             rec["v_min_m3"] = self.gas.area_m2 * GAS_MIN_DELAY_FRACTION * self.surface.stroke_length_m(

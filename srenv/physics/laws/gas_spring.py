@@ -28,7 +28,10 @@ GAS_FIELDS = [("gas_mode", "i8"), ("gas_on", "i8"), ("u0_m", "f8"), ("gas_m3", "
               ("liq_c", "f8"), ("tub_c", "f8"),
               # mode 2: the stiffness of the downstroke's transfer at the top when it differs from k, the
               # upstroke's at the bottom (the chamber's liquid: clearance + swept there; 0: k for both)
-              ("k_top", "f8")]
+              ("k_top", "f8"),
+              # mode 1: gas at p_d the travelling valve does not pass, kept in the clearance (m^3; 0: the chamber
+              # expels its own mixture, gas and liquid alike; pump.clearance_gas_fraction)
+              ("gas_keep_m3", "f8")]
 
 
 @njit(cache=True, inline="always")
@@ -139,13 +142,30 @@ def valves(params, ub):
     elif v0 > 0.0 and (vg <= 0.0 or p0 * (v0 / vg) ** k > p.p_d_pa):
         v_open = v0 * (p0 / p.p_d_pa) ** (1.0 / k)
         out = v_open - vg
-        f = v_open / (v_open + p.liquid_m3)
-        p.gas_m3 = max(v_open - f * out, 0.0)
-        p.liquid_m3 = max(p.liquid_m3 - (1.0 - f) * out, 0.0)
+        if p.gas_keep_m3 > 0.0:
+            p.gas_m3, p.liquid_m3 = expel_keeping(p.gas_keep_m3, v_open, p.liquid_m3, out)
+        else:
+            f = v_open / (v_open + p.liquid_m3)
+            p.gas_m3 = max(v_open - f * out, 0.0)
+            p.liquid_m3 = max(p.liquid_m3 - (1.0 - f) * out, 0.0)
         p.p0 = p.p_d_pa
         p.u0_m = ub
     elif v0 <= 0.0 and vg <= 0.0:
         p.u0_m = ub  # liquid-full chamber moving down: the travelling valve is open
+
+
+@njit(cache=True)
+def expel_keeping(keep_m3, gas_m3, liquid_m3, out_m3):
+    """(gas, liquid) left after the open travelling valve passed out_m3 at p_d, keeping up to keep_m3 of the
+    chamber's gas (trapped in the clearance, where the plunger does not sweep it out): the rest of the gas and
+    the liquid leave mixed as the chamber holds them; once they are gone the kept gas leaves too."""
+    held = min(keep_m3, gas_m3)
+    free = gas_m3 - held
+    mix = free + liquid_m3
+    if out_m3 <= mix and mix > 0.0:
+        f = free / mix
+        return held + free - f * out_m3, liquid_m3 - (1.0 - f) * out_m3
+    return max(gas_m3 + liquid_m3 - out_m3, 0.0), 0.0
 
 
 @njit(cache=True)
@@ -210,6 +230,8 @@ def compressible_valves(params, ub):
             if side == 0:
                 p.gas_m3 = vg + p.phi * flow
                 p.liquid_m3 = vl + (1.0 - p.phi) * flow
+            elif p.gas_keep_m3 > 0.0 and flow < 0.0:
+                p.gas_m3, p.liquid_m3 = expel_keeping(p.gas_keep_m3, vg, vl, -flow)
             else:
                 f = vg / (vg + vl) if vg + vl > 0.0 else 0.0
                 p.gas_m3 = max(vg + f * flow, 0.0)
