@@ -23,7 +23,7 @@ from ..physics.fluid import tubing_pressure_pa
 from ..physics.inflow import Annulus
 from ..physics.laws import rod_friction
 from ..physics.laws import valve as valve_law_record
-from ..physics.pump import GasChamber, ValveLaw, liquid_stiffness_n_m, series_stiffness_n_m, valve_law
+from ..physics.pump import GasChamber, ValveLaw, chamber_spring_n_m, valve_law
 from ..physics.pump_inputs import intake_at_pump_pa, pump_at_rod_end
 from ..physics.rod import (
     GRAVITY_M_S2,
@@ -111,10 +111,9 @@ class Simulator(PumpCycle):
             area = math.pi / 4 * ((tb.outer_diameter_mm * 1e-3) ** 2 - (tb.inner_diameter_mm * 1e-3) ** 2)
             free_m = cfg.rod_length_m - tb.anchor_depth_m  # its stiffness given (docs/realism.md) or from its size
             self.tubing_stiffness_n_m = tb.stiffness_n_m or tb.youngs_modulus_pa * area / free_m
-        if self.gas is None and cfg.pump.liquid_compressibility_per_pa > 0:  # the liquid in series (mode 2)
-            self.tubing_stiffness_n_m = series_stiffness_n_m(
-                self.tubing_stiffness_n_m, liquid_stiffness_n_m(cfg.pump, self.surface.stroke_length_m(
-                    cfg.surface.stroke_length_m)))
+        self.tubing_stiffness_n_m, self.tubing_top_stiffness_n_m = chamber_spring_n_m(  # the liquid in series
+            cfg.pump, self.surface.stroke_length_m(cfg.surface.stroke_length_m), self.tubing_stiffness_n_m,
+            self.gas is not None)
         self.f1_hz = first_natural_frequency_hz(mesh, cfg.rod.mass_matrix)
         self._check_convexity()
 

@@ -118,6 +118,7 @@ def field_overrides(d: Draw, well) -> dict[str, object]:
         wc = min(max((well.fluid.density_kg_m3 - OIL_RHO) / (WATER_RHO - OIL_RHO), 0.0), 1.0)
         c = wc * WATER_COMPRESSIBILITY_PER_PA + (1.0 - wc) * d.oil_compressibility_per_pa
         out["pump.liquid_compressibility_per_pa"] = float(f"{c:.4g}")
+        out["pump.liquid_chamber_volume"] = "top_of_stroke"  # the law these sets were drawn with (runs 3-6)
     if d.unanchored:
         out["tubing.anchored"] = False
     return out
