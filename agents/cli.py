@@ -101,6 +101,8 @@ def build_parser() -> argparse.ArgumentParser:
     q.add_argument("--train", action="store_true", help="the training demo: the v1 benchmark on a small scale "
                    "(tune baselines, train PPO/SAC for a minute)")
     q.add_argument("--workers", type=_flag("quickstart", "--workers"), default=2, help="processes (default 2)")
+    q.add_argument("--env", choices=("v1", "v2"), default="v2",
+                   help="whose shipped agent: srenv/SuckerRod-v2's (default) or v1's")
     q.add_argument("--config", default=str(QUICK_BENCHMARK), help="--train: benchmark YAML (default v1_quick.yaml)")
     q.add_argument("--out", default="runs/quickstart")
     q.add_argument("--total-timesteps", type=_flag("quickstart", "--total-timesteps"),
@@ -112,7 +114,7 @@ def build_parser() -> argparse.ArgumentParser:
     b = sub.add_parser("benchmark", help="tune baselines, train PPO/SAC, test all on unseen wells (v1)")
     b.add_argument("config", help="benchmark YAML, e.g. configs/benchmark/v1.yaml")
     b.add_argument("--quick", action="store_true", help="apply the config's quick: block (minutes, for CI)")
-    b.add_argument("--out-dir", help="output directory (default docs, or runs/benchmark_quick with --quick)")
+    b.add_argument("--out-dir", help="output directory (default: the env version's shipped report folder, docs for v1 and docs/v2 for v2, with the models in models/; runs/benchmark_quick with --quick)")
     b.add_argument("--evaluate-only", action="store_true", help="no training or tuning: the shipped models and "
                    "tuned baselines on --episodes fresh family wells drawn from --fresh-seed")
     b.add_argument("--fresh-seed", type=_flag("benchmark", "--fresh-seed"),
@@ -202,7 +204,7 @@ def cmd_quickstart(args: argparse.Namespace) -> dict:
     if not args.train:  # prints its table, verdict and file locations itself: no JSON after them
         from .benchmark.shipped_quickstart import quickstart_shipped
 
-        quickstart_shipped(args.out, args.episodes or 3, workers=args.workers)
+        quickstart_shipped(args.out, args.episodes or 3, workers=args.workers, version=args.env)
         return {"_printed": True}
     from .benchmark.run import quickstart
 

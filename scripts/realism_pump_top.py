@@ -27,9 +27,15 @@ from pathlib import Path
 import numpy as np
 
 from srenv.analysis.card_compare import resample_stroke
-from srenv.analysis.field_model import discharge_pressure_pa, liquid_compressibility_per_pa, well_config
+from srenv.analysis.field_model import (
+    CLEARANCE_FRACTION,
+    discharge_pressure_pa,
+    liquid_compressibility_per_pa,
+    well_config,
+)
 from srenv.analysis.field_record import read_dynacard_json
 from srenv.analysis.transfer_reading import (
+    clearance_gas_fraction,
     plateaus,
     series_stiffness_n_m,
     tag_from_diagnosis,
@@ -118,6 +124,12 @@ def what_ifs(rec, base: dict, diag_x: np.ndarray, diag_f: np.ndarray) -> dict:
     p_c = intake_from_plateaus(rec, diag_x, diag_f, base["pump_state"]["plunger_friction_n"])
     c = liquid_compressibility_per_pa(rec)
     k_read = series_stiffness_n_m(diag_x, diag_f)
+    # the clearance's gas read off the diagnosed upstroke transfer, at the model's intake and at the plateaus'
+    # (validate's clearance share of the surface stroke; isothermal gas, as validate's model)
+    travel_up, p_d = transfer_travel_m(diag_x, diag_f)["up"], discharge_pressure_pa(rec)
+    clear_m = CLEARANCE_FRACTION * float(np.ptp(rec.position_m))
+    psi = clearance_gas_fraction(travel_up, base["pump_state"]["intake_pressure_pa"], p_d, clear_m)
+    psi_pc = clearance_gas_fraction(travel_up, max(p_c, 101325.0), p_d, clear_m)
     return {
         "tagging_up (read off the diagnosis)": None if tag is None else {
             "pump.tag_top_overtravel_m": tag["tag_top_overtravel_m"],
@@ -131,7 +143,25 @@ def what_ifs(rec, base: dict, diag_x: np.ndarray, diag_f: np.ndarray) -> dict:
         # the compliance the diagnosed transfer shows, carried by free tubing of that stiffness
         "series compliance read off the diagnosed transfer": None if k_read is None else {
             "tubing.anchored": False, "tubing.stiffness_n_m": k_read},
+        "clearance gas read off the diagnosed upstroke transfer": None if psi == 0 else {
+            "pump.clearance_gas_fraction": psi},
+        "clearance gas and intake read off the diagnosis (plateaus)": None if psi_pc == 0 else {
+            "pump.clearance_gas_fraction": psi_pc, "pump.intake_pressure_pa": max(p_c, 101325.0)},
     }, tag, p_c
+
+
+CLEARANCE_GAS_SHARES = (0.02, 0.05, 0.1, 0.15, 0.2, 0.3)  # the same shares on both records: the law's response
+
+
+def clearance_gas_scan(rec, pa_n: float) -> dict:
+    """The four figures, the harmonics and the transfer travels with the clearance keeping each share as gas."""
+    out = {}
+    for psi in CLEARANCE_GAS_SHARES:
+        o, (_, r, _) = validate(rec, [], 4, "effective", {"pump.clearance_gas_fraction": psi})
+        out[str(psi)] = {**{k: o[k] for k in FIGURES}, "h4_20_x_measured": o["spectrum"]["ratio_h4_20"],
+                         "predicted_transfer_travel_m": transfer_travel_m(r.trace["pump_position_m"],
+                                                                          r.trace["pump_load_n"] + pa_n)}
+    return out
 
 
 def run_well(w: str, ax_cards, ax_ring) -> dict:
@@ -144,8 +174,9 @@ def run_well(w: str, ax_cards, ax_ring) -> dict:
     ax_cards.plot(rec.pump_position_m - rec.pump_position_m.min(), rec.pump_load_n / 1e3, "k", lw=1.6,
                   label="vendor diagnosis")
     ax_cards.plot(dx - dx.min(), df / 1e3, "0.5", lw=1.2, label="srenv diagnosis")
-    plotted = {"now": res, "tagging_up (read off the diagnosis)": None,
-               "series compliance read off the diagnosed transfer": None}
+    plotted = {"now": res, "series compliance read off the diagnosed transfer": None,
+               "clearance gas read off the diagnosed upstroke transfer": None,
+               "clearance gas and intake read off the diagnosis (plateaus)": None}
     for name, over in ifs.items():
         if over is None:
             rows[name] = {"applied": False, "why": "the diagnosis does not show it (transfer_reading rule)"}
@@ -170,6 +201,7 @@ def run_well(w: str, ax_cards, ax_ring) -> dict:
     for a in (ax_cards, ax_ring):
         a.legend(fontsize=7)
     return {"rows": rows, "tag_read_off_diagnosis": tag, "intake_from_plateaus_pa": p_c,
+            "clearance_gas_scan": clearance_gas_scan(rec, pa),
             "diagnosed_transfer_travel_m": transfer_travel_m(dx, df),
             "series_stiffness_read_n_m": series_stiffness_n_m(dx, df),
             "free_tubing_stiffness_n_m": 2.07e11 * TUBING_AREA_M2 / rec.rod_length_m,

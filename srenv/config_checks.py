@@ -65,6 +65,15 @@ def _check_pump(cfg: WellConfig) -> None:
     if p.liquid_compressibility_per_pa > 0 and p.law != "constant":
         raise ConfigError("pump.liquid_compressibility_per_pa", p.liquid_compressibility_per_pa,
                           "0 with pump.law 'nonmonotone' (the liquid spring carries the constant law only)")
+    gas = p.intake_gas_fraction > 0 or p.intake_glr_m3_m3 > 0 or p.fillage < 1
+    if p.clearance_gas_fraction > 0 and not gas:
+        raise ConfigError("pump.clearance_gas_fraction", p.clearance_gas_fraction,
+                          "0 without free gas at the intake (the clearance's gas comes with it)")
+    if (p.liquid_compressibility_per_pa > 0 and not gas and p.liquid_chamber_volume == "per_transfer"
+            and not p.clearance_volume_fraction > 0):  # the upstroke's transfer decompresses the clearance's liquid
+        raise ConfigError("pump.clearance_volume_fraction", p.clearance_volume_fraction,
+                          "a fraction > 0 with pump.liquid_compressibility_per_pa > 0 and no free gas (the "
+                          "upstroke's load transfer decompresses the clearance's liquid)")
 
 
 # the pump-condition laws the kernel's chamber spring does not carry: with free gas, a compressible chamber liquid

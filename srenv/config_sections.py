@@ -149,6 +149,17 @@ class PumpConfig:
         doc="gradual load transfer: the pumped liquid's compressibility (water 4.5e-10); the chamber's liquid "
             "(and free gas, and unanchored tubing) is a spring in series with the valve law, so the load "
             "transfers over a plunger travel instead of at once; 0 = incompressible (docs/realism.md)")
+    clearance_gas_fraction: float = num(
+        0.0, unit="-", check="unit_interval", hi=1.0,
+        doc="gas share of the clearance at the discharge pressure that the open travelling valve does not pass "
+            "(trapped where the plunger does not sweep): it re-expands on every upstroke before the standing "
+            "valve opens; with pump.fillage the intake's gas is the rest of the fillage's; 0 = the chamber "
+            "expels its own mixture (docs/realism.md)")
+    liquid_chamber_volume: str = choice(
+        "per_transfer", ("per_transfer", "top_of_stroke"),
+        "without free gas, the chamber liquid each load transfer compresses: per_transfer = the clearance at the "
+        "bottom (upstroke), clearance + swept at the top (downstroke); top_of_stroke = the top's for both (the "
+        "earlier law, kept for the classifier's card sets)")
     # predictive inputs (docs/realism.md, "Predictive inputs"); None = not given
     depth_m: float | None = num(None, unit="m", lo=1.0, hi=1.0e5,
                                 doc="measured depth of the pump when it sits below the rod string's end (the "

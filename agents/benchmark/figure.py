@@ -1,5 +1,6 @@
 """The benchmark's figure: mean return with its 95 % CI per policy, and on one test episode the best agent
-beside the best tuned baseline (average SPM, duty, fillage estimate over time; three surface cards)."""
+beside the best tuned baseline (average SPM, duty, fillage estimate over time, the spans of the well's true
+condition where v2 names one; three surface cards)."""
 
 from __future__ import annotations
 
@@ -9,6 +10,24 @@ from typing import Any
 import numpy as np
 
 from .report import _fmt
+
+# one colour per condition, the same in every panel (matplotlib's tab10 without the lines' blue/orange/green)
+_CONDITION_COLOURS = ("tab:red", "tab:purple", "tab:brown", "tab:pink", "tab:olive", "tab:cyan", "tab:gray")
+
+
+def _condition_spans(ax: Any, hours: np.ndarray, conditions: list[str], dt_h: float) -> None:
+    """Shade each run of intervals whose true condition is not a full pump (what the agent met), labelled once."""
+    names = sorted({c for c in conditions if c not in ("", "full")})
+    colour = {c: _CONDITION_COLOURS[k % len(_CONDITION_COLOURS)] for k, c in enumerate(names)}
+    start = 0
+    for i in range(1, len(conditions) + 1):
+        if i == len(conditions) or conditions[i] != conditions[start]:
+            c = conditions[start]
+            if c in colour:
+                ax.axvspan(hours[start] - dt_h, hours[i - 1], color=colour[c], alpha=0.12,
+                           label=c.replace("_", " ") if c in names else None)
+                names = [n for n in names if n != c]  # label each condition once
+            start = i
 
 
 def figure(report: dict[str, Any], traces: dict[str, dict[str, Any]], path: Path) -> None:
@@ -39,6 +58,7 @@ def figure(report: dict[str, Any], traces: dict[str, dict[str, Any]], path: Path
         hours = np.arange(1, len(t["avg_spm"]) + 1) * tr["interval_s"] / 3600
         a1 = fig.add_subplot(gs[1, col])
         a1.step(hours, t["avg_spm"], where="pre", color="tab:blue", label="average SPM")
+        _condition_spans(a1, hours, t.get("condition", []), tr["interval_s"] / 3600)
         # two lines: a long policy name must not run into the neighbouring panel's title
         a1.set(title=f"{label}\non {tr['well_id']} (seed {tr['seed']}): return {tr['reward']:.0f}",
                xlabel="time (h)", ylabel="average SPM")

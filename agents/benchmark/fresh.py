@@ -13,9 +13,11 @@ tuned, selected or evaluated on - with no training and no tuning, and writes the
   on v2, pump-off's tuned parameters with the config's fixed ``evaluate_only.alarm_params`` (a report made
   before it was tuned, such as the shipped v1 one); and, when the config lists it, ``causal_oracle`` (the
   reference of the normalised score) and the clairvoyant ``oracle``.
-- The shipped agents are v1 agents. On v2 they see v1's part of v2's field observation (its first 77 entries
-  are v1's: :class:`agents.evaluation.v1_view.V1ObsView`), so they run unchanged; the conditions and the
-  classifier's output are then unseen by them.
+- Which report (:func:`default_report`, or ``--report``): the shipped report that holds the config's agents, the
+  config's env version's first - ``configs/benchmark/v2_oracle_distilled.yaml`` plays the shipped v2 agent
+  (``docs/v2/benchmark.json``), ``configs/benchmark/v2.yaml`` the shipped v1 agents. v1 agents on v2 see v1's part
+  of v2's field observation (its first 77 entries are v1's: :class:`agents.evaluation.v1_view.V1ObsView`), so they
+  run unchanged; the conditions and the classifier's output are then unseen by them.
 - ``python -m agents replay DIR/benchmark.json`` re-runs the report's episodes on the same family wells.
 """
 
@@ -29,7 +31,7 @@ from typing import Any
 
 import numpy as np
 
-from ..envs import ENV_ID_V1
+from ..envs import ENV_ID_V1, env_tag
 from ..evaluation.replay import ReplayError, load_report, policy_specs
 from ..evaluation.rollout import Runner, _cached_env, run_episode
 from ..evaluation.v1_view import build_policy_any
@@ -57,6 +59,22 @@ def fresh_episode_job(job: dict[str, Any]) -> dict[str, Any]:
     torch.set_num_threads(1)
     env = _cached_env(job["env_id"], job["env_kwargs"])
     return run_episode(env, build_policy_any(job["policy"], env), job["seed"])
+
+
+def default_report(cfg: dict[str, Any]) -> Path:
+    """The shipped report that holds the config's ``evaluate_only.agents``: the config's own env version's first
+    (v2_oracle_distilled.yaml: the shipped v2 agent), else v1's (v2.yaml names v1's agents, played on v2)."""
+    from ..evaluation.shipped import shipped_report
+
+    wanted = (cfg.get("evaluate_only") or {}).get("agents", DEFAULT_AGENTS)
+    for version in dict.fromkeys((env_tag(cfg["env_id"]), "v1")):
+        try:
+            path = shipped_report(version)
+        except ValueError:  # no agent of that version is shipped
+            continue
+        if all(str(a) in load_report(path)["policies"] for a in wanted):
+            return path
+    return shipped_report("v1")
 
 
 def _specs(cfg: dict[str, Any], rep: dict[str, Any], root: Path) -> dict[str, list[dict[str, Any]]]:
@@ -99,13 +117,12 @@ def check_out_dir(flag: str, out: Path, names: tuple[str, ...]) -> None:
 def evaluate_fresh(config: str, fresh_seed: int, episodes: int, out_dir: str | Path,
                    workers: int | None = None, report: str | Path | None = None) -> dict[str, Any]:
     """``report``: the benchmark report whose tuned baselines and agents are played (``--report``; its models
-    are read next to it), by default the shipped v1 report."""
-    from ..evaluation.shipped import shipped_report
+    are read next to it), by default :func:`default_report`."""
     from .config import load_benchmark_config
 
     t0 = time.perf_counter()
     cfg = load_benchmark_config(config)
-    path = Path(report) if report is not None else shipped_report("v1")
+    path = Path(report) if report is not None else default_report(cfg)
     rep = load_report(path)  # data only (JSON, schema and fields checked), before the output folder is made
     if rep["env_id"] not in (cfg["env_id"], ENV_ID_V1):
         raise ReplayError(f"--report {path}: env_id = {rep['env_id']!r}, expected {cfg['env_id']!r} (the config's) "

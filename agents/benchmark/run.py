@@ -34,8 +34,8 @@ import time
 from pathlib import Path
 from typing import Any
 
-from ..envs import ENV_ID_V1, make_env
-from ..evaluation.manifest import MODELS_HOME, write_manifest
+from ..envs import ENV_ID_V1, env_tag, make_env
+from ..evaluation.manifest import MODELS_HOME, shipped_out_dir, shipped_reports, write_manifest
 from ..evaluation.rollout import Runner
 from ..inputs import check_output_dir
 from ..policies.field import interval_s_of
@@ -129,12 +129,15 @@ def _interval_s(env_id: str, kwargs: dict[str, Any], seed: int) -> float:
 def benchmark_main(config: str, quick: bool = False, out_dir: str | None = None) -> dict[str, Any]:
     """``python -m agents benchmark``: the whole protocol; prints the table and returns the JSON summary."""
     cfg = load_benchmark_config(config, quick=quick)
-    out = Path(out_dir or ("runs/benchmark_quick" if quick else "docs"))
-    # the shipped run: its report in docs/, its models in the repository's models/ (with the manifest)
-    shipped = out_dir is None and not quick
+    # the shipped run (no --out-dir): its report where the env version's shipped report lives (docs/ for v1,
+    # docs/v2/ for v2: one version's run never overwrites another's), its models in the repository's models/
+    tag = env_tag(cfg["env_id"])
+    home = shipped_out_dir(tag)
+    shipped = out_dir is None and not quick and home is not None
+    out = Path(out_dir or ("runs/benchmark_quick" if quick else home or f"runs/benchmark_{tag}"))
     report = run_benchmark(cfg, out, quick=quick, models_dir=MODELS_HOME if shipped else None)
     if shipped:
-        write_manifest(MODELS_HOME, out / "benchmark.json")
+        write_manifest(MODELS_HOME, shipped_reports(MODELS_HOME.parent))
     print(markdown_tables(report), flush=True)
     print(verdict(report), flush=True)
     print(f"benchmark: wall time {report['wall_time_s']['total']:.0f} s; wrote {out / 'benchmark.json'}, "

@@ -74,7 +74,7 @@ def run_episode(env: Any, policy: Any, seed: int, trace: bool = False) -> dict[s
                            "seed": int(seed)}
     sums: dict[str, float] = {}
     means: dict[str, list[float]] = {k: [] for k in MEAN_KEYS}
-    tr: dict[str, list] = {k: [] for k in (*TRACE_KEYS, "reward", "card")} if trace else {}
+    tr: dict[str, list] = {k: [] for k in (*TRACE_KEYS, "reward", "card", "condition")} if trace else {}
     ret, n, failure = 0.0, 0, None
     for obs, reward, terminated, _, info in steps:
         ret += float(reward)
@@ -90,6 +90,7 @@ def run_episode(env: Any, policy: Any, seed: int, trace: bool = False) -> dict[s
                 tr[k].append(float(info[k]) if k in info and _is_number(info[k]) else math.nan)
             tr["reward"].append(float(reward))
             tr["card"].append(np.asarray(obs, np.float64)[:64].round(4).tolist())
+            tr["condition"].append(str(info.get("condition", "")))  # v2's true condition ("" before v2)
         failure = info.get("failure") if terminated else None
     rec.update(reward=ret, cost=sums.pop("cost", 0.0), steps=n, reward_rate_usd_h=ret / max(n, 1))
     rec.update(sorted(sums.items()))

@@ -5,7 +5,8 @@ holds ``labels``, the feature scaling ``mean``/``std`` and layers ``w0, b0, w1, 
 softmax at the end), and since run P1 optionally ``card_type`` (``surface`` or ``pump``: the card it reads; a file
 without it is a surface model, as every file before), since run P2 optionally ``feature_set`` (``shape+level``: the
 pump card's 65th entry is its load level against a described well's fluid load, so the model needs a config; a file
-without it is ``shape``, read as before). Trained on simulated cards only (docs/conditions.md).
+without it is ``shape``, read as before), since run P3 ``shape+level+offset`` (a 66th entry: the lower plateau
+against the described P+). Trained on simulated cards only (docs/conditions.md).
 """
 
 from __future__ import annotations
@@ -16,7 +17,7 @@ import numpy as np
 
 from ..physics.conditions import LABELS
 from .card_shape import CARD_TYPES, N_FEATURES, features
-from .pump_level import FEATURE_SETS, with_level
+from .pump_level import FEATURE_SETS, with_level, with_offset
 
 DEFAULT_MODEL = Path(__file__).resolve().parents[1] / "models" / "classifier.npz"
 # run 2's weights, pinned: srenv/SuckerRod-v2's observation carries its probabilities, so v2 keeps its numbers
@@ -26,6 +27,8 @@ V2_MODEL = DEFAULT_MODEL.with_name("classifier_run2.npz")
 PUMP_MODEL = DEFAULT_MODEL.with_name("classifier_pump.npz")
 # run P2's pump model with the load level (`srenv classify --config WELL --card pump`), if shipped
 PUMP_LEVEL_MODEL = DEFAULT_MODEL.with_name("classifier_pump_level.npz")
+# run P3's pump model with the level and the offset, trained on diagnosed cards (the default with a config), if shipped
+PUMP_P3_MODEL = DEFAULT_MODEL.with_name("classifier_pump_p3.npz")
 MAX_LAYERS = 8
 MAX_WIDTH = 4096
 
@@ -63,6 +66,11 @@ class CardClassifier:
         """True: the model reads the load level, so a well config (its described fluid load) is needed."""
         return self.feature_set != FEATURE_SETS[0]
 
+    @property
+    def needs_offset(self) -> bool:
+        """True: the model reads the offset (run P3), so the described P+ is needed too."""
+        return self.feature_set == FEATURE_SETS[2]
+
     @classmethod
     def load(cls, path: str | Path = DEFAULT_MODEL) -> CardClassifier:
         try:
@@ -85,17 +93,17 @@ class CardClassifier:
             raise BadModel(f"model file {path}: card_type {card_type!r}, expected one of {CARD_TYPES}")
         if feature_set not in FEATURE_SETS or (feature_set != FEATURE_SETS[0] and card_type != "pump"):
             raise BadModel(f"model file {path}: feature_set {feature_set!r} with card_type {card_type!r}, expected "
-                           f"{FEATURE_SETS[0]!r} (or {FEATURE_SETS[1]!r} for a pump model)")
-        cls._check(path, labels, mean, std, layers)
+                           f"{FEATURE_SETS[0]!r} (or one of {FEATURE_SETS[1:]} for a pump model)")
+        cls._check(path, labels, mean, std, layers, N_FEATURES + (feature_set == FEATURE_SETS[2]))
         return cls(labels, mean, std, layers, card_type, feature_set)
 
     @staticmethod
-    def _check(path, labels, mean, std, layers) -> None:
+    def _check(path, labels, mean, std, layers, n_features: int) -> None:
         if labels != LABELS:
             raise BadModel(f"model file {path}: labels {labels} are not srenv's twelve")
-        if mean.shape != (N_FEATURES,) or std.shape != (N_FEATURES,) or not np.all(std > 0):
-            raise BadModel(f"model file {path}: feature scaling of the wrong shape (expected {N_FEATURES})")
-        width = N_FEATURES
+        if mean.shape != (n_features,) or std.shape != (n_features,) or not np.all(std > 0):
+            raise BadModel(f"model file {path}: feature scaling of the wrong shape (expected {n_features})")
+        width = n_features
         for i, (w, b) in enumerate(layers):
             if w.ndim != 2 or w.shape[0] != width or b.shape != (w.shape[1],) or w.shape[1] > MAX_WIDTH:
                 raise BadModel(f"model file {path}: layer {i} has shape {w.shape}, expected ({width}, n)")
@@ -116,17 +124,21 @@ class CardClassifier:
         e = np.exp(h)
         return e / e.sum(axis=1, keepdims=True)
 
-    def card_features(self, position, load, fluid_load_n: float | None = None) -> np.ndarray:
+    def card_features(self, position, load, fluid_load_n: float | None = None,
+                      downstroke_load_n: float | None = None) -> np.ndarray:
         """The model's features of one card (``fluid_load_n``: the described fluid load, N, for a level model;
-        ignored by the others); raises card_shape.BadCard, pump_level.BadLevel."""
+        ``downstroke_load_n``: the described P+ as a true load, N, for an offset model; ignored by the others);
+        raises card_shape.BadCard, pump_level.BadLevel."""
         f = features(position, load, self.card_type)
         if not self.needs_level:
             return f
-        if fluid_load_n is None:
-            raise ValueError(f"this model's features are {self.feature_set}: it needs a described fluid load")
-        return with_level(f, load, fluid_load_n)
+        if fluid_load_n is None or (self.needs_offset and downstroke_load_n is None):
+            raise ValueError(f"this model's features are {self.feature_set}: it needs the described pump's loads")
+        f = with_level(f, load, fluid_load_n)
+        return with_offset(f, load, downstroke_load_n, fluid_load_n) if self.needs_offset else f
 
-    def classify(self, position, load, fluid_load_n: float | None = None) -> tuple[str, dict[str, float]]:
+    def classify(self, position, load, fluid_load_n: float | None = None,
+                 downstroke_load_n: float | None = None) -> tuple[str, dict[str, float]]:
         """(label, probabilities of all twelve) of one card; raises card_shape.BadCard, pump_level.BadLevel."""
-        p = self.proba_features(self.card_features(position, load, fluid_load_n))[0]
+        p = self.proba_features(self.card_features(position, load, fluid_load_n, downstroke_load_n))[0]
         return self.labels[int(np.argmax(p))], {k: float(v) for k, v in zip(self.labels, p)}

@@ -10,6 +10,10 @@ surface card; each rule was fixed before the figures it feeds were measured.
   within 0.1 cm on both field records).
 - **Series stiffness**: the spring in series with the pump the upstroke's transfer shows, 80 % of the step
   between the plateaus over its travel (the tubing's stretch when it is free; the chamber's contents).
+- **Clearance gas**: the gas share psi of the clearance at p_d whose re-expansion to p_in takes the upstroke
+  transfer's 10 -> 90 % travel (``pump.clearance_gas_fraction``): at the load's 10 % the chamber is at
+  p_10 = p_d - 0.1 (p_d - p_in), at 90 % at p_90 = p_in + 0.1 (p_d - p_in), so the travel is
+  psi V_d ((p_d / p_90)^(1/k) - (p_d / p_10)^(1/k)) / A_pl, the clearance's liquid neglected; at most 1.
 - **Tagging up**: an upstroke whose top 15 % (median) climbs above its plateau by more than 10 % of the card's
   load range is read as a contact with the pump's top: from x_c, the highest position below that band whose
   load is still within 10 % of the climb of the plateau, to the top; the overtravel is the travel above x_c
@@ -86,3 +90,14 @@ def tag_from_diagnosis(x: np.ndarray, f: np.ndarray) -> dict | None:
     x_c = float(xu[np.nonzero(fu[:first_top + 1] <= f_mid + 0.1 * climb)[0][-1]])
     return {"climb_start_m": x_c, "travel_m": top, "plateau_n": f_mid, "climb_n": climb,
             "tag_top_overtravel_m": top - x_c, "tag_stiffness_n_m": climb / (top - x_c)}
+
+
+def clearance_gas_fraction(travel_up_m: float, p_in_pa: float, p_d_pa: float, clearance_m: float,
+                           exponent: float = 1.0) -> float:
+    """The clearance's gas share at p_d that the upstroke's transfer travel shows (module docstring);
+    ``clearance_m`` is the clearance volume over the plunger's area. 0 for a rigid transfer."""
+    if not travel_up_m >= MIN_TRAVEL_M or not p_d_pa > p_in_pa > 0:
+        return 0.0
+    dp = p_d_pa - p_in_pa
+    span = (p_d_pa / (p_in_pa + 0.1 * dp)) ** (1.0 / exponent) - (p_d_pa / (p_d_pa - 0.1 * dp)) ** (1.0 / exponent)
+    return float(min(travel_up_m / (clearance_m * span), 1.0))

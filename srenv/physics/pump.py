@@ -70,12 +70,40 @@ STANDARD_PRESSURE_PA = 101325.0
 
 def liquid_stiffness_n_m(pump: PumpConfig, nominal_stroke_m: float) -> float:
     """The liquid-full chamber at the top of the stroke (clearance + swept volume V) as a spring on the
-    plunger: A_pl^2 / (c V); the load transfers over the travel (fluid load) / k. inf when incompressible."""
+    plunger: A_pl^2 / (c V); the downstroke's load transfer (p_in -> p_d) takes the travel (fluid load) / k.
+    inf when incompressible."""
     c = pump.liquid_compressibility_per_pa
     a = plunger_area_m2(pump)
     if not c > 0:
         return math.inf
     return a / (c * (1.0 + pump.clearance_volume_fraction) * nominal_stroke_m)
+
+
+def liquid_bottom_stiffness_n_m(pump: PumpConfig, nominal_stroke_m: float) -> float:
+    """The liquid-full chamber at the bottom of the stroke, the clearance V_d alone, as a spring on the
+    plunger: A_pl^2 / (c V_d); the upstroke's transfer (p_d -> p_in) takes (fluid load) / k, a clearance
+    fraction's share of the downstroke's. ``liquid_chamber_volume: top_of_stroke`` keeps the earlier law
+    (the top's chamber for both transfers, ~20x too long a travel here; the classifier's card sets)."""
+    if pump.liquid_chamber_volume == "top_of_stroke":
+        return liquid_stiffness_n_m(pump, nominal_stroke_m)
+    c = pump.liquid_compressibility_per_pa
+    if not c > 0:
+        return math.inf
+    return plunger_area_m2(pump) / (c * pump.clearance_volume_fraction * nominal_stroke_m)
+
+
+def chamber_spring_n_m(pump: PumpConfig, nominal_stroke_m: float, tubing_n_m: float, gas: bool
+                       ) -> tuple[float, float]:
+    """The spring on the plunger without free gas (the valve law's mode 2, laws/gas_spring.tubing_spring):
+    (stiffness of the upstroke's transfer at the bottom, of the downstroke's at the top; 0 = the first for
+    both). Unanchored tubing's stretch (``tubing_n_m``, 0 anchored) in series with the chamber's liquid,
+    whose volume differs between the two: the clearance at the bottom, clearance + swept at the top. With free
+    gas the chamber law (mode 1) keeps its own volumes and only the tubing is returned."""
+    if gas or not pump.liquid_compressibility_per_pa > 0:
+        return tubing_n_m, 0.0
+    bottom = series_stiffness_n_m(tubing_n_m, liquid_bottom_stiffness_n_m(pump, nominal_stroke_m))
+    top = series_stiffness_n_m(tubing_n_m, liquid_stiffness_n_m(pump, nominal_stroke_m))
+    return bottom, (0.0 if top == bottom else top)
 
 
 def series_stiffness_n_m(k1: float, k2: float) -> float:
@@ -105,6 +133,21 @@ def gas_fraction_for_fillage(fillage: float, p_in_pa: float, p_d_pa: float, k: f
     return float(min(max(phi, 0.0), MAX_FILLAGE_GAS_FRACTION))
 
 
+def gas_fraction_keeping(fillage: float, p_in_pa: float, p_d_pa: float, k: float, clearance_fraction: float,
+                         kept_fraction: float) -> float:
+    """``gas_fraction_for_fillage`` when the clearance keeps the share ``kept_fraction`` of its volume as gas at
+    p_d (``pump.clearance_gas_fraction``): the top of the stroke holds that gas re-expanded to p_in, psi c
+    (p_d / p_in)^(1/k) of the swept volume, and intake mixture in the rest of the chamber, so that the gas the
+    downstroke compresses, (1 - f) / squeeze, stays the fillage's:
+    phi = ((1 - f) / squeeze - psi c (p_d/p_in)^(1/k)) / (1 + c - psi c (p_d/p_in)^(1/k)), within [0, max]."""
+    p_in = max(p_in_pa, STANDARD_PRESSURE_PA)
+    ratio = max(p_d_pa, p_in * (1.0 + 1e-9)) / p_in
+    top_gas = (1.0 - fillage) / max(1.0 - ratio ** (-1.0 / k), 1e-12)
+    kept = kept_fraction * clearance_fraction * ratio ** (1.0 / k)
+    phi = (top_gas - kept) / max(1.0 + clearance_fraction - kept, 1e-12)
+    return float(min(max(phi, 0.0), MAX_FILLAGE_GAS_FRACTION))
+
+
 @dataclass(frozen=True)
 class GasChamber:
     """Free gas in the pump chamber (ideal gas, polytropic p V^k = const, liquid incompressible).
@@ -125,6 +168,7 @@ class GasChamber:
     exponent: float
     gas_fraction: float = 0.0
     glr_m3_m3: float = 0.0
+    kept_m3: float = 0.0  # gas at p_d the clearance keeps (pump.clearance_gas_fraction x its volume)
 
     @classmethod
     def from_config(cls, pump: PumpConfig, nominal_stroke_m: float, p_d_pa: float | None = None
@@ -132,14 +176,18 @@ class GasChamber:
         """The chamber of the config's free gas: its fraction or GLR, or the fraction that gives
         ``pump.fillage`` at the config's intake pressure and the discharge pressure p_d."""
         phi = pump.intake_gas_fraction
+        psi = pump.clearance_gas_fraction
         if pump.fillage < 1 and p_d_pa is not None:
             phi = gas_fraction_for_fillage(pump.fillage, pump.intake_pressure_pa, p_d_pa,
-                                           pump.gas_polytropic_exponent, pump.clearance_volume_fraction)
-        if phi <= 0 and pump.intake_glr_m3_m3 <= 0:
+                                           pump.gas_polytropic_exponent, pump.clearance_volume_fraction) \
+                if psi == 0 else gas_fraction_keeping(pump.fillage, pump.intake_pressure_pa, p_d_pa,
+                                                      pump.gas_polytropic_exponent, pump.clearance_volume_fraction,
+                                                      psi)
+        if phi <= 0 and pump.intake_glr_m3_m3 <= 0 and psi == 0:
             return None
         a = plunger_area_m2(pump)
-        return cls(a, pump.clearance_volume_fraction * a * nominal_stroke_m, pump.gas_polytropic_exponent,
-                   phi, pump.intake_glr_m3_m3)
+        clearance = pump.clearance_volume_fraction * a * nominal_stroke_m
+        return cls(a, clearance, pump.gas_polytropic_exponent, phi, pump.intake_glr_m3_m3, psi * clearance)
 
     def fraction(self, p_in_pa: float) -> float:
         """Free-gas volume fraction of the intake mixture at p_in."""
@@ -156,6 +204,8 @@ class GasChamber:
         """Gas volume at p_d left in the clearance at the bottom of the stroke."""
         phi = self.fraction(p_in_pa)
         vg = phi * (p_in_pa / p_d_pa) ** (1.0 / self.exponent)
+        if self.kept_m3 > 0:  # the kept gas, and intake mixture compressed to p_d in the rest
+            return self.kept_m3 + (self.clearance_m3 - self.kept_m3) * vg / (vg + 1.0 - phi)
         return self.clearance_m3 * vg / (vg + 1.0 - phi)
 
     def compression_travel_m(self, p_in_pa: float, p_d_pa: float, upstroke_m: float,
@@ -170,5 +220,7 @@ class GasChamber:
         swept = self.area_m2 * max(upstroke_m, 1e-12)
         phi = self.fraction(p_in_pa)
         vg_d = self.clearance_gas_m3(p_in_pa, p_d_pa)
-        liquid_in = (1.0 - phi) * (self.clearance_m3 + swept)
+        # the kept gas re-expanded to p_in fills its share of the top's chamber; intake mixture the rest
+        kept_in = self.kept_m3 * (p_d_pa / p_in_pa) ** (1.0 / self.exponent) if self.kept_m3 > 0 else 0.0
+        liquid_in = (1.0 - phi) * (self.clearance_m3 + swept - kept_in)
         return float(min(max((liquid_in - (self.clearance_m3 - vg_d)) / swept, 0.0), 1.0))

@@ -89,7 +89,7 @@ class PumpCycle:
             if ub_max - min(self._top_ub, ub_min) <= min_travel:
                 return fillage
             if self.annulus is not None:
-                self.law = self._valve()
+                self.law = self.valve_law_now()
                 valve["lo_n"] = -self.law.up_eq_n
                 valve["void_until_m"] = self._plan_upstroke(ub_max, time_s, period_s)
                 valve["void"] = 1
@@ -123,6 +123,7 @@ class PumpCycle:
             rec["p_out_pa"], rec["gas_friction_n"] = self.p_pump_pa, cfg.pump.plunger_friction_n
             rec["p_d_full_pa"], rec["p_out_full_pa"] = rec["p_d_pa"], rec["p_out_pa"]  # a tubing leak drains them
             rec["liq_c"] = cfg.pump.liquid_compressibility_per_pa
+            rec["gas_keep_m3"] = self.gas.kept_m3
             if self.tubing_stiffness_n_m > 0:  # unanchored: the barrel's travel in series with the chamber
                 rec["tub_c"] = self.gas.area_m2 ** 2 / self.tubing_stiffness_n_m
             rec["v_min_m3"] = self.gas.area_m2 * GAS_MIN_DELAY_FRACTION * self.surface.stroke_length_m(
@@ -131,6 +132,7 @@ class PumpCycle:
             rec["gas_mode"] = 2
             rec["u0_m"], rec["p0"] = self._gas[1], self._gas[3]
             rec["k"], rec["area_m2"] = self.tubing_stiffness_n_m, 0.0
+            rec["k_top"] = self.tubing_top_stiffness_n_m  # the downstroke's transfer (0: k)
         return rec
 
     def _cond_reset(self) -> None:

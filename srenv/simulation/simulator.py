@@ -23,7 +23,7 @@ from ..physics.fluid import tubing_pressure_pa
 from ..physics.inflow import Annulus
 from ..physics.laws import rod_friction
 from ..physics.laws import valve as valve_law_record
-from ..physics.pump import GasChamber, ValveLaw, liquid_stiffness_n_m, series_stiffness_n_m, valve_law
+from ..physics.pump import GasChamber, ValveLaw, chamber_spring_n_m, valve_law
 from ..physics.pump_inputs import intake_at_pump_pa, pump_at_rod_end
 from ..physics.rod import (
     GRAVITY_M_S2,
@@ -111,19 +111,18 @@ class Simulator(PumpCycle):
             area = math.pi / 4 * ((tb.outer_diameter_mm * 1e-3) ** 2 - (tb.inner_diameter_mm * 1e-3) ** 2)
             free_m = cfg.rod_length_m - tb.anchor_depth_m  # its stiffness given (docs/realism.md) or from its size
             self.tubing_stiffness_n_m = tb.stiffness_n_m or tb.youngs_modulus_pa * area / free_m
-        if self.gas is None and cfg.pump.liquid_compressibility_per_pa > 0:  # the liquid in series (mode 2)
-            self.tubing_stiffness_n_m = series_stiffness_n_m(
-                self.tubing_stiffness_n_m, liquid_stiffness_n_m(cfg.pump, self.surface.stroke_length_m(
-                    cfg.surface.stroke_length_m)))
+        self.tubing_stiffness_n_m, self.tubing_top_stiffness_n_m = chamber_spring_n_m(  # the liquid in series
+            cfg.pump, self.surface.stroke_length_m(cfg.surface.stroke_length_m), self.tubing_stiffness_n_m,
+            self.gas is not None)
         self.f1_hz = first_natural_frequency_hz(mesh, cfg.rod.mass_matrix)
         self._check_convexity()
 
-    def _valve(self) -> ValveLaw:
+    def valve_law_now(self) -> ValveLaw:
+        """The valve law (equivalent rod-end loads) at the intake pressure now (srenv.simulation.described)."""
         p_in = self.annulus.intake_pressure_pa() if self.annulus is not None else None
         law = valve_law(self.cfg.pump, self.p_pump_pa, self.area_bottom_m2, p_in)
         if not law.up_eq_n > law.down_eq_n:
-            raise ConfigError("pump.intake_pressure_pa", p_in if p_in is not None else
-                              self.cfg.pump.intake_pressure_pa,
+            raise ConfigError("pump.intake_pressure_pa", self.cfg.pump.intake_pressure_pa if p_in is None else p_in,
                               f"an intake pressure in Pa below the discharge pressure {self.p_pump_pa:.4g} Pa "
                               "(the upstroke load must exceed the downstroke load)")
         return law
@@ -168,7 +167,7 @@ class Simulator(PumpCycle):
         n = self.n_free
         if self.annulus is not None:
             self.annulus.reset(self.cfg.inflow.initial_fluid_level_m if fluid_level_m is None else fluid_level_m)
-        self.law = self._valve()
+        self.law = self.valve_law_now()
         kd, ko = self._k
         rhs = self._f_all[1:].copy()
         rhs[-1] += self.law.down_eq_n  # the plunger pulls down with P+_eq
@@ -230,7 +229,7 @@ class Simulator(PumpCycle):
         self._assemble()
         if keep_annulus and ann is not None and self.annulus is not None:
             self.annulus = ann
-        self.law = self._valve()
+        self.law = self.valve_law_now()
         if (self.gas is not None, self.tubing_stiffness_n_m > 0) != had:
             self._gas_init()
 

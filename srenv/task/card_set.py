@@ -118,6 +118,7 @@ def field_overrides(d: Draw, well) -> dict[str, object]:
         wc = min(max((well.fluid.density_kg_m3 - OIL_RHO) / (WATER_RHO - OIL_RHO), 0.0), 1.0)
         c = wc * WATER_COMPRESSIBILITY_PER_PA + (1.0 - wc) * d.oil_compressibility_per_pa
         out["pump.liquid_compressibility_per_pa"] = float(f"{c:.4g}")
+        out["pump.liquid_chamber_volume"] = "top_of_stroke"  # the law these sets were drawn with (runs 3-6)
     if d.unanchored:
         out["tubing.anchored"] = False
     return out
@@ -246,19 +247,30 @@ def load_cards(path: str) -> dict[str, np.ndarray]:
         return {k: z[k] for k in z.files}
 
 
-def described_fluid_loads_n(well_seeds: np.ndarray) -> np.ndarray:
-    """The described fluid load (srenv.analysis.pump_level) of each card's well, from its well seed: the family well
-    in the *full* condition (the description an engineer holds: the well and the liquid over its pump, not its
-    condition); run P2's level (``train_classifier --card pump --level``)."""
+def described_well(well_seed: int):
+    """The description an engineer holds of a card's well: the family well of its seed in the *full* condition (the
+    well and the liquid over its pump, not its condition, nor the card's drawn damping, operating point or unit)."""
     from ..analysis.condition_card import condition_config
-    from ..analysis.pump_level import described_fluid_load_n
     from .well_family import draw_params, spec_from_params
 
-    cache: dict[int, float] = {}
-    out = np.empty(len(well_seeds))
+    return condition_config(spec_from_params(draw_params(well_seed), f"card{well_seed}").cfg, "full", 0.0)
+
+
+def described_pumps(well_seeds: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(F_desc, P+_desc as a true load) in N of each card's described well (srenv.simulation.described): run P2's
+    level (``train_classifier --card pump --level``) and run P3's offset (``--offset``)."""
+    from ..simulation.described import described_pump
+
+    cache: dict[int, tuple[float, float]] = {}
+    out = np.empty((2, len(well_seeds)))
     for i, s in enumerate(int(v) for v in well_seeds):
         if s not in cache:
-            well = spec_from_params(draw_params(s), f"card{s}").cfg
-            cache[s] = described_fluid_load_n(condition_config(well, "full", 0.0))
-        out[i] = cache[s]
-    return out
+            d = described_pump(described_well(s))
+            cache[s] = (d.fluid_load_n, d.downstroke_true_n)
+        out[:, i] = cache[s]
+    return out[0], out[1]
+
+
+def described_fluid_loads_n(well_seeds: np.ndarray) -> np.ndarray:
+    """F_desc (N) of each card's described well (described_pumps)."""
+    return described_pumps(well_seeds)[0]

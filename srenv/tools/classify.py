@@ -14,10 +14,13 @@ in any units and either load convention) with the pump model (``srenv/models/cla
 trained on the other card type is refused. A pump card with a stroke but no load variation is called
 ``parted_rods`` by rule (docs/conditions.md, run P1; ``"rule": true`` in its JSON line). With ``--config WELL`` the
 CSVs are *surface* cards in SI units (one stroke at the well's stroke rate): each is diagnosed first (``srenv
-diagnose``'s Gibbs method, true loads) and its pump card classified — by run P2's model, if shipped, whose 65th
-feature is the pump card's load level against the described well's fluid load (srenv.analysis.pump_level): on a pump
-card only the level tells full, parted rods, flowing and heavy oil apart. Without a config ``--card pump`` keeps run
-P1's model; a level model is refused without a config.
+diagnose``'s Gibbs method, true loads) and its pump card classified by run P3's model (``classifier_pump_p3.npz``;
+else run P2's, else P1's): trained on pump cards *diagnosed* the same way, so train and use match. Its 65th feature is
+the pump card's load level against the described well's fluid load (run P2, srenv.analysis.pump_level: on a pump card
+only the level tells full, parted rods, flowing and heavy oil apart), its 66th the lower plateau against the described
+plunger's downstroke load P+ as a true load (srenv.simulation.described): a parted string diagnosed through the
+described intact string sits about the missing rods' weight below it. Without a config ``--card pump`` keeps run P1's
+model; a level model is refused without a config.
 """
 
 from __future__ import annotations
@@ -42,10 +45,10 @@ def add_parser(sub) -> None:
     c.add_argument("path", help="a card CSV or a directory of *.csv")
     c.add_argument("--config", help="the well's config (checked; with --card pump the cards are surface cards in SI "
                    "units, diagnosed to pump cards first and read with their load level against the well's fluid "
-                   "load (run P2's model); the surface model reads the card alone)")
+                   "load and P+ (run P3's model); the surface model reads the card alone)")
     c.add_argument("--json", action="store_true", help="one JSON line per card")
     c.add_argument("--model", help="model file (default: the shipped srenv/models/classifier.npz, "
-                   "with --card pump srenv/models/classifier_pump.npz, with --config too classifier_pump_level.npz)")
+                   "with --card pump srenv/models/classifier_pump.npz, with --config too classifier_pump_p3.npz)")
     c.add_argument("--card", choices=CARD_TYPES, default="surface",
                    help="the card type of the CSVs: the polished rod's (surface, default) or the pump's (downhole); "
                    "without --config full, parted rods, flowing and heavy oil share one normalised pump card shape "
@@ -132,12 +135,14 @@ def card_files(path: str) -> list[Path]:
 
 
 def default_model(card: str, with_config: bool) -> str:
-    """The shipped model: surface; pump (P1) without a config; with one, P2's level model if shipped, else P1."""
-    from ..analysis.card_classifier import DEFAULT_MODEL, PUMP_LEVEL_MODEL, PUMP_MODEL
+    """The shipped model: surface; pump (P1) without a config; with one, P3's model if shipped, else P2's level model
+    if shipped, else P1."""
+    from ..analysis.card_classifier import DEFAULT_MODEL, PUMP_LEVEL_MODEL, PUMP_MODEL, PUMP_P3_MODEL
 
     if card != "pump":
         return str(DEFAULT_MODEL)
-    return str(PUMP_LEVEL_MODEL if with_config and PUMP_LEVEL_MODEL.is_file() else PUMP_MODEL)
+    shipped = [m for m in (PUMP_P3_MODEL, PUMP_LEVEL_MODEL) if with_config and m.is_file()]
+    return str(shipped[0] if shipped else PUMP_MODEL)
 
 
 def load_model(model: str | None, card: str, with_config: bool = False):
@@ -159,26 +164,33 @@ def load_model(model: str | None, card: str, with_config: bool = False):
     return clf
 
 
-def described_fluid_load(cfg) -> float:
-    """The config's fluid load (N) for the level; a description without one (0, or not finite) in one line."""
-    from ..analysis.pump_level import BadLevel, check_fluid_load, described_fluid_load_n
+def described(cfg):
+    """The config's described pump (srenv.simulation.described: the fluid load and P+, N) for the level and the
+    offset; a description that lifts no load (0, or not finite) in one line."""
+    from ..analysis.pump_level import BadLevel, check_fluid_load
     from ..errors import ConfigError
+    from ..simulation import described as desc
 
     # the config loader refuses P- <= P+ given as loads, the simulator an intake pressure at or above the discharge
     # pressure (one line each); what passes both and still lifts no finite load is refused here
+    pump = desc.described_pump(cfg)
     try:
-        return check_fluid_load(described_fluid_load_n(cfg), f"well {cfg.name}")
+        check_fluid_load(pump.fluid_load_n, f"well {cfg.name}")
     except BadLevel as exc:
         raise ConfigError("--config", cfg.name, f"a well whose pump lifts a fluid load ({exc})") from None
+    return pump
 
 
-def _features_or_rule(clf, x: np.ndarray, y: np.ndarray, f: Path, fluid_load_n: float | None) -> np.ndarray | None:
-    """The card's features; None for a pump card with a stroke and no load (run P1's rule: parted rods)."""
+def _features_or_rule(clf, x: np.ndarray, y: np.ndarray, f: Path, pump) -> np.ndarray | None:
+    """The card's features (``pump``: the described pump, or None); None for a pump card with a stroke and no load
+    (run P1's rule: parted rods)."""
     from ..analysis.card_shape import BadCard, FlatLoad
     from ..analysis.pump_level import BadLevel
 
     try:
-        return clf.card_features(x, y, fluid_load_n)
+        if pump is None:
+            return clf.card_features(x, y)
+        return clf.card_features(x, y, pump.fluid_load_n, pump.downstroke_true_n)
     except FlatLoad as exc:
         if clf.card_type == "pump":
             return None
@@ -211,11 +223,11 @@ def main(args: argparse.Namespace) -> int:
         cfg = load_config(args.config)
     files = card_files(args.path)
     clf = load_model(args.model, args.card, cfg is not None)
-    fluid = described_fluid_load(cfg) if clf.needs_level else None
+    pump = described(cfg) if clf.needs_level else None
     cards = [read_card(f) for f in files]
     if cfg is not None and args.card == "pump":  # surface cards of a described well: diagnose them first
         cards = [diagnosed(cfg, x, y, f) for f, (x, y) in zip(files, cards)]
-    rows = [_features_or_rule(clf, x, y, f, fluid) for f, (x, y) in zip(files, cards)]
+    rows = [_features_or_rule(clf, x, y, f, pump) for f, (x, y) in zip(files, cards)]
     readable = [r for r in rows if r is not None]
     proba = iter(clf.proba_features(np.array(readable)) if readable else [])
     rule = np.array([lab == "parted_rods" for lab in clf.labels], dtype=np.float64)

@@ -16,6 +16,8 @@ read here. Needs torch (a training-time dependency; inference is numpy only).
 ``parted_rods`` by rule (docs/conditions.md, run P1). The default, ``surface``, is runs 1-6's path bit for bit.
 ``--card pump --level`` (run P2) puts the load level against each card's described fluid load (pump_level) in the
 65th entry, with a description error on augmented cards, and records ``feature_set: shape+level``.
+``--offset`` with it (run P3) adds the lower plateau against each card's described P+ (true load) as a 66th entry
+(``feature_set: shape+level+offset``); run P3 trains it on diagnosed pump cards (srenv.tools.diagnose_cards).
 """
 
 from __future__ import annotations
@@ -29,10 +31,10 @@ import numpy as np
 
 from ..analysis.card_augment import InstrumentAugment, SpectralAugment, augment
 from ..analysis.card_shape import CARD_TYPES, BadCard, features
-from ..analysis.pump_level import DESCRIPTION_ERROR, FEATURE_SETS, with_level
+from ..analysis.pump_level import DESCRIPTION_ERROR, FEATURE_SETS, OFFSET_ERROR, with_level, with_offset
 from ..cli_types import OneLineParser
 from ..physics.conditions import LABELS
-from ..task.card_set import described_fluid_loads_n, load_cards
+from ..task.card_set import described_pumps, load_cards
 
 # name -> (hidden widths, augmented training); chosen on augmented validation accuracy
 CANDIDATES = {"mlp_aug": ((128, 128), True), "mlp_clean": ((128, 128), False), "linear_aug": ((), True),
@@ -46,40 +48,51 @@ FEATURE_SET_LEVEL = FEATURE_SETS[1]  # run P2's model file entry
 DEGENERATE_RULE = "parted_rods"  # a degenerate pump card's label by rule (run P1, fixed a priori)
 
 
-def load_sets(dirs: list[str], card: str = "surface", level: bool = False) -> dict[str, np.ndarray]:
+def load_sets(dirs: list[str], card: str = "surface", level: bool = False, offset: bool = False
+              ) -> dict[str, np.ndarray]:
     """The sets' columns; ``position`` and ``load`` are the card type's arrays; ``fluid_load``: with ``level`` each
-    card's described fluid load from its well seed (run P2), else None."""
+    card's described fluid load from its well seed (run P2), else None; ``down_load``: with ``offset`` its described
+    P+ as a true load (run P3), else None."""
     sets = [load_cards(str(Path(d) / "cards.npz")) for d in dirs]
     keys = (*CARD_ARRAYS[card], "label", "split", "well_seed")
     data = {k: np.concatenate([s[k] for s in sets]) for k in keys}
     data["position"], data["load"] = (data[k] for k in CARD_ARRAYS[card])
-    data["fluid_load"] = described_fluid_loads_n(data["well_seed"]) if level else None
+    fluid, down = described_pumps(data["well_seed"]) if level else (None, None)
+    data["fluid_load"], data["down_load"] = fluid, down if offset else None
     return data
 
 
-def _row(p: np.ndarray, q: np.ndarray, card: str, fluid_load: float | None, rng, aug: bool) -> np.ndarray:
+def _row(p: np.ndarray, q: np.ndarray, card: str, fluid_load: float | None, rng, aug: bool,
+         down_load: float | None = None) -> np.ndarray:
     """One card's features; with a described fluid load the level in the 65th entry (augmented: times the
-    description error, drawn after the card's augmentation so the runs without the level draw what they drew)."""
+    description error, drawn after the card's augmentation so the runs without the level draw what they drew); with
+    a described P+ the offset in a 66th (augmented: P+ moved by F_desc times U[-e, e], drawn after P2's draws)."""
     f = features(p, q, card)
     if fluid_load is None:
         return f
     err = rng.uniform(1.0 - DESCRIPTION_ERROR, 1.0 + DESCRIPTION_ERROR) if aug else 1.0
-    return with_level(f, q, fluid_load * err)
+    f = with_level(f, q, fluid_load * err)
+    if down_load is None:
+        return f
+    shift = rng.uniform(-OFFSET_ERROR, OFFSET_ERROR) * fluid_load if aug else 0.0
+    return with_offset(f, q, down_load + shift, fluid_load * err)
 
 
 def featurise(x: np.ndarray, y: np.ndarray, labels: np.ndarray, rng, aug: bool, draws: int = 1,
               instrument: InstrumentAugment | None = None, spectral: SpectralAugment | None = None,
-              card: str = "surface", fluid_load: np.ndarray | None = None):
+              card: str = "surface", fluid_load: np.ndarray | None = None, down_load: np.ndarray | None = None):
     """Feature rows and labels (cards the representation cannot read are dropped and counted); ``fluid_load``:
-    each card's described fluid load (run P2's level), None without the level."""
+    each card's described fluid load (run P2's level), None without the level; ``down_load``: each card's described
+    P+ (run P3's offset), None without it."""
     rows, out = [], []
     loads = [None] * len(labels) if fluid_load is None else fluid_load
+    downs = [None] * len(labels) if down_load is None else down_load
     for _ in range(draws):
-        for p, q, lab, fl in zip(x, y, labels, loads):
+        for p, q, lab, fl, dl in zip(x, y, labels, loads, downs):
             if aug:
                 p, q = augment(p, q, rng, instrument, spectral)
             try:
-                rows.append(_row(p, q, card, fl, rng, aug))
+                rows.append(_row(p, q, card, fl, rng, aug, dl))
             except BadCard:
                 continue
             out.append(lab)
@@ -145,9 +158,9 @@ def evaluate(weights: dict, data: dict, idx: np.ndarray, aug: bool, seed: int,
     clf = CardClassifier(tuple(str(s) for s in weights["labels"]), weights["mean"], weights["std"],
                          [(weights[f"w{i}"], weights[f"b{i}"]) for i in range(8) if f"w{i}" in weights])
     rng = np.random.default_rng(seed)
-    fl = None if data.get("fluid_load") is None else data["fluid_load"][idx]
+    fl, dl = (None if data.get(k) is None else data[k][idx] for k in ("fluid_load", "down_load"))
     f, t = featurise(data["position"][idx], data["load"][idx], data["label"][idx],
-                     rng, aug, VALIDATION_DRAWS if aug else 1, instrument, spectral, card, fl)
+                     rng, aug, VALIDATION_DRAWS if aug else 1, instrument, spectral, card, fl, dl)
     pred = np.argmax(clf.proba_features(f), axis=1)
     cm = np.zeros((len(LABELS), len(LABELS)), dtype=np.int64)
     np.add.at(cm, (t, pred), 1)
@@ -199,7 +212,9 @@ def _check_args(ap, a) -> None:
                  "position channel, expected 0 with --card pump")
     if a.level and a.card != "pump":
         ap.error(f"--level: the load level is a pump card's feature, expected --card pump (got --card {a.card})")
-    want = FEATURE_SET_LEVEL if a.level else FEATURE_SETS[0]
+    if a.offset and not a.level:
+        ap.error("--offset: the offset is read with the level, expected --level with it")
+    want = FEATURE_SETS[2] if a.offset else FEATURE_SET_LEVEL if a.level else FEATURE_SETS[0]
     for path in a.compare:  # a model of the other card type (or features) would be scored on cards it cannot read
         kind, fset = _card_type_of(path)
         if kind != a.card:
@@ -209,7 +224,7 @@ def _check_args(ap, a) -> None:
             ap.error(f"--compare {path}: a model with features {fset}, expected features {want}")
 
 
-def _pump_report(data: dict, bad: np.ndarray, split_idx: dict, level: bool) -> dict:
+def _pump_report(data: dict, bad: np.ndarray, split_idx: dict, level: bool, offset: bool = False) -> dict:
     """The pump run's report entries: degenerate counts per split and label, the rule; P2's feature set."""
     out = {"card": "pump", "degenerate": {s: {lab: int(np.sum(bad[i] & (data["label"][i] == k)))
                                               for k, lab in enumerate(LABELS)
@@ -218,6 +233,8 @@ def _pump_report(data: dict, bad: np.ndarray, split_idx: dict, level: bool) -> d
            "degenerate_rule": DEGENERATE_RULE}
     if level:
         out.update({"feature_set": FEATURE_SET_LEVEL, "description_error": DESCRIPTION_ERROR})
+    if offset:
+        out.update({"feature_set": FEATURE_SETS[2], "offset_error": OFFSET_ERROR})
     return out
 
 
@@ -241,17 +258,19 @@ def main(argv: list[str] | None = None) -> int:
                     "rod's (surface, default: runs 1-6) or the pump's (downhole; run P1, the load ratio set to 0)")
     ap.add_argument("--level", action="store_true", help="with --card pump: the load level against each card's "
                     "described fluid load in the 65th entry (run P2; the model then needs a well config)")
+    ap.add_argument("--offset", action="store_true", help="with --level: the lower plateau against each card's "
+                    "described P+ (true load) in a 66th entry (run P3)")
     a = ap.parse_args(argv)
     _check_args(ap, a)
     inst = (InstrumentAugment(a.synth_position_p, a.position_lag_p)
             if a.synth_position_p > 0.0 or a.position_lag_p > 0.0 else None)
     spec = SpectralAugment(a.spectral_p) if a.spectral_p > 0.0 else None
-    data = load_sets(a.cards, a.card, a.level)
+    data = load_sets(a.cards, a.card, a.level, a.offset)
     bad = degenerate(data, a.card)
     split_idx = {s: np.flatnonzero(data["split"] == s) for s in ("train", "validation", "test")}
     report: dict = {"n_cards": {s: len(i) for s, i in split_idx.items()}, "candidates": {}}
     if a.card == "pump":
-        report.update(_pump_report(data, bad, split_idx, a.level))
+        report.update(_pump_report(data, bad, split_idx, a.level, a.offset))
     ruled = data["label"][split_idx["test"][bad[split_idx["test"]]]]
     split_idx = {s: i[~bad[i]] for s, i in split_idx.items()}  # the model reads only readable cards
     if inst is not None:
@@ -266,7 +285,7 @@ def main(argv: list[str] | None = None) -> int:
     for aug in {CANDIDATES[c][1] for c in a.candidates}:
         pools[aug] = featurise(data["position"][tr], data["load"][tr], data["label"][tr],
                                np.random.default_rng(a.seed), aug, AUG_COPIES if aug else 1, inst, spec, a.card,
-                               None if data["fluid_load"] is None else data["fluid_load"][tr])
+                               *(None if data[k] is None else data[k][tr] for k in ("fluid_load", "down_load")))
     models = {name: (lambda widths=widths, aug=aug: fit(*pools[aug], widths, a.epochs, a.seed))
               for name, (widths, aug) in CANDIDATES.items() if name in a.candidates}
     models.update({path: (lambda path=path: _read_weights(path)) for path in a.compare})  # trained before
@@ -287,7 +306,7 @@ def main(argv: list[str] | None = None) -> int:
     if a.card != "surface":  # a surface model's file stays runs 1-6's (no entry = surface)
         best = {**best, "card_type": np.array(a.card)}
     if a.level:  # P1's file has no entry (= shape)
-        best = {**best, "feature_set": np.array(FEATURE_SET_LEVEL)}
+        best = {**best, "feature_set": np.array(FEATURE_SETS[2] if a.offset else FEATURE_SET_LEVEL)}
     write_model(a.out, best)
     if a.report:
         Path(a.report).write_text(json.dumps(report, indent=1) + "\n")

@@ -25,7 +25,13 @@ GAS_FIELDS = [("gas_mode", "i8"), ("gas_on", "i8"), ("u0_m", "f8"), ("gas_m3", "
               ("lin_dk", "f8"), ("lin_shift_n", "f8"), ("u_tilde_m", "f8"),
               # the liquid's compressibility (1/Pa, pump.liquid_compressibility_per_pa; 0: incompressible) and
               # unanchored tubing's compliance seen by the chamber, A_pl^2 / k_t (m^3/Pa; 0: anchored)
-              ("liq_c", "f8"), ("tub_c", "f8")]
+              ("liq_c", "f8"), ("tub_c", "f8"),
+              # mode 2: the stiffness of the downstroke's transfer at the top when it differs from k, the
+              # upstroke's at the bottom (the chamber's liquid: clearance + swept there; 0: k for both)
+              ("k_top", "f8"),
+              # mode 1: gas at p_d the travelling valve does not pass, kept in the clearance (m^3; 0: the chamber
+              # expels its own mixture, gas and liquid alike; pump.clearance_gas_fraction)
+              ("gas_keep_m3", "f8")]
 
 
 @njit(cache=True, inline="always")
@@ -72,13 +78,26 @@ def spring(params, ub):
 def tubing_spring(params, ub):
     """Unanchored tubing: centre = c0 + k_t (u_B - u0) between the valve law's bounds [lo_n, hi_n]."""
     p = params[0]
-    c = p.p0 + p.k * (ub - p.u0_m)
+    k = tubing_k(params)
+    c = p.p0 + k * (ub - p.u0_m)
     lo = fluid_clamp(params)
     if c <= lo:
         return lo, 0.0
     if c >= p.hi_n:
         return p.hi_n, 0.0
-    return c, p.k
+    return c, k
+
+
+@njit(cache=True, inline="always")
+def tubing_k(params):
+    """Mode 2's stiffness for the transfer under way: the reference p0 is the bound the spring was last held
+    at, so below the downstroke bound hi_n it left the top (the fluid load) and the downstroke's transfer
+    k_top applies; at hi_n (the bottom, and the start) the upstroke's, k. Fixed within a step (the reference
+    moves only between steps, in ``valves``), so each step stays the same convex problem."""
+    p = params[0]
+    if p.k_top > 0.0 and p.p0 < p.hi_n:
+        return p.k_top
+    return p.k
 
 
 @njit(cache=True, inline="always")
@@ -99,7 +118,7 @@ def valves(params, ub):
     mixture (gas and liquid in the proportion it holds at p_d). Both valves closed: nothing changes."""
     p = params[0]
     if p.area_m2 == 0.0:  # unanchored tubing: the plunger slid in its barrel, the spring re-references
-        c = p.p0 + p.k * (ub - p.u0_m)
+        c = p.p0 + tubing_k(params) * (ub - p.u0_m)
         lo = fluid_clamp(params)
         if c <= lo or c >= p.hi_n:
             p.p0 = min(max(c, lo), p.hi_n)
@@ -123,13 +142,30 @@ def valves(params, ub):
     elif v0 > 0.0 and (vg <= 0.0 or p0 * (v0 / vg) ** k > p.p_d_pa):
         v_open = v0 * (p0 / p.p_d_pa) ** (1.0 / k)
         out = v_open - vg
-        f = v_open / (v_open + p.liquid_m3)
-        p.gas_m3 = max(v_open - f * out, 0.0)
-        p.liquid_m3 = max(p.liquid_m3 - (1.0 - f) * out, 0.0)
+        if p.gas_keep_m3 > 0.0:
+            p.gas_m3, p.liquid_m3 = expel_keeping(p.gas_keep_m3, v_open, p.liquid_m3, out)
+        else:
+            f = v_open / (v_open + p.liquid_m3)
+            p.gas_m3 = max(v_open - f * out, 0.0)
+            p.liquid_m3 = max(p.liquid_m3 - (1.0 - f) * out, 0.0)
         p.p0 = p.p_d_pa
         p.u0_m = ub
     elif v0 <= 0.0 and vg <= 0.0:
         p.u0_m = ub  # liquid-full chamber moving down: the travelling valve is open
+
+
+@njit(cache=True)
+def expel_keeping(keep_m3, gas_m3, liquid_m3, out_m3):
+    """(gas, liquid) left after the open travelling valve passed out_m3 at p_d, keeping up to keep_m3 of the
+    chamber's gas (trapped in the clearance, where the plunger does not sweep it out): the rest of the gas and
+    the liquid leave mixed as the chamber holds them; once they are gone the kept gas leaves too."""
+    held = min(keep_m3, gas_m3)
+    free = gas_m3 - held
+    mix = free + liquid_m3
+    if out_m3 <= mix and mix > 0.0:
+        f = free / mix
+        return held + free - f * out_m3, liquid_m3 - (1.0 - f) * out_m3
+    return max(gas_m3 + liquid_m3 - out_m3, 0.0), 0.0
 
 
 @njit(cache=True)
@@ -194,6 +230,8 @@ def compressible_valves(params, ub):
             if side == 0:
                 p.gas_m3 = vg + p.phi * flow
                 p.liquid_m3 = vl + (1.0 - p.phi) * flow
+            elif p.gas_keep_m3 > 0.0 and flow < 0.0:
+                p.gas_m3, p.liquid_m3 = expel_keeping(p.gas_keep_m3, vg, vl, -flow)
             else:
                 f = vg / (vg + vl) if vg + vl > 0.0 else 0.0
                 p.gas_m3 = max(vg + f * flow, 0.0)

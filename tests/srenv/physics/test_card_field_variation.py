@@ -44,6 +44,16 @@ def test_the_set_records_what_was_drawn() -> None:
     assert set(cs.WELL_COLUMNS) == set(w)
 
 
+def test_compressible_cards_keep_the_chamber_law_their_sets_were_drawn_with():
+    """The sets of runs 3-6 drew their compressible no-gas cards with both transfers over the top's chamber
+    volume; srenv's default now gives the upstroke's the clearance alone (docs/realism.md), so the set pins the
+    earlier law and a seed draws the same card as before."""
+    d = next(x for x in _draws() if x.oil_compressibility_per_pa > 0)
+    cfg = cs.card_config(d)
+    assert cfg.pump.liquid_chamber_volume == "top_of_stroke" and cfg.pump.liquid_compressibility_per_pa > 0
+    assert "pump.liquid_chamber_volume" not in cs.field_overrides(_plain(d), cfg)
+
+
 def _plain(d: cs.Draw) -> cs.Draw:
     return dataclasses.replace(d, kv_tau_s=0.0, column_mass=False, oil_compressibility_per_pa=0.0, unanchored=False)
 

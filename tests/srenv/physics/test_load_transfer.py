@@ -35,21 +35,60 @@ def _transfer(trace) -> tuple[float, float]:
     return hi - lo, abs(np.polyfit(u[inside], f[inside], 1)[0])
 
 
+def _transfers(trace) -> list[tuple[float, float]]:
+    """(plunger position, slope dF/du_B) of each stretch of the pump card strictly inside its load range:
+    the upstroke's transfer at the bottom and the downstroke's at the top."""
+    f, u = trace["pump_load_n"], trace["pump_position_m"]
+    lo, hi = f.min(), f.max()
+    idx = np.flatnonzero((f > lo + 0.02 * (hi - lo)) & (f < hi - 0.02 * (hi - lo)))
+    runs = [r for r in np.split(idx, np.flatnonzero(np.diff(idx) > 1) + 1) if len(r) >= 3]
+    return [(float(u[r].mean()), abs(np.polyfit(u[r], f[r], 1)[0])) for r in runs]
+
+
 def test_transfer_travel_grows_with_compliance_and_fluid_load():
-    """No gas: the liquid-full chamber (clearance + swept volume V at the top) is the spring A^2 / (c V); the
-    pump card's transfer follows it exactly, so the travel (fluid load) / k doubles with c and grows with the
-    fluid load (a lower intake pressure)."""
+    """No gas: the liquid-full chamber is the spring A^2 / (c V), V the clearance at the bottom (the upstroke's
+    transfer) and clearance + swept at the top (the downstroke's); the pump card's transfers follow them
+    exactly, so the travel (fluid load) / k doubles with c and grows with the fluid load (a lower intake)."""
     travel = {}
     for c, p_in in ((2.5e-9, 1e6), (5e-9, 1e6), (5e-9, 3e6)):
         cfg, sim, trace = _last_stroke([f"pump.liquid_compressibility_per_pa={c}", f"pump.intake_pressure_pa={p_in}"])
-        k = plunger_area_m2(cfg.pump) / (c * (1 + cfg.pump.clearance_volume_fraction) * cfg.surface.stroke_length_m)
-        assert sim.tubing_stiffness_n_m == pytest.approx(k, rel=1e-12)
+        a, stroke, clear = plunger_area_m2(cfg.pump), cfg.surface.stroke_length_m, cfg.pump.clearance_volume_fraction
+        k_up, k_down = a / (c * clear * stroke), a / (c * (1 + clear) * stroke)
+        assert sim.tubing_stiffness_n_m == pytest.approx(k_up, rel=1e-12)
+        assert sim.tubing_top_stiffness_n_m == pytest.approx(k_down, rel=1e-12)
+        (x_up, s_up), (x_down, s_down) = _transfers(trace)
+        assert x_up < x_down  # the first at the bottom (positions positive down: the top's u_B is larger)
+        assert s_up == pytest.approx(k_up, rel=1e-3) and s_down == pytest.approx(k_down, rel=1e-3)
         load, slope = _transfer(trace)
-        assert slope == pytest.approx(k, rel=1e-3)
         travel[c, p_in] = load / slope
         assert abs(sim.energy_balance()["residual_j"]) < 1e-6
     assert travel[5e-9, 1e6] == pytest.approx(2 * travel[2.5e-9, 1e6], rel=1e-3)
     assert travel[5e-9, 1e6] > 1.2 * travel[5e-9, 3e6]
+
+
+def test_each_transfer_compresses_its_own_chamber_volume():
+    """The upstroke's transfer decompresses the clearance's liquid alone from p_d to p_in, V_d c dp / A_pl; the
+    downstroke's compresses the top's chamber, (V_d + V_swept) c dp / A_pl (plunger friction and the
+    travelling valve's loss 0, so the load step is dp A_pl exactly). The earlier law (``top_of_stroke``)
+    gave both the top's travel: it fails the first equality by a factor (1 + V_swept / V_d) = 21."""
+    c = 5e-9
+    for law in ("per_transfer", "top_of_stroke"):
+        cfg, sim, trace = _last_stroke([f"pump.liquid_compressibility_per_pa={c}", "pump.plunger_friction_n=0",
+                                        "pump.discharge_overpressure_pa=0", f"pump.liquid_chamber_volume={law}"])
+        a, swept = plunger_area_m2(cfg.pump), plunger_area_m2(cfg.pump) * cfg.surface.stroke_length_m
+        dp = sim.p_pump_pa - cfg.pump.intake_pressure_pa
+        load = trace["pump_load_n"].max() - trace["pump_load_n"].min()
+        assert load == pytest.approx(dp * a, rel=1e-9)
+        (_, k_up), (_, k_down) = _transfers(trace)
+        clear = cfg.pump.clearance_volume_fraction * swept
+        assert load / k_down == pytest.approx((clear + swept) * c * dp / a, rel=1e-3)
+        if law == "per_transfer":
+            assert load / k_up == pytest.approx(clear * c * dp / a, rel=1e-3)
+        else:
+            assert load / k_up == pytest.approx((clear + swept) * c * dp / a, rel=1e-3)
+    with pytest.raises(ConfigError, match="pump.clearance_volume_fraction"):
+        load_config("default", ["pump.liquid_compressibility_per_pa=1e-9", "pump.clearance_volume_fraction=0",
+                                "pump.load_source=pressures"])
 
 
 def test_zero_compressibility_is_the_rigid_law_and_series_with_tubing():
