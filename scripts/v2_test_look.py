@@ -18,6 +18,13 @@ before its validation and test stages, and this script plays the test look:
 
     python scripts/v2_test_look.py configs/benchmark/v2_oracle_distilled.yaml --run runs/v2_oracle_distilled \
         --log runs/v2od.log
+
+With a ``guarded:`` block in the config (configs/benchmark/v2_oracle_distilled_guarded.yaml) the design is the same
+students' ensemble under the constraint guard (agents/policies/guarded.py), the fallback its tuned baseline; the
+report goes to ``--out`` (the students copied to OUT/models, so ``replay`` and ``--evaluate-only --report`` find them):
+
+    python scripts/v2_test_look.py configs/benchmark/v2_oracle_distilled_guarded.yaml \
+        --run runs/v2_oracle_distilled --log runs/v2od.log --out runs/v2_oracle_distilled_guarded
 """
 
 from __future__ import annotations
@@ -26,12 +33,13 @@ import argparse
 import ast
 import json
 import re
+import shutil
 import sys
 import time
 from pathlib import Path
 from typing import Any
 
-from agents.benchmark.assemble import _ensemble_record
+from agents.benchmark.assemble import _ensemble_record, guarded_record
 from agents.benchmark.config import load_benchmark_config
 from agents.benchmark.report import (
     _atomic_write,
@@ -42,8 +50,8 @@ from agents.benchmark.report import (
     write_markdown,
 )
 from agents.benchmark.runs import _policy_part, residual_spec
-from agents.benchmark.stages import _mapped, tune_baselines
-from agents.evaluation.rollout import Runner, episode_jobs
+from agents.benchmark.stages import design_guarded, run_test_episodes, tune_baselines
+from agents.evaluation.rollout import Runner
 from agents.policies.ensemble import ensemble_spec
 from agents.policies.factory import benchmark_baselines
 
@@ -64,10 +72,38 @@ def logged_run(log: Path) -> tuple[dict[str, dict[str, Any]], dict[int, list[dic
     return tuned, hist
 
 
-def test_look(config: str, run_dir: Path, log: Path, workers: int | None = None) -> dict[str, Any]:
-    cfg = load_benchmark_config(config)
-    logged, hist = logged_run(log)
+def design(cfg: dict[str, Any], run_dir: Path, tuned: dict[str, Any], out_dir: Path) -> tuple[str, dict, dict]:
+    """(policy name, spec, report record) of the design the config's judge reads: the run's students' ensemble,
+    or - with a ``guarded:`` block (configs/benchmark/v2_oracle_distilled_guarded.yaml) - that ensemble under
+    the constraint guard (agents/policies/guarded.py; the students copied to OUT/models, where the report's
+    ``models/`` names resolve for replay and --evaluate-only)."""
     (a, run), = cfg["agents"]["runs"].items()  # the design's one run
+    res = residual_spec(run, tuned)
+    students = []
+    for seed in run["seeds"]:
+        path = next((run_dir / "models").glob(f"{a}_v*_seed{seed}.zip"))
+        students.append({"kind": "agent", "path": str(path), "residual": res,
+                         "obs_norm": str(path.with_name(path.stem + "_obs_norm.npz"))})
+    ens = {**ensemble_spec(students), "of": a}
+    g = cfg.get("guarded")
+    if not g:
+        return f"{a}_ensemble", _policy_part(ens), _ensemble_record(ens, cfg["agents"]["runs"], [])
+    if out_dir.resolve() != run_dir.resolve():
+        (out_dir / "models").mkdir(parents=True, exist_ok=True)
+        for st in students:
+            for f in (Path(st["path"]), Path(st["obs_norm"])):
+                shutil.copyfile(f, out_dir / "models" / f.name)
+    spec = design_guarded(cfg, tuned, ens, a)
+    rec = guarded_record(spec, cfg["agents"]["runs"], [])
+    return f"{a}_guarded", _policy_part(spec), rec
+
+
+def test_look(config: str, run_dir: Path, log: Path, workers: int | None = None,
+              out_dir: Path | None = None) -> dict[str, Any]:
+    cfg = load_benchmark_config(config)
+    out_dir = out_dir or run_dir
+    logged, hist = logged_run(log)
+    (a, run), = cfg["agents"]["runs"].items()
     t0 = time.perf_counter()
     with Runner(workers or cfg["workers"]) as runner:
         tuned, tuning_split = tune_baselines(cfg, runner, lambda m: print(m, file=sys.stderr, flush=True))
@@ -75,47 +111,35 @@ def test_look(config: str, run_dir: Path, log: Path, workers: int | None = None)
             if n != "oracle" and tuned[n]["params"] != params:
                 raise SystemExit(f"tuned {n} = {tuned[n]['params']}, the run logged {params}: not the run's tuning")
         wall = {"tuning": time.perf_counter() - t0}
-        res = residual_spec(run, tuned)
-        students = []
-        for seed in run["seeds"]:
-            path = next((run_dir / "models").glob(f"{a}_v*_seed{seed}.zip"))
-            students.append({"kind": "agent", "path": str(path), "residual": res,
-                             "obs_norm": str(path.with_name(path.stem + "_obs_norm.npz"))})
-        ens = {**ensemble_spec(students), "of": a}
+        name, spec, rec = design(cfg, run_dir, tuned, out_dir)
         bases = [n for n in benchmark_baselines(tuned) if n != "oracle"]
-        entries = [(n, {"kind": "baseline", "name": n, "params": tuned[n]["params"]}) for n in bases]
-        entries.append((f"{a}_ensemble", _policy_part(ens)))
-        kwargs = {**cfg["env_kwargs"], "scenario": cfg["test"].get("scenario", "test")}
-        seeds = cfg["test"]["seeds"]
-        jobs = [j for _, sp in entries for j in episode_jobs(cfg["env_id"], kwargs, sp, seeds)]
         t1 = time.perf_counter()
-        recs = _mapped(runner, jobs, "test")
+        by_entry = run_test_episodes(cfg, runner, tuned, {name: [spec]}, -1, policies=bases)
         wall["test"] = time.perf_counter() - t1
-    n_t = len(seeds)
-    by = {n: recs[i * n_t:(i + 1) * n_t] for i, (n, _) in enumerate(entries)}
-    policies: dict[str, Any] = {n: {"kind": "baseline", "params": tuned[n]["params"], "episodes": by[n]}
+    seeds = cfg["test"]["seeds"]
+    policies: dict[str, Any] = {n: {"kind": "baseline", "params": tuned[n]["params"], "episodes": by_entry[(n, -1)]}
                                 for n in bases}
-    policies[f"{a}_ensemble"] = _ensemble_record(ens, cfg["agents"]["runs"], by[f"{a}_ensemble"])
+    policies[name] = {**rec, "episodes": by_entry[(name, 0)]}
     training = {"selection": cfg["agents"]["selection"], "runs": {},  # no single student was played on test
-                "ensembles": {f"{a}_ensemble": {"of": a, "models": policies[f"{a}_ensemble"]["models"],
-                                                "validation_reward": None}},
+                "ensembles": {name: {"of": a, "models": rec["models"], "validation_reward": None}},
                 "students": {a: {"config": run["config"], "seeds": run["seeds"],
                                  "teacher": {**run["teacher"], "observation": "true env state", "models": [],
                                              "distill": [{"seed": s, "iterations": hist.get(s)} for s in run["seeds"]]},
-                                 "played_on_test": "in the ensemble only (scripts/v2_test_look.py)"}}}
+                                 "played_on_test": f"in {name} only (scripts/v2_test_look.py)"}}}
     splits = {"tuning": tuning_split, "validation": {"scenario": "train", "seeds": [], "well_ids": [],
                                                     "note": "not played (selection: mean needs none)"},
-              "test": {"scenario": kwargs["scenario"], "seeds": seeds,
-                                               "well_ids": sorted({e["well_id"] for e in by[bases[0]]})}}
+              "test": {"scenario": cfg["test"].get("scenario", "test"), "seeds": seeds,
+                       "well_ids": sorted({e["well_id"] for e in policies[bases[0]]["episodes"]})}}
     wall["total"] = time.perf_counter() - t0
     report = build_report(cfg, policies, splits, {n: {k: v for k, v in t.items() if k != "evaluated"}
                                                    for n, t in tuned.items()}, training, wall)
     report["quick"] = False
-    report["test_look"] = ("scripts/v2_test_look.py: the tuned baselines (not the clairvoyant oracle) and the "
-                           "ensemble; the students trained by the benchmark run, stopped before its test stage")
+    report["test_look"] = (f"scripts/v2_test_look.py: the tuned baselines (not the clairvoyant oracle) and {name}; "
+                           "the students trained by the benchmark run, stopped before its test stage")
     report = _json_clean(report)
-    _atomic_write(run_dir / "benchmark.json", json.dumps(report, indent=1))
-    write_markdown(report, run_dir / "benchmark.md", None)
+    out_dir.mkdir(parents=True, exist_ok=True)
+    _atomic_write(out_dir / "benchmark.json", json.dumps(report, indent=1))
+    write_markdown(report, out_dir / "benchmark.md", None)
     return report
 
 
@@ -125,8 +149,9 @@ def main() -> None:
     p.add_argument("--run", type=Path, required=True, help="the benchmark run's --out-dir (its models/)")
     p.add_argument("--log", type=Path, required=True, help="the run's stderr (tuned parameters, DAgger history)")
     p.add_argument("--workers", type=int)
+    p.add_argument("--out", type=Path, help="where the report goes (default: --run)")
     args = p.parse_args()
-    rep = test_look(args.config, args.run, args.log, args.workers)
+    rep = test_look(args.config, args.run, args.log, args.workers, args.out)
     print(markdown_tables(rep))
     print(verdict(rep))
 

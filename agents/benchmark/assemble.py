@@ -32,6 +32,14 @@ def _ensemble_record(spec: dict[str, Any], runs: dict[str, Any], eps: list[dict[
             "episodes": eps}
 
 
+def guarded_record(spec: dict[str, Any], runs: dict[str, Any], eps: list[dict[str, Any]]) -> dict[str, Any]:
+    """A guarded ensemble's record: the ensemble's, and what replay needs to rebuild the guard around it."""
+    rec = _ensemble_record({**spec["inner"], "of": spec["of"]}, runs, eps)
+    rec["selection"] += ", under the constraint guard"
+    rec["guarded"] = {"fallback": spec["fallback"], "guard": spec["guard"], "scale": spec.get("scale")}
+    return rec
+
+
 def _ship(specs: list[dict[str, Any]], pick: int, a: str, models_dir: Path, tag: str) -> Path:
     """The shipped single model of run ``a``: the validation pick (training wells), else seed 0."""
     shipped = models_dir / f"{a}_{tag}.zip"
@@ -69,8 +77,9 @@ def policy_records(cfg: dict[str, Any], tuned: dict[str, Any], agent_specs: dict
     for a, specs in agent_specs.items():
         per_seed = [by_entry[(a, k)] for k in range(len(specs))]
         val = val_scores.get(a)
-        if specs[0]["kind"] == "ensemble":
-            policies[a] = _ensemble_record(specs[0], runs, per_seed[0])
+        if specs[0]["kind"] in ("ensemble", "guarded"):
+            policies[a] = (_ensemble_record if specs[0]["kind"] == "ensemble" else guarded_record)(
+                specs[0], runs, per_seed[0])
             training.setdefault("ensembles", {})[a] = {
                 "of": specs[0]["of"], "models": policies[a]["models"],
                 "iqm_test_reward": iqm([e["reward"] for e in per_seed[0]]),

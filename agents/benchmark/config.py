@@ -88,7 +88,29 @@ def load_benchmark_config(path: str | Path, quick: bool = False) -> dict[str, An
     for algo, run in runs.items():
         if run.get("teacher") is not None:
             _check_teacher(algo, run, runs, sets["tuning"] | sets["validation"])
+    if cfg.get("guarded") is not None:
+        _check_guarded(cfg["guarded"], bl, runs)
     return cfg
+
+
+def _check_guarded(g: Any, bl: dict[str, Any], runs: dict[str, Any]) -> None:
+    """``guarded: {fallback, scale, guard}``: the design's one ensemble under a constraint guard
+    (agents/policies/guarded.py, which bounds the guard and the scale)."""
+    from ..policies.guarded import guarded_spec
+
+    if not isinstance(g, dict) or set(g) - {"fallback", "scale", "guard"}:
+        raise BenchmarkConfigError(f"benchmark config: guarded = {str(g)[:80]!r}: expected {{fallback: BASELINE, "
+                                   "scale: S, guard: {...}}")
+    if g.get("fallback") not in bl or g.get("fallback") == "oracle":
+        raise BenchmarkConfigError(f"benchmark config: guarded.fallback = {g.get('fallback')!r}: expected a tuned "
+                                   f"field baseline of this config ({', '.join(n for n in bl if n != 'oracle')})")
+    if len(runs) != 1 or not all(r.get("residual") for r in runs.values()):
+        raise BenchmarkConfigError("benchmark config: guarded: expected one residual agent run (its students' ensemble)")
+    try:
+        guarded_spec({"kind": "ensemble", "residual": {"base": "best_tuned"}, "members": []}, g["fallback"], {}, g.get("guard") or {},
+                     g.get("scale"))
+    except ValueError as exc:
+        raise BenchmarkConfigError(f"benchmark config: guarded.{str(exc).removeprefix('guarded.')}") from None
 
 
 TEST_SCENARIOS = ("test", "validation")

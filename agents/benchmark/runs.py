@@ -63,7 +63,9 @@ def _algo_of(run: dict[str, Any]) -> str:
 
 
 def _policy_part(spec: dict[str, Any]) -> dict[str, Any]:
-    return {k: spec[k] for k in ("kind", "path", "obs_norm", "residual", "members") if k in spec}
+    # a guarded spec's parts too (agents/policies/guarded.py): its inner policy, fallback, guard and scale
+    return {k: spec[k] for k in ("kind", "path", "obs_norm", "residual", "members", "inner", "fallback", "guard",
+                                 "scale") if k in spec}
 
 
 def residual_spec(run: dict[str, Any], tuned: dict[str, Any]) -> dict[str, Any] | None:

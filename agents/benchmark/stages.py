@@ -8,6 +8,7 @@ from __future__ import annotations
 import json
 import sys
 import time
+from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
@@ -17,6 +18,7 @@ from ..envs import env_tag, make_env
 from ..evaluation.rollout import Runner, episode_jobs
 from ..policies.ensemble import ensemble_spec
 from ..policies.factory import SEARCHED_BASELINES, benchmark_baselines
+from ..policies.guarded import guarded_spec
 from ..training.distill import distill_job
 from ..training.tuning import Evaluator, TuningSet, coordinate_search, search_best_constant
 from .runs import (
@@ -150,7 +152,17 @@ def train_agents(cfg: dict[str, Any], runner: Runner, tuned: dict[str, Any], wor
     # seed ensembles (agents/policies/ensemble.py): the mean action of every seed's model, one more policy
     for a in [a for a in agent_specs if runs[a].get("ensemble")]:
         agent_specs[f"{a}_ensemble"] = [{**ensemble_spec(agent_specs[a]), "of": a}]
+    if cfg.get("guarded"):  # the design's ensemble under its constraint guard (agents/policies/guarded.py)
+        (a,) = runs
+        agent_specs[f"{a}_guarded"] = [design_guarded(cfg, tuned, ensemble_spec(agent_specs[a]), a)]
     return agent_specs, teachers, residuals
+
+
+def design_guarded(cfg: dict[str, Any], tuned: dict[str, Any], ens: dict[str, Any], of: str) -> dict[str, Any]:
+    """The guarded spec of the config's ``guarded:`` block on the ensemble ``ens`` of run ``of``'s models."""
+    g = cfg["guarded"]
+    spec = guarded_spec(_policy_part(ens), g["fallback"], tuned[g["fallback"]]["params"], g["guard"], g.get("scale"))
+    return {**spec, "of": of}
 
 
 def validate(cfg: dict[str, Any], runner: Runner,
@@ -175,14 +187,16 @@ def validate(cfg: dict[str, Any], runner: Runner,
 
 
 def run_test_episodes(cfg: dict[str, Any], runner: Runner, tuned: dict[str, Any],
-                  agent_specs: dict[str, list[dict[str, Any]]],
-                  fig_seed: int) -> dict[tuple[str, int], list[dict[str, Any]]]:
+                      agent_specs: dict[str, list[dict[str, Any]]], fig_seed: int,
+                      policies: Sequence[str] | None = None) -> dict[tuple[str, int], list[dict[str, Any]]]:
     """Every policy on the same test episodes: records by (policy name, model index; -1 for a baseline), the
-    episode ``fig_seed`` with its trace for the figure."""
+    episode ``fig_seed`` with its trace for the figure. ``policies``: the tuned baselines played (default every
+    one the benchmark reports; a test look leaves out what its judge does not read, scripts/v2_test_look.py)."""
     test_seeds = cfg["test"]["seeds"]
     test_kwargs = {**cfg["env_kwargs"], "scenario": cfg["test"].get("scenario", "test")}
+    names = benchmark_baselines(tuned) if policies is None else policies
     entries: list[tuple[str, int, dict[str, Any]]] = [
-        (n, -1, {"kind": "baseline", "name": n, "params": tuned[n]["params"]}) for n in benchmark_baselines(tuned)]
+        (n, -1, {"kind": "baseline", "name": n, "params": tuned[n]["params"]}) for n in names]
     for a, specs in agent_specs.items():
         entries += [(a, k, _policy_part(sp)) for k, sp in enumerate(specs)]
     tjobs = []

@@ -6,7 +6,9 @@ run in worker processes that build their own env and policy:
   observation normalisation it was trained with, stored as npz; both are read as data, nothing is unpickled),
   optionally with ``"residual": {"base", "params", "scale"[, "idle_scale"]}`` (:mod:`agents.policies.residual`),
 - ``{"kind": "ensemble", "members": [{"path", "obs_norm"}, ...], "residual": ... | None}``: the mean of the
-  members' actions (:mod:`agents.policies.ensemble`).
+  members' actions (:mod:`agents.policies.ensemble`);
+- ``{"kind": "guarded", "inner": <agent or ensemble spec>, "fallback": {"name", "params"}, "guard": {...},
+  "scale": ... | None}``: the inner policy under a constraint guard (:mod:`agents.policies.guarded`).
 """
 
 from __future__ import annotations
@@ -18,6 +20,7 @@ import numpy as np
 from ..policies.ensemble import EnsemblePolicy
 from ..policies.factory import make_baseline
 from ..policies.field import obs_names_of
+from ..policies.guarded import GuardedPolicy
 from ..policies.residual import ResidualAgentPolicy
 from .model_io import algorithms, detect_algo, load_policy, read_data, space_shape
 from .normalizer import ObsNormalizer
@@ -68,6 +71,8 @@ class AgentPolicy(SB3Policy):
 
 
 def build_policy(spec: dict[str, Any], env: Any) -> Any:
+    if spec["kind"] == "guarded":
+        return _guarded(spec, env)
     if spec["kind"] == "baseline":
         return make_baseline(spec["name"], spec.get("params", {}), obs_names_of(env))
     if spec["kind"] in ("agent", "ensemble"):
@@ -79,4 +84,16 @@ def build_policy(spec: dict[str, Any], env: Any) -> Any:
         if res:
             return ResidualAgentPolicy(agent, res["base"], res["params"], res["scale"], res.get("idle_scale"))
         return agent
-    raise ValueError(f"policy spec kind = {spec.get('kind')!r}: expected baseline, agent or ensemble")
+    raise ValueError(f"policy spec kind = {spec.get('kind')!r}: expected baseline, agent, ensemble or guarded")
+
+
+def _guarded(spec: dict[str, Any], env: Any) -> Any:
+    """A guarded spec's policy; its ``scale`` replaces the inner residual's (0: the residual's base itself)."""
+    inner, res = dict(spec["inner"]), spec["inner"].get("residual")
+    if spec.get("scale") is not None and res:
+        if float(spec["scale"]) == 0.0:
+            inner = {"kind": "baseline", "name": res["base"], "params": res["params"]}
+        else:
+            inner["residual"] = {**res, "scale": float(spec["scale"])}
+    fb = spec["fallback"]
+    return GuardedPolicy(build_policy(inner, env), fb["name"], fb.get("params", {}), spec["guard"], obs_names_of(env))

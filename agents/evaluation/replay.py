@@ -7,7 +7,8 @@ episodes from ``reset(seed=S)`` on ``scenario="test"``, and puts every return be
 
 - An agent entry that is the mean over its seeds' models is replayed as such: every model plays the episode,
   and the mean of their returns is compared.
-- A ``*_ensemble`` entry is one policy (:mod:`agents.policies.ensemble`).
+- A ``*_ensemble`` entry is one policy (:mod:`agents.policies.ensemble`); with a ``guarded`` record (fallback,
+  guard, scale) it is that ensemble under the constraint guard (:mod:`agents.policies.guarded`).
 - Model zips are read as data (:class:`agents.evaluation.agent.AgentPolicy`). A report names each as
   ``models/<file>.zip``; :func:`locate_model` looks for it in the report's own folder (a fresh run's
   ``OUT/models``), then in the repository's ``models/`` (:data:`MODELS_HOME`, where the shipped report's
@@ -30,6 +31,7 @@ import numpy as np
 from ..envs import ENV_ID_V1, ENV_ID_V2, make_env
 from ..inputs import baseline_params, report_env_kwargs, report_episodes
 from ..policies.ensemble import ensemble_spec
+from ..policies.guarded import guarded_spec
 from ..policies.residual import RESIDUAL_BASES, check_scales
 from .manifest import MODELS_HOME
 from .rollout import run_episode
@@ -127,7 +129,22 @@ def policy_specs(rep: dict[str, Any], name: str, root: Path) -> list[dict[str, A
         raise ReplayError(f"policies.{name}: expected a baseline, or an agent with a list of models")
     res = _residual(pol.get("residual_on"), name)
     specs = [{"kind": "agent", **_model(root, m, name), **({"residual": res} if res else {})} for m in models]
+    if pol.get("guarded") is not None:
+        return [_guarded(pol["guarded"], ensemble_spec(specs), name)]
     return [ensemble_spec(specs)] if pol.get("ensemble_of") else specs
+
+
+def _guarded(rec: Any, inner: dict[str, Any], name: str) -> dict[str, Any]:
+    """The guarded spec a report's ``guarded`` record names (its fallback baseline, guard and scale)."""
+    fb = rec.get("fallback") if isinstance(rec, dict) else None
+    if not (isinstance(fb, dict) and isinstance(fb.get("name"), str) and isinstance(fb.get("params"), dict)):
+        raise ReplayError(f"policies.{name}.guarded = {str(rec)[:80]}: expected {{fallback: {{name, params}}, "
+                          "guard: {...}, scale: S | null}")
+    try:
+        return guarded_spec(inner, fb["name"], baseline_params(fb["name"], fb["params"], f"policies.{name}.guarded"),
+                            rec.get("guard") or {}, rec.get("scale"))
+    except ValueError as exc:
+        raise ReplayError(f"policies.{name}.{exc}") from None
 
 
 def _scenario(rep: dict[str, Any], k: int) -> str:

@@ -38,7 +38,8 @@ def _model_dim(spec: dict[str, Any]) -> int:
 def build_policy_any(spec: dict[str, Any], env: Any) -> Any:
     """:func:`agents.evaluation.agent.build_policy`, with v1 models viewing v2's observation through :class:`V1ObsView`."""
     policy = build_policy(spec, env)
-    if spec["kind"] == "baseline" or env.observation_space.shape[0] == V1_FIELD_DIM:
+    # a guard wraps the students of its own env version (agents/policies/guarded.py): no view
+    if spec["kind"] in ("baseline", "guarded") or env.observation_space.shape[0] == V1_FIELD_DIM:
         return policy
     dim = _model_dim(spec)
     if hasattr(policy, "model") and hasattr(policy, "base_name"):  # a residual: the model sees obs + base action
