@@ -18,6 +18,24 @@ import numpy as np
 from .vector_steps import env_op, next_step, same_step, slot_env
 
 
+def _serve(envs: list, cmd: str, args, first: int) -> tuple[str, object]:
+    """One command on a block of envs: ``("ok", results)`` or ``("error", one line naming the block)``."""
+    try:
+        if cmd == "reset":
+            out = [env.reset(seed=s, options=o) for env, (s, o) in zip(envs, args)]
+        elif cmd == "next":
+            out = [next_step(env, done, a) for env, (done, a) in zip(envs, args)]
+        elif cmd == "same":
+            out = [same_step(env, a) for env, a in zip(envs, args)]
+        else:  # ("op", (what, name, local indices, args, kwargs))
+            what, name, idx, a, k = args
+            out = [env_op(envs[i], what, name, a, k) for i in idx]
+        return "ok", out
+    except Exception as exc:  # noqa: BLE001 - reported to the parent as one line
+        return "error", (f"{cmd} in the worker of envs {first}..{first + len(envs) - 1}: "
+                         f"{type(exc).__name__}: {exc}")
+
+
 def _worker(conn, env_cls: type, env_kwargs: dict, count: int, first: int, env_wrapper=None) -> None:
     try:
         envs = [slot_env(env_cls, env_kwargs, env_wrapper) for _ in range(count)]
@@ -32,30 +50,54 @@ def _worker(conn, env_cls: type, env_kwargs: dict, count: int, first: int, env_w
                 env.close()
             conn.send(("ok", None))
             return
+        conn.send(_serve(envs, cmd, args, first))
+
+
+class _DriverBlock:
+    """The first block, stepped in the driver process itself behind a pipe's send/recv: the command is kept at
+    ``send`` and run at ``recv``, which :meth:`ProcessShards._gather` calls after every worker has its command, so
+    the blocks still run at the same time. Why: with P workers and a driver that only waits, P + 1 processes are
+    runnable on P cores during a step's hand-offs, and a pipe write that wakes a worker gives it the driver's core
+    (docs/speed.md §3); with P - 1 workers no more processes run than there are cores."""
+
+    def __init__(self, env_cls: type, env_kwargs: dict, count: int, env_wrapper=None) -> None:
+        self.envs: list = []
         try:
-            if cmd == "reset":
-                out = [env.reset(seed=s, options=o) for env, (s, o) in zip(envs, args)]
-            elif cmd == "next":
-                out = [next_step(env, done, a) for env, (done, a) in zip(envs, args)]
-            elif cmd == "same":
-                out = [same_step(env, a) for env, a in zip(envs, args)]
-            else:  # ("op", (what, name, local indices, args, kwargs))
-                what, name, idx, a, k = args
-                out = [env_op(envs[i], what, name, a, k) for i in idx]
-            conn.send(("ok", out))
-        except Exception as exc:  # noqa: BLE001 - reported to the parent as one line
-            conn.send(("error", (f"{cmd} in the worker of envs {first}..{first + count - 1}: "
-                                f"{type(exc).__name__}: {exc}")))
+            self.envs = [slot_env(env_cls, env_kwargs, env_wrapper) for _ in range(count)]
+            self._pending: tuple = ("ok", (self.envs[0].observation_space, self.envs[0].action_space))
+        except Exception as exc:  # noqa: BLE001 - raised by _gather as a worker's would be
+            self._pending = ("error", f"building env 0: {type(exc).__name__}: {exc}")
+
+    def send(self, msg: tuple) -> None:
+        if msg[0] == "close":
+            for env in self.envs:
+                env.close()
+            self._pending = ("ok", None)
+        else:
+            self._pending = ("run", msg)
+
+    def recv(self) -> tuple:
+        status, payload = self._pending
+        if status == "run":
+            cmd, args = payload
+            return _serve(self.envs, cmd, args, 0)
+        return status, payload
+
+    def close(self) -> None:
+        pass
 
 
 class ProcessShards:
-    """P worker processes holding a contiguous block of the N envs each."""
+    """P blocks of the N envs, contiguous: with P > 1 the driver steps the first (``driver_block``, default) and P - 1
+    worker processes the others; P = 1 is one worker process."""
 
-    def __init__(self, env_cls: type, num_envs: int, processes: int, env_kwargs: dict, env_wrapper=None) -> None:
+    def __init__(self, env_cls: type, num_envs: int, processes: int, env_kwargs: dict, env_wrapper=None,
+                 driver_block: bool = True) -> None:
         ctx = mp.get_context("forkserver")
         self.blocks = [b.tolist() for b in np.array_split(np.arange(num_envs), processes)]
         self.conns, self.procs = [], []
-        for block in self.blocks:
+        local = processes > 1 and driver_block  # the driver steps the first block itself
+        for block in self.blocks[1:] if local else self.blocks:
             parent, child = ctx.Pipe()
             p = ctx.Process(target=_worker, args=(child, env_cls, dict(env_kwargs), len(block), block[0],
                                                          env_wrapper), daemon=True)
@@ -63,6 +105,8 @@ class ProcessShards:
             child.close()
             self.conns.append(parent)
             self.procs.append(p)
+        if local:  # built while the workers build theirs; first in the list, as its block is first
+            self.conns.insert(0, _DriverBlock(env_cls, dict(env_kwargs), len(self.blocks[0]), env_wrapper))
         self.spaces = self._gather()[0]
 
     def _gather(self) -> list:

@@ -47,7 +47,8 @@ def test_vector_env_is_registered_and_declares_its_autoreset_mode(env_id) -> Non
         venv.close()
 
 
-@pytest.mark.parametrize("backend", [{"threads": 2}, {"processes": 2}], ids=["threads", "processes"])
+@pytest.mark.parametrize("backend", [{"threads": 2}, {"processes": 2}, {"processes": 3}],
+                         ids=["threads", "processes", "driver+2 workers"])
 @pytest.mark.parametrize("env_cls", [SuckerRodV1Env, SuckerRodV2Env])
 def test_vector_env_matches_single_envs_through_an_autoreset(env_cls, backend) -> None:
     n, steps = 3, 5
@@ -173,3 +174,20 @@ def test_env_wrapper_wraps_every_slot_in_both_backends(backend) -> None:
     assert any(d.any() for d in runs[0][3::3])
     for x, y in zip(*runs):
         np.testing.assert_array_equal(x, y)
+
+
+def test_the_driver_steps_the_first_block_and_the_workers_the_rest() -> None:
+    """processes=P: the driver steps the first block itself and P - 1 workers the others (docs/speed.md §3);
+    ``driver_block=False`` keeps P workers. Both step the envs as single envs do."""
+    from srenv.envs.vector_procs import ProcessShards, _DriverBlock
+
+    for driver, workers in ((True, 1), (False, 2)):
+        shards = ProcessShards(SuckerRodV1Env, 4, 2, dict(SHORT), driver_block=driver)
+        try:
+            assert len(shards.procs) == workers and isinstance(shards.conns[0], _DriverBlock) is driver
+            assert shards.blocks == [[0, 1], [2, 3]]
+            res = shards.run("reset", [(7 + i, None) for i in range(4)])
+            single = [SuckerRodV1Env(**SHORT).reset(seed=7 + i)[0] for i in range(4)]
+            assert all(np.array_equal(r[0], o) for r, o in zip(res, single))
+        finally:
+            shards.close()
