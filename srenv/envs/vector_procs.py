@@ -1,4 +1,5 @@
-"""The native vector env's process backend: N envs split into P worker processes, a contiguous block each.
+"""The native vector env's process backend: N envs split into P contiguous blocks, the first stepped by the driver
+process itself and each other by a worker process (``driver_block``; P = 1 is one worker).
 
 Why processes: a step's Python (the env's bookkeeping, card features, the classifier) holds the GIL and is about
 half of its CPU time, so threads cannot keep two cores busy (docs/speed.md §3); a worker process runs its block's
