@@ -229,7 +229,7 @@ def write_markdown(report: dict[str, Any], path: Path, figure: str | None) -> No
         (f"- Tuning (baselines): {len(report['tuning']['seeds'])} episodes on training wells, seeds "
         f"{_seed_text(report['tuning']['seeds'])}. Validation (agent seed choice, if used): "
         f"{_seed_text(report['validation']['seeds']) or 'none'}."),
-        (f"- Agents: {_runs_text(tr)}; "
+        (f"- Agents: {_runs_text(tr, report.get('policies'))}; "
         f"reported as: {tr.get('selection', 'n/a')}."),
         "",
         "## Result",
@@ -354,11 +354,12 @@ def rerender(out_dir: str | Path) -> None:
     write_markdown(report, out / "benchmark.md", "figures/benchmark_v1.png")
 
 
-def _runs_text(training: dict[str, Any]) -> str:
+def _runs_text(training: dict[str, Any], policies: dict[str, Any] | None = None) -> str:
     runs, ens = training.get("runs", {}), training.get("ensembles", {})
     text = ", ".join(f"{a} seeds {v['seeds']}" for a, v in runs.items()) or "none"
+    guarded = {n for n, p in (policies or {}).items() if isinstance(p, dict) and p.get("guarded")}
     return text + "".join(f"; {n}: the mean action of {v['of']}'s {len(v['models'])} seed models"
-                          for n, v in ens.items())
+                          + (", under the constraint guard" if n in guarded else "") for n, v in ens.items())
 
 
 def _seed_text(seeds: list[int]) -> str:

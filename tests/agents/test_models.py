@@ -100,3 +100,15 @@ def test_evaluate_only_plays_the_shipped_report_that_holds_the_configs_agents() 
     assert default_report(v2od) == shipped.shipped_report("v2")
     v2 = load_benchmark_config(REPO / "configs/benchmark/v2.yaml")  # names v1's agents, played on v2
     assert default_report(v2) == shipped.shipped_report("v1")
+
+
+def test_every_v2_report_in_docs_finds_its_models_in_models() -> None:
+    """The v2 reports kept in docs/ (the shipped one, its fresh split, the guarded design's look and fresh split) name
+    the students by the files shipped in models/, so `python -m agents replay REPORT` runs from a checkout."""
+    paths = [REPO / "docs/v2/benchmark.json", REPO / "docs/v2/fresh.json",
+             *sorted((REPO / "docs/archive").glob("benchmark_v2_oracle_distilled_guarded_*.json"))]
+    assert len(paths) == 4
+    for path in paths:
+        rep = load_report(path)
+        named = {m for p in rep["policies"].values() for m in p.get("models") or []}
+        assert named and all(locate_model(path.parent, m, "x").parent == MODELS_HOME for m in named), path
