@@ -356,10 +356,9 @@ def rerender(out_dir: str | Path) -> None:
 
 def _runs_text(training: dict[str, Any], policies: dict[str, Any] | None = None) -> str:
     runs, ens = training.get("runs", {}), training.get("ensembles", {})
-    text = ", ".join(f"{a} seeds {v['seeds']}" for a, v in runs.items()) or "none"
-    guarded = {n for n, p in (policies or {}).items() if isinstance(p, dict) and p.get("guarded")}
-    return text + "".join(f"; {n}: the mean action of {v['of']}'s {len(v['models'])} seed models"
-                          + (", under the constraint guard" if n in guarded else "") for n, v in ens.items())
+    guard = {n: ", under the constraint guard" for n, p in (policies or {}).items() if (p or {}).get("guarded")}
+    return (", ".join(f"{a} seeds {v['seeds']}" for a, v in runs.items()) or "none") + "".join(f"; {n}: the mean action of {v['of']}'s {len(v['models'])} seed models{guard.get(n, '')}"
+                          for n, v in ens.items())
 
 
 def _seed_text(seeds: list[int]) -> str:

@@ -177,3 +177,12 @@ def test_config_refuses_a_bad_guarded_block(tmp_path, change, match):
     bad.write_text(yaml.safe_dump(raw))
     with pytest.raises(BenchmarkConfigError, match=match):
         load_benchmark_config(bad)
+
+
+def test_a_guarded_ensemble_is_named_as_guarded_in_the_report_header():
+    from agents.benchmark.report import _runs_text
+
+    tr = {"runs": {}, "ensembles": {"g": {"of": "s", "models": ["a.zip", "b.zip"]}, "e": {"of": "s", "models": ["a.zip"]}}}
+    text = _runs_text(tr, {"g": {"guarded": {"guard": {}}}, "e": {"kind": "agent"}})
+    assert "g: the mean action of s's 2 seed models, under the constraint guard" in text
+    assert text.endswith("e: the mean action of s's 1 seed models")
