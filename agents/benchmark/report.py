@@ -148,12 +148,17 @@ def _fmt(x: float, nd: int = 1) -> str:
     return "n/a" if x is None or not math.isfinite(x) else f"{x:,.{nd}f}"
 
 
+def contenders(summary: dict[str, Any]) -> tuple[list[str], list[str]]:
+    """(agents, tuned baselines) of a report's summary: the oracles are references, not baselines."""
+    return ([n for n in summary if summary[n]["kind"] == "agent"],
+            [n for n in summary if summary[n]["kind"] != "agent" and n not in ("oracle", "causal_oracle")])
+
+
 def verdict(report: dict[str, Any]) -> str:
     """One line: the reward's scale and whether the best agent's lead over the best tuned baseline is real."""
     s, pol = report["summary"], report["policies"]
     steps = int(np.mean([e["steps"] for e in pol["installed"]["episodes"]]))
-    agents = [n for n in s if s[n]["kind"] == "agent"]
-    bases = [n for n in s if s[n]["kind"] != "agent" and n not in ("oracle", "causal_oracle")]  # references
+    agents, bases = contenders(s)
     best_b = max(bases, key=lambda n: s[n]["mean_reward"])
     scale = (f"reward = USD per hour of well time; an episode's return sums its {steps} intervals, so 1 USD/h "
              f"held all episode = {steps} return units")
@@ -162,17 +167,11 @@ def verdict(report: dict[str, Any]) -> str:
     best_a = max(agents, key=lambda n: s[n]["mean_reward"])
     d = report["paired"][best_a][best_b]
     lo, hi = judged_ci(d)
-    by_well = ""
-    if "ci95_by_well" in d:
-        by_well = (f" over the episodes; over the {d['n_wells']} wells' means, each well once, "
-                   f"[{lo / steps:+.2f}, {hi / steps:+.2f}] USD/h")
+    by_well = (f" over the episodes; over the {d['n_wells']} wells' means, each well once, "
+               f"[{lo / steps:+.2f}, {hi / steps:+.2f}] USD/h") if "ci95_by_well" in d else ""
     beaten = [b for b in bases if report["paired"][best_a][b]["significant_positive"]]
-    if lo > 0:
-        call = "significant (95 % CI above zero)"
-    elif hi < 0:
-        call = "agent significantly WORSE (95 % CI below zero)"
-    else:
-        call = "within noise (95 % CI spans zero)"
+    call = ("significant (95 % CI above zero)" if lo > 0 else "agent significantly WORSE (95 % CI below zero)"
+            if hi < 0 else "within noise (95 % CI spans zero)")
     return (f"{scale}. Best agent {best_a} vs best tuned baseline {best_b}: {d['mean_diff_reward']:+.1f} "
             f"[{d['ci95'][0]:+.1f}, {d['ci95'][1]:+.1f}] per episode = {d['mean_diff_reward'] / steps:+.2f} USD/h"
             f"{by_well}: {call}; "

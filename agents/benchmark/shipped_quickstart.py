@@ -36,7 +36,7 @@ import numpy as np
 from ..evaluation.replay import ReplayError, load_report, policy_specs
 from ..evaluation.rollout import Runner, episode_jobs
 from .figure import figure
-from .report import _atomic_write, _json_clean, build_report, verdict
+from .report import _atomic_write, _json_clean, build_report, contenders, verdict
 
 # per env version: the tuned field baselines played now (the shipped report's best tuned baseline and, for v2, the
 # field controller with alarms), and the policies taken from the report's records of the same episodes: baselines
@@ -140,8 +140,7 @@ def cost_note(report: dict[str, Any]) -> str:
     """One sentence: the best agent's constraint cost (``info["cost"]`` summed per episode) against the best tuned
     baseline's - a lead bought with more cost is not the same result (the v2 benchmarks judge both)."""
     s = report["summary"]
-    agents = [n for n in s if s[n]["kind"] == "agent"]
-    bases = [n for n in s if s[n]["kind"] != "agent" and n not in ("oracle", "causal_oracle")]
+    agents, bases = contenders(s)
     if not agents or not bases:
         return ""
     a = max(agents, key=lambda n: s[n]["mean_reward"])

@@ -117,6 +117,8 @@ def fluid_column_mass_kg(density_kg_m3: float, length_m: float, plunger_area_m2:
     """The liquid column above a rising plunger as a mass at the plunger: the column in the tubing-rod
     annulus moves at v A_pl / (A_t - A_r), so its kinetic energy is (1/2) rho L A_pl^2 / (A_t - A_r) v^2."""
     return density_kg_m3 * length_m * plunger_area_m2 ** 2 / max(tubing_area_m2 - rod_area_m2, 1e-9)
+
+
 MAX_FILLAGE_GAS_FRACTION = 0.95
 
 
@@ -178,11 +180,10 @@ class GasChamber:
         phi = pump.intake_gas_fraction
         psi = pump.clearance_gas_fraction
         if pump.fillage < 1 and p_d_pa is not None:
-            phi = gas_fraction_for_fillage(pump.fillage, pump.intake_pressure_pa, p_d_pa,
-                                           pump.gas_polytropic_exponent, pump.clearance_volume_fraction) \
-                if psi == 0 else gas_fraction_keeping(pump.fillage, pump.intake_pressure_pa, p_d_pa,
-                                                      pump.gas_polytropic_exponent, pump.clearance_volume_fraction,
-                                                      psi)
+            state = (pump.fillage, pump.intake_pressure_pa, p_d_pa, pump.gas_polytropic_exponent,
+                     pump.clearance_volume_fraction)
+            # two formulas, not one with psi = 0: the keeping one's arithmetic order differs by round-off
+            phi = gas_fraction_keeping(*state, psi) if psi > 0 else gas_fraction_for_fillage(*state)
         if phi <= 0 and pump.intake_glr_m3_m3 <= 0 and psi == 0:
             return None
         a = plunger_area_m2(pump)
