@@ -21,6 +21,8 @@ from pathlib import Path
 import numpy as np
 
 from ..cli_types import OneLineParser
+from ..errors import ConfigError
+from ..outputs import atomic_write_all, check_output_path
 from ..task.card_set import described_well, load_cards, write_npz
 
 
@@ -72,13 +74,21 @@ def main(argv: list[str] | None = None) -> int:
         ap.error(f"--cards {a.cards}: expected a directory with cards.npz (written by `srenv cards`)")
     if (dst / "cards.npz").exists():
         ap.error(f"--out {a.out}: holds a card set already, expected a new directory")
-    cols, failed = diagnose_set(load_cards(str(src / "cards.npz")))
-    dst.mkdir(parents=True, exist_ok=True)
-    write_npz(str(dst / "cards.npz"), cols)
-    meta_path = src / "dataset_card.json"
-    meta = json.loads(meta_path.read_text()) if meta_path.is_file() else {}
-    meta.update(pump_source="diagnosed", diagnosis_failed=failed, derived_from=str(src))
-    (dst / "dataset_card.json").write_text(json.dumps(meta, indent=1) + "\n")
+    if dst.is_symlink() or (dst.exists() and not dst.is_dir()):
+        ap.error(f"--out {a.out}: expected a directory that is not a symbolic link")
+    try:  # both outputs checked before the work, written atomically (both or neither) as `srenv cards` does
+        dst.mkdir(parents=True, exist_ok=True)
+        for name in ("cards.npz", "dataset_card.json"):
+            check_output_path("--out", str(dst / name), (Path(name).suffix,))
+        cols, failed = diagnose_set(load_cards(str(src / "cards.npz")))
+        meta_path = src / "dataset_card.json"
+        meta = json.loads(meta_path.read_text()) if meta_path.is_file() else {}
+        meta.update(pump_source="diagnosed", diagnosis_failed=failed, derived_from=str(src))
+        atomic_write_all([(dst / "cards.npz", lambda tmp: write_npz(tmp, cols)),
+                          (dst / "dataset_card.json",
+                           lambda tmp: Path(tmp).write_text(json.dumps(meta, indent=1) + "\n"))])
+    except (ConfigError, OSError) as exc:
+        ap.error(str(exc))
     print(json.dumps({"cards": len(cols["label"]), "diagnosis_failed": failed}))
     return 0
 

@@ -177,3 +177,19 @@ def test_diagnose_cards_writes_the_diagnosed_pump_cards_as_a_derived_set(tmp_pat
         diag(["--cards", str(src), "--out", str(tmp_path / "dst")])
     err = capsys.readouterr().err
     assert exc.value.code == 2 and err.count("\n") == 1 and "--out" in err
+
+
+def test_diagnose_cards_refuses_an_output_through_a_link_before_any_work(tmp_path, capsys) -> None:
+    from srenv.tools.diagnose_cards import main as diag
+
+    src = _surface_set(tmp_path / "src")
+    (tmp_path / "real").mkdir()
+    (tmp_path / "link").symlink_to(tmp_path / "real")
+    (tmp_path / "d2").mkdir()
+    (tmp_path / "d2" / "dataset_card.json").symlink_to(tmp_path / "elsewhere.json")
+    for out in (tmp_path / "link", tmp_path / "d2"):
+        with pytest.raises(SystemExit) as exc:
+            diag(["--cards", str(src), "--out", str(out)])
+        err = capsys.readouterr().err
+        assert exc.value.code == 2 and err.count("\n") == 1 and "--out" in err and "link" in err, err
+    assert not list((tmp_path / "real").iterdir()) and not (tmp_path / "d2" / "cards.npz").exists()
