@@ -10,10 +10,13 @@
 2. :func:`assert_cli_refuses`: one check for the CLI's bad-input contract, shared by the tests of each command
    that reads a file.
 3. The ``wheel`` fixture: srenv's wheel, built once per session (tests/test_wheel.py, test_core_install.py).
+4. :func:`run_on_avx2_numpy`: a snippet in a fresh interpreter on numpy's AVX2 kernels, for the tests that pin
+   results to the bit.
 """
 
 from __future__ import annotations
 
+import os
 import shutil
 import subprocess
 import sys
@@ -178,3 +181,31 @@ def wheel(tmp_path_factory: pytest.TempPathFactory) -> Path:
     assert p.returncode == 0, p.stderr[-2000:]
     (whl,) = (tmp / "dist").glob("srenv-*.whl")
     return whl
+
+
+def _beyond_avx2() -> list[str]:
+    """numpy's dispatch targets above AVX2 (X86_V3) on this CPU: AVX-512's."""
+    try:
+        from numpy._core._multiarray_umath import __cpu_dispatch__
+    except ImportError:  # numpy 1.x
+        from numpy.core._multiarray_umath import __cpu_dispatch__
+    return [name for name in __cpu_dispatch__ if "512" in name or name == "X86_V4"]
+
+
+def run_on_avx2_numpy(code: str) -> str:
+    """Run ``code`` in a fresh interpreter (the repository root as working directory, it and tests/ on the path)
+    with numpy's AVX-512 kernels switched off, and return its stdout.
+
+    Why: the digests the tests pin were computed on AVX2 machines, and numpy's AVX-512 kernels of the
+    transcendental functions (sin, exp, tanh, ...) round some results differently in the last bit. On an AVX-512
+    CPU the same code then gives other bits (v2's episodes differ by at most 4e-12 relative over 3 x 20 steps, the
+    card augmentation likewise), and with ``NPY_DISABLE_CPU_FEATURES`` naming those kernels the pinned bits come
+    back. numpy reads the variable when it is imported, hence the fresh interpreter."""
+    root = Path(__file__).resolve().parents[1]
+    path = [str(root), str(root / "tests"), os.environ.get("PYTHONPATH")]
+    env = dict(os.environ, NPY_DISABLE_CPU_FEATURES=" ".join(_beyond_avx2()),
+               PYTHONPATH=os.pathsep.join(filter(None, path)))
+    done = subprocess.run([sys.executable, "-c", code], check=False, cwd=root, env=env, capture_output=True,
+                          text=True)
+    assert done.returncode == 0, done.stderr[-2000:]
+    return done.stdout

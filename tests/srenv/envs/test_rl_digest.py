@@ -1,7 +1,8 @@
 """v1 (default and ``fast_stepping``) and v2 give the observations, rewards and infos of 25d9225, to the bit,
 under random (a new action every step: an RL agent) and constant actions: the changing-action step's fast paths
 (issue 25, docs/speed.md §2d) move no result. The digests were computed by ``scripts/rl_digest.py`` on a checkout
-of 25d9225 (``PYTHONPATH=/tmp/rl_before python scripts/rl_digest.py``)."""
+of 25d9225 (``PYTHONPATH=/tmp/rl_before python scripts/rl_digest.py``) on an AVX2 machine; they are recomputed in a
+fresh interpreter on numpy's AVX2 kernels (conftest.run_on_avx2_numpy), so they hold on AVX-512 CPUs too."""
 
 from __future__ import annotations
 
@@ -9,6 +10,7 @@ import importlib.util
 from pathlib import Path
 
 import pytest
+from conftest import run_on_avx2_numpy
 
 AT_25D9225 = {
     "v1/random": "11199c5c867f5179f93a34f85a2efb24d4aecfb8a991daad0f4e063d74558dc3",
@@ -18,6 +20,11 @@ AT_25D9225 = {
     "v2/random": "62b47d5f9b25c2f94cab29999e64d70739cd1a53b38ce43b3d43d4a6a959d173",
     "v2/constant": "0a8ffad33fa2557f3876619e9454be056339e81dc3df474cc4585d142083f9c6",
 }
+
+
+def _pinned(call: str) -> str:
+    """``rl_digest.CALL`` on numpy's AVX2 kernels (conftest.run_on_avx2_numpy: how the digests were made)."""
+    return run_on_avx2_numpy(f"import sys; sys.path.insert(0, 'scripts'); import rl_digest; print(rl_digest.{call})").strip()
 
 
 def _digest_module():
@@ -33,7 +40,7 @@ def test_episodes_are_those_of_25d9225_to_the_bit(case: str) -> None:
     mod = _digest_module()
     name, policy = case.split("/")
     env_id, kwargs = mod.CASES[name]
-    assert mod.digest(env_id, kwargs, policy) == AT_25D9225[case]
+    assert _pinned(f"digest({env_id!r}, {kwargs!r}, {policy!r})") == AT_25D9225[case]
 
 
 def test_the_digest_sees_a_changed_bit() -> None:
@@ -59,4 +66,4 @@ def test_acceptance_protocol_is_that_of_67d2e08_to_the_bit(case: str) -> None:
     mod = _digest_module()
     name, protocol = case.split("/")
     a0 = mod.ACCEPTANCE_ACTIONS[protocol.removeprefix("acceptance_")]
-    assert mod.acceptance_digest(f"srenv/SuckerRod-{name}", a0) == AT_67D2E08[case]
+    assert _pinned(f"acceptance_digest('srenv/SuckerRod-{name}', {a0!r})") == AT_67D2E08[case]
