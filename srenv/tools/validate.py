@@ -15,7 +15,8 @@ card, and compare both with what the record holds. One JSON line (docs/realism.m
 RECORD is the vendor dynacard JSON layout (field units; a card stored in reverse time is oriented forward and
 reported as ``card_time_reversed``), or srenv's card CSV (``t_s, polished_rod_position_m,
 polished_rod_load_n``, or a unit row) with ``--config WELL``. The pump's state (intake pressure, fillage)
-comes from the record's own analysis where it has one, else from srenv's diagnosis of the measured card.
+comes from the record's own analysis where it has one, else from srenv's diagnosis of the measured card read
+by its load lines (``analysis.pump_intake``: the field's p_in = p_d - F_o / A_pl).
 """
 
 from __future__ import annotations
