@@ -138,3 +138,13 @@ def test_validate_reads_11708328s_pump_state_off_its_load_lines(tmp_path):
     vendor = load_lines(rec.pump_position_m, rec.pump_load_n)
     assert st["load_lines"]["fluid_load_n"] == pytest.approx(vendor["fluid_load_n"], rel=0.02)
     assert st["fillage"] == pytest.approx(vendor["fillage"], abs=0.03)
+
+
+def test_a_card_without_a_fluid_load_reads_no_fluid_load():
+    """A flat card (pumped off, parted rods): both lines at its load, no fluid load, fillage 0 — finite numbers
+    for diagnose's strict JSON."""
+    x = 0.5 * (1 - np.cos(2 * np.pi * np.arange(200) / 200))
+    lines = load_lines(x, np.full(200, 1234.0))
+    assert lines["upstroke_line_n"] == lines["downstroke_line_n"] == 1234.0
+    assert lines["fluid_load_n"] == 0.0 and lines["fillage"] == 0.0
+    assert all(math.isfinite(v) for v in lines.values())
