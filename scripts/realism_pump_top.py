@@ -34,6 +34,7 @@ from srenv.analysis.field_model import (
     well_config,
 )
 from srenv.analysis.field_record import read_dynacard_json
+from srenv.analysis.pump_intake import intake_pressure_pa
 from srenv.analysis.transfer_reading import (
     clearance_gas_fraction,
     plateaus,
@@ -51,9 +52,10 @@ FIGURES = ("pprl_error_pct", "mprl_error_pct", "card_rms_pct_of_pprl", "pump_car
 
 
 def intake_from_plateaus(rec, x: np.ndarray, f: np.ndarray, drag_n: float) -> float:
+    """The what-if of the plateaus (25-75 % of each branch): the load lines' formula on another reading."""
     f_up, f_down = plateaus(x, f)
     a_pl = math.pi / 4 * rec.plunger_diameter_m ** 2
-    return discharge_pressure_pa(rec) - (f_up - f_down - 2.0 * drag_n) / a_pl
+    return intake_pressure_pa(f_up - f_down, discharge_pressure_pa(rec), a_pl, drag_n)
 
 
 def ring(load: np.ndarray) -> np.ndarray:

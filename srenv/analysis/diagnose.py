@@ -246,13 +246,19 @@ def summary(cfg: WellConfig, card: PumpCard, convention: str = "true") -> dict:
     # the discharge pressure at the pump: the rod end's plus the liquid column down to a deeper pump
     p_out = float(tubing_pressure_pa(cfg.fluid, survey.tvd(cfg.rod_length_m))) + column_below_rods_pa(cfg, survey)
     from ..physics.pump import plunger_area_m2
+    from .pump_intake import read_pump_state
 
-    a_pl = plunger_area_m2(cfg.pump)
     friction = cfg.pump.plunger_friction_n if cfg.pump.load_source == "pressures" else 0.0
-    # fluid load = (p_out - p_in) A_pl + 2 P_f between the two plateaus (valve law, design §2)
-    # (with the loads given directly the config has no plunger area to turn the load into a pressure: null)
-    p_in = None if cfg.pump.load_source == "loads" else max(
-        0.0, p_out - (s["fluid_load_n"] - 2 * friction - cfg.pump.discharge_overpressure_pa * a_pl) / a_pl)
+    # the intake from the card's load lines, the field's reading (analysis/pump_intake.py, docs/realism.md);
+    # with the loads given directly the config has no plunger area to turn the load into a pressure: null
+    st = read_pump_state(card.pump_position_m, card.pump_load_n, p_out, plunger_area_m2(cfg.pump), friction,
+                         cfg.pump.discharge_overpressure_pa)
+    p_in = None if cfg.pump.load_source == "loads" else max(0.0, st["intake_pressure_pa"])
+    lines = {"upstroke_n": load_in_convention(st["upstroke_line_n"], convention, card.rod_end_pressure_pa,
+                                              card.rod_end_area_m2),
+             "downstroke_n": load_in_convention(st["downstroke_line_n"], convention, card.rod_end_pressure_pa,
+                                                card.rod_end_area_m2),
+             "fluid_load_n": st["fluid_load_n"], "fillage": st["fillage"]}
     return {
         "period_s": card.period_s,
         "spm": 60.0 / card.period_s,
@@ -263,6 +269,7 @@ def summary(cfg: WellConfig, card: PumpCard, convention: str = "true") -> dict:
         **s,
         "discharge_pressure_pa": p_out,
         "intake_pressure_pa": p_in,
+        "load_lines": lines,
         "load_convention": convention,
         "rod_end_pressure_pa": card.rod_end_pressure_pa,
         "rod_end_area_m2": card.rod_end_area_m2,

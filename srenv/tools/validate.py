@@ -15,7 +15,8 @@ card, and compare both with what the record holds. One JSON line (docs/realism.m
 RECORD is the vendor dynacard JSON layout (field units; a card stored in reverse time is oriented forward and
 reported as ``card_time_reversed``), or srenv's card CSV (``t_s, polished_rod_position_m,
 polished_rod_load_n``, or a unit row) with ``--config WELL``. The pump's state (intake pressure, fillage)
-comes from the record's own analysis where it has one, else from srenv's diagnosis of the measured card.
+comes from the record's own analysis where it has one, else from srenv's diagnosis of the measured card read
+by its load lines (``analysis.pump_intake``: the field's p_in = p_d - F_o / A_pl).
 """
 
 from __future__ import annotations
@@ -73,23 +74,20 @@ def pump_state(rec, work_dir: str) -> dict:
     """Intake pressure (Pa), fillage and plunger friction (N): the record's own analysis where it has one,
     else srenv's diagnosis of the measured card (never a fit to the surface card)."""
     from ..analysis.field_model import MIN_INTAKE_PA, pump_drag_n, well_config
-    from ..config import apply_overrides, config_from_dict
-    from ..physics.pump_inputs import column_below_rods_pa
-    from ..physics.survey import Survey
 
     if rec.intake_pressure_pa is not None:
         p_in, fill, fluid, source = rec.intake_pressure_pa, rec.fillage or 1.0, rec.fluid_load_n, "record"
+        lines = None
     else:
-        cfg = well_config(rec, os.path.join(work_dir, "motion.csv"), MIN_INTAKE_PA)
-        # the diagnosis's intake at the rod end (clipped at 0 there) plus the column down to the pump: an
-        # intake that clips at the rod end is read as the column's weight at the pump (docs/realism.md)
-        _, s = _diagnose(apply_overrides(cfg, {"pump.depth_m": None}), rec)
-        parsed = config_from_dict(cfg)
-        column = column_below_rods_pa(parsed, Survey.from_config(parsed.survey, parsed.rod_length_m))
-        p_in = max(float(s["intake_pressure_pa"] or 0.0) + column, MIN_INTAKE_PA)
-        fill, fluid, source = float(s["fillage"]), float(s["fluid_load_n"]), "srenv diagnose"
+        # srenv's diagnosis of the measured card read as the field reads it: the load lines' fluid load at the
+        # pump's own depth, p_in = p_d - F_o / A_pl (no plunger friction: the whole fluid load is pressure),
+        # held at one atmosphere at least, and the fillage where the transfer ends (analysis/pump_intake.py)
+        _, s = _diagnose(well_config(rec, os.path.join(work_dir, "motion.csv"), MIN_INTAKE_PA), rec)
+        lines = s["load_lines"]
+        p_in = max(float(s["intake_pressure_pa"]), MIN_INTAKE_PA)
+        fill, fluid, source = float(lines["fillage"]), float(lines["fluid_load_n"]), "srenv diagnose"
     return {"intake_pressure_pa": p_in, "fillage": fill, "plunger_friction_n": pump_drag_n(rec, fluid, p_in),
-            "source": source}
+            "source": source, "load_lines": lines}
 
 
 def _simulate(cfg_dict: dict, strokes: int):

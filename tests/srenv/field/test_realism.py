@@ -203,21 +203,25 @@ def test_validate_prints_the_contract_keys(figures, well):
 
 @pytest.mark.parametrize("well", WELLS)
 def test_validate_figures_held_today(figures, well):
-    """What the realistic model reaches today without fitting (docs/realism.md): PPRL within 5 %, MPRL within
+    """What the realistic model reaches today without fitting (docs/realism.md): PPRL within 5 % (7699227) and
+    10 % (11708328, whose pump state is now read off its diagnosis by the load lines: -8.9 %), MPRL within
     12 %, the card within 9 % of PPRL, the load spectrum above the 20th harmonic within 3x the measured share
     (38-39x with the previous damping)."""
     d = figures[well]
-    assert abs(d["pprl_error_pct"]) <= 5.0
-    assert abs(d["mprl_error_pct"]) <= 13.5
+    assert abs(d["pprl_error_pct"]) <= (10.0 if well == "11708328" else 5.0)
+    assert abs(d["mprl_error_pct"]) <= (9.0 if well == "11708328" else 13.5)
     assert d["card_rms_pct_of_pprl"] <= 9.0
     assert d["spectrum"]["ratio_above_h20"] <= 3.0
     if well == "11708328":  # srenv's diagnosis against the vendor's pump card, in its effective convention
         assert d["pump_card_rms_pct_of_range"] <= 3.0
         # its position channel is a synthesised cosine: driven by its own unit's four-bar, the card meets the
         # goal (7.1 -> 5.75 % of PPRL) while MPRL (-11.6 -> -13.0 %) and harmonics 4-20 (2.2x -> 3.1x) move off;
-        # the record's 20 hp NEMA D motor then lets the crank slow under the torque: 5.68 %, -12.7 %, 2.92x
+        # the record's 20 hp NEMA D motor then lets the crank slow under the torque: 5.68 %, -12.7 %, 2.92x;
+        # the pump state read off the diagnosis by the load lines (4.13 MPa, fillage 0.63 instead of 284 kPa,
+        # 0.815): PPRL +1.1 -> -8.9 %, MPRL -12.7 -> -7.9 %, card 5.68 -> 5.19 %, harmonics 2.92 -> 3.15x
         assert d["position_synthesised"] and d["motion_source"] == "record unit"
-        assert d["card_rms_pct_of_pprl"] <= 5.72 and d["spectrum"]["ratio_h4_20"] <= 3.0
+        assert d["card_rms_pct_of_pprl"] <= 5.3 and d["spectrum"]["ratio_h4_20"] <= 3.3
+        assert d["pump_state"]["intake_pressure_pa"] > 3e6 and d["pump_state"]["plunger_friction_n"] < 1.0
         assert d["motor"]["used"] and d["motor"]["nema_design"] == "D" and d["motor"]["converged"]
     else:
         assert not d["position_synthesised"] and d["motion_source"] == "card"
@@ -229,9 +233,9 @@ def test_validate_figures_held_today(figures, well):
         assert off["downstroke"] - off["upstroke"] > 1000.0 and 0.0 < off["upstroke"] < 1500.0
 
 
-@pytest.mark.xfail(strict=True, reason="issue 27's goal, not reached yet: MPRL 12.7 % low on 11708328 and 7.7 % "
-                   "high on 7699227, 11708328's harmonics 4-20 2.9x the measured share, 7699227's card 8.7 % of "
-                   "PPRL RMS (a constant 3.3 kN) and its diagnosed pump card 8.5 % of range (docs/realism.md)")
+@pytest.mark.xfail(strict=True, reason="issue 27's goal, not reached yet: 11708328's PPRL 8.9 % and MPRL 7.9 % "
+                   "low, its harmonics 4-20 3.2x the measured share; 7699227's MPRL 7.7 % high, its card 8.7 % "
+                   "of PPRL RMS (a constant 3.3 kN) and its diagnosed pump card 8.5 % of range (docs/realism.md)")
 @pytest.mark.parametrize("well", WELLS)
 def test_validate_meets_the_issue_goal(figures, well):
     d = figures[well]
@@ -436,7 +440,8 @@ def test_vendor_prediction_is_read_checked_and_scored_like_srenv(tmp_path, figur
 def test_card_difference_splits_into_level_and_shape(figures, well):
     """card RMS² = offset² + shape RMS² (the same difference, resampled on position); 7699227's prediction sits a
     constant 3.3 kN above its measured card (docs/realism.md: a load cell's zero or the string's weight) and its
-    shape is within 6 % of PPRL; 11708328's error is mostly its shape (5.7 %, held here)."""
+    shape is within 6 % of PPRL; 11708328's error is mostly its shape (4.5 %), over a level 1.4 kN low since
+    its pump state is read off the load lines (a fluid load too small for the top of its upstroke)."""
     d = figures[well]
     pprl = d["measured_pprl_n"]
     total = math.hypot(100 * d["card_offset_n"] / pprl, d["card_shape_rms_pct_of_pprl"])
@@ -444,7 +449,7 @@ def test_card_difference_splits_into_level_and_shape(figures, well):
     if well == "7699227":
         assert 2500 < d["card_offset_n"] < 4000 and d["card_shape_rms_pct_of_pprl"] < 6.0
     else:
-        assert abs(d["card_offset_n"]) < 1000 and d["card_shape_rms_pct_of_pprl"] < 6.0
+        assert -2000 < d["card_offset_n"] < -1000 and d["card_shape_rms_pct_of_pprl"] < 5.0
 
 
 def test_a_synthesised_position_channel_is_recognised_and_replaced_by_the_records_unit():
