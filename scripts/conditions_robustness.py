@@ -17,7 +17,11 @@ wells, used to choose between models (docs/conditions.md, runs 3 and 4). Two che
   pre-registered check): (e1) the shipped configs, each with a 1.5-in sinker-bar bottom over 10 % of the string and
   a 2 kN plunger drag, and with a 1-in fiberglass top over 50 % and a 1 kN drag; (e2) the v2-family check wells at
   their installed point, each with equipment drawn by the card set's own function (``card_equipment``) from a
-  stream of its own, deviation to 60 deg included.
+  stream of its own, deviation to 60 deg included;
+* ``field_record_well`` (reported only, never deciding): the described field well ``--field-record`` (7699227) as
+  ``srenv validate`` builds it from the record's description and recorded surface motion, the pump full
+  (``pump.fillage`` 1), in every condition at one severity; the record's load card and the vendor's verdict are
+  not read for it beyond what ``validate.pump_state`` reads (the record's own intake pressure where it has one).
 
     python scripts/conditions_robustness.py [--models M.npz ...]
         [--checks out_of_family v2_family v2_family_synth v2_family_smooth field_equipment]
@@ -55,6 +59,7 @@ EQUIPMENT_STREAM = 0xE0E7  # check (e2)'s equipment draws: a stream no card set 
 # check (e1)'s two fixed variants (run 7's pre-registration)
 FIXED_EQUIPMENT = {"sinker": ce.Equipment(2000.0, 38.1, 0.10), "fiberglass": ce.Equipment(1000.0, 0.0, 0.0, 25.4, 0.5)}
 E1_TAU_S = 0.02
+FIELD_RECORD = "/work/shared/field/7699227.json"
 
 
 def cards(wells, severities, taus):
@@ -133,6 +138,26 @@ def equipment_cards(wells, n_wells: int, severity: float):
         yield from _conditions(f"e2/clscheck-{k}", well, severity)
 
 
+def record_well_cards(path: str, severity: float):
+    """Check (f): the described well of a field record, simulated in every condition (its motion file lives in a
+    temporary directory for the simulations)."""
+    import os
+    import tempfile
+
+    from srenv.analysis.field_model import well_config
+    from srenv.config import apply_overrides, config_from_dict
+    from srenv.tools.validate import _card_motion, _write_motion_csv, pump_state, read_record
+
+    rec = read_record(path, None, False)
+    with tempfile.TemporaryDirectory(prefix="srenv-check-f-") as work:
+        csv = os.path.join(work, "motion.csv")
+        _write_motion_csv(_card_motion(rec), csv)
+        st = pump_state(rec, work)
+        well = config_from_dict(apply_overrides(well_config(rec, csv, st["intake_pressure_pa"], st["fillage"],
+                                                            st["plunger_friction_n"]), {"pump.fillage": 1.0}))
+        yield from _conditions(f"f/{os.path.basename(path)}", well, severity)
+
+
 def synthesised(stream):
     """The same cards with the position a load-only controller writes (the last stroke's trace: one period,
     samples at equal times, the period's end not repeated)."""
@@ -185,13 +210,15 @@ def healthy_by_corner(full_called: dict) -> dict:
 def main() -> None:
     ap = argparse.ArgumentParser()
     ap.add_argument("--models", nargs="+", default=[str(DEFAULT_MODEL)])
-    ap.add_argument("--checks", nargs="+", choices=("out_of_family", *V2_CHECKS, "field_equipment"),
+    ap.add_argument("--checks", nargs="+", choices=("out_of_family", *V2_CHECKS, "field_equipment",
+                                                        "field_record_well"),
                     default=["out_of_family", "v2_family"])
     ap.add_argument("--wells", nargs="+", default=list(WELLS))
     ap.add_argument("--severities", type=float, nargs="+", default=[0.4, 0.8])
     ap.add_argument("--taus", type=float, nargs="+", default=[0.0, 0.02])
     ap.add_argument("--v2-wells", type=int, default=12)
     ap.add_argument("--v2-severity", type=float, default=0.6)
+    ap.add_argument("--field-record", default=FIELD_RECORD, help="check field_record_well's record (JSON)")
     ap.add_argument("--out", help="also write the lines as one JSON report")
     a = ap.parse_args()
     clfs = {m: CardClassifier.load(m) for m in a.models}
@@ -207,18 +234,21 @@ def main() -> None:
         checks["v2_family_smooth"] = score(clfs, smoothed(v2))
     if "field_equipment" in a.checks:
         checks["field_equipment"] = score(clfs, equipment_cards(a.wells, a.v2_wells, a.v2_severity))
+    reported = {}  # checks outside the score (run 7's check (f))
+    if "field_record_well" in a.checks:
+        reported["field_record_well"] = score(clfs, record_well_cards(a.field_record, a.v2_severity))
     for check in V2_CHECKS:
         for r in checks.get(check, {}).values():
             r["healthy_full_by_corner"] = healthy_by_corner(r["full_called"])
     rows = []
     for m in clfs:
-        row = {"model": m, **{k: v[m] for k, v in checks.items()},
-               "score": round(sum(v[m]["right"] / max(v[m]["of"], 1) for v in checks.values()) / len(checks), 4)}
+        row = {"model": m, **{k: v[m] for k, v in checks.items()}, **{k: v[m] for k, v in reported.items()},
+               "score": round(sum(v[m]["right"] / max(v[m]["of"], 1) for v in checks.values()) / max(len(checks), 1), 4)}
         rows.append(row)
         print(json.dumps(row))
     if a.out:
         with open(a.out, "w") as f:
-            json.dump({"checks": list(checks), "v2_wells": a.v2_wells, "v2_severity": a.v2_severity,
+            json.dump({"checks": list(checks), "reported_only": list(reported), "v2_wells": a.v2_wells, "v2_severity": a.v2_severity,
                        "severities": a.severities, "taus": a.taus,
                        **({"smooth_k": SMOOTH_K} if "v2_family_smooth" in checks else {}), "models": rows}, f, indent=1)
             f.write("\n")

@@ -118,3 +118,24 @@ def test_sinker_bars_stay_thinner_than_the_plunger() -> None:
     assert ce.string_with(tapers, eq, 57.15)[-1]["diameter_mm"] == 44.45
     assert ce.string_with(tapers, eq, 44.45)[-1]["diameter_mm"] == 38.1
     assert ce.string_with(tapers, eq, 31.75)[-1]["diameter_mm"] == 28.575
+
+
+def test_robustness_check_e_runs_the_sets_equipment_on_shipped_and_check_wells() -> None:
+    import importlib.util
+    from pathlib import Path
+
+    from srenv.analysis.card_classifier import DEFAULT_MODEL, CardClassifier
+
+    path = Path(__file__).parents[3] / "scripts" / "conditions_robustness.py"
+    spec = importlib.util.spec_from_file_location("conditions_robustness", path)
+    mod = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(mod)
+    stream = list(mod.equipment_cards(["default"], 1, 0.6))
+    where = {w for w, _, _ in stream}
+    assert where == {"e1/default/sinker", "e1/default/fiberglass", "e2/clscheck-0"}
+    assert sum(1 for w, lab, _ in stream if lab == "full") == 3  # the full pump on each well
+    assert mod.FIXED_EQUIPMENT["sinker"].sinker_bar_diameter_mm == 38.1
+    r = mod.score({"m": CardClassifier.load(DEFAULT_MODEL)}, stream)["m"]
+    parts = r["right_of_by_part"]
+    assert parts["e1"][1] + parts["e2"][1] == r["of"] == len(stream)
+    assert parts["e1"][0] + parts["e2"][0] == r["right"]
