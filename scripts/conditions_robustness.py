@@ -12,10 +12,19 @@ wells, used to choose between models (docs/conditions.md, runs 3 and 4). Two che
   period, phased on its bottom; the loads kept by time; run 5's pre-registered check);
 * ``v2_family_smooth``: the v2-family check's cards, every one (position and load alike) low-passed by
   ``card_augment.spectral_lowpass`` at a fixed corner harmonic K = 10 (a real string and load cell smooth the card;
-  run 6's pre-registered check).
+  run 6's pre-registered check);
+* ``field_equipment``: the full pump and every other condition at one severity on wells with field equipment (run 7's
+  pre-registered check): (e1) the shipped configs, each with a 1.5-in sinker-bar bottom over 10 % of the string and
+  a 2 kN plunger drag, and with a 1-in fiberglass top over 50 % and a 1 kN drag; (e2) the v2-family check wells at
+  their installed point, each with equipment drawn by the card set's own function (``card_equipment``) from a
+  stream of its own, deviation to 60 deg included;
+* ``field_record_well`` (reported only, never deciding): the described field well ``--field-record`` (7699227) as
+  ``srenv validate`` builds it from the record's description and recorded surface motion, the pump full
+  (``pump.fillage`` 1), in every condition at one severity; the record's load card and the vendor's verdict are
+  not read for it beyond what ``validate.pump_state`` reads (the record's own intake pressure where it has one).
 
     python scripts/conditions_robustness.py [--models M.npz ...]
-        [--checks out_of_family v2_family v2_family_synth v2_family_smooth]
+        [--checks out_of_family v2_family v2_family_synth v2_family_smooth field_equipment]
         [--wells NAME ...] [--severities 0.4 0.8] [--taus 0 0.02] [--v2-wells 12] [--v2-severity 0.6]
         [--out REPORT.json]
 
@@ -36,6 +45,7 @@ from srenv.analysis.condition_card import condition_config, simulate_card
 from srenv.config import load_config
 from srenv.errors import ConfigError, NumericFailure, SolverFailure
 from srenv.physics.conditions import LABELS
+from srenv.task import card_equipment as ce
 
 WELLS = ("conventional_fig4", "default", "paper_fig3_vertical", "paper_fig4_deviated", "paper_fig6_nonmonotone",
          "paper_fig7_pullout")
@@ -45,6 +55,11 @@ CORNERS = (("spm_min", "stroke_min"), ("spm_min", "stroke_max"), ("spm_max", "st
 FAILED = (ConfigError, NumericFailure, SolverFailure, ValueError)
 SMOOTH_K = 10.0  # the v2_family_smooth check's corner harmonic (run 6, fixed before any measurement)
 V2_CHECKS = ("v2_family", "v2_family_synth", "v2_family_smooth")
+EQUIPMENT_STREAM = 0xE0E7  # check (e2)'s equipment draws: a stream no card set draws from
+# check (e1)'s two fixed variants (run 7's pre-registration)
+FIXED_EQUIPMENT = {"sinker": ce.Equipment(2000.0, 38.1, 0.10), "fiberglass": ce.Equipment(1000.0, 0.0, 0.0, 25.4, 0.5)}
+E1_TAU_S = 0.02
+FIELD_RECORD = "/work/shared/field/7699227.json"
 
 
 def cards(wells, severities, taus):
@@ -87,6 +102,62 @@ def v2_cards(n_wells: int, severity: float):
                 yield f"clscheck-{k}/{spm_end}/{stroke_end}", label, card
 
 
+def _conditions(where: str, well, severity: float, extra: dict | None = None):
+    """(where, label, card) of the full pump and every other condition at ``severity`` the config accepts."""
+    for label in LABELS:
+        try:
+            card = simulate_card(condition_config(well, label, 0.0 if label == "full" else severity, extra))
+        except FAILED:
+            continue
+        yield where, label, card
+
+
+def equipment_cards(wells, n_wells: int, severity: float):
+    """Check (e): (e1) the shipped configs in FIXED_EQUIPMENT's variants, (e2) the v2-family check wells with drawn
+    field equipment, at their installed operating point."""
+    import numpy as np
+
+    from srenv.task import v2_physics
+    from srenv.task import well_family as wf
+
+    for name in wells:
+        for variant, eq in FIXED_EQUIPMENT.items():
+            try:
+                well = ce.with_equipment(load_config(name), eq)
+            except FAILED:
+                continue
+            yield from _conditions(f"e1/{name}/{variant}", well, severity,
+                                   {"damping.stiffness_proportional_s": E1_TAU_S})
+    for k in range(n_wells):
+        eq = ce.draw_equipment(np.random.default_rng([EQUIPMENT_STREAM, k]))
+        spec = wf.spec_from_params(ce.deviated(wf.draw_params(k, stream=CHECK_STREAM), eq), f"clscheck-{k}")
+        try:
+            well = ce.with_equipment(load_config(spec.cfg, v2_physics.overrides(spec)), eq)
+        except FAILED:
+            continue
+        yield from _conditions(f"e2/clscheck-{k}", well, severity)
+
+
+def record_well_cards(path: str, severity: float):
+    """Check (f): the described well of a field record, simulated in every condition (its motion file lives in a
+    temporary directory for the simulations)."""
+    import os
+    import tempfile
+
+    from srenv.analysis.field_model import well_config
+    from srenv.config import apply_overrides, config_from_dict
+    from srenv.tools.validate import _card_motion, _write_motion_csv, pump_state, read_record
+
+    rec = read_record(path, None, False)
+    with tempfile.TemporaryDirectory(prefix="srenv-check-f-") as work:
+        csv = os.path.join(work, "motion.csv")
+        _write_motion_csv(_card_motion(rec), csv)
+        st = pump_state(rec, work)
+        well = config_from_dict(apply_overrides(well_config(rec, csv, st["intake_pressure_pa"], st["fillage"],
+                                                            st["plunger_friction_n"]), {"pump.fillage": 1.0}))
+        yield from _conditions(f"f/{os.path.basename(path)}", well, severity)
+
+
 def synthesised(stream):
     """The same cards with the position a load-only controller writes (the last stroke's trace: one period,
     samples at equal times, the period's end not repeated)."""
@@ -118,6 +189,10 @@ def score(clfs: dict, stream) -> dict:
             r["right_by_label"][label] += got == label
             if label == "full":
                 r["full_called"][where] = got
+            if where[:3] in ("e1/", "e2/"):  # check (e)'s two parts, reported apart
+                part = r.setdefault("right_of_by_part", {}).setdefault(where[:2], [0, 0])
+                part[0] += got == label
+                part[1] += 1
     for r in out.values():
         r["accuracy"] = round(r["right"] / max(r["of"], 1), 3)
     return out
@@ -135,13 +210,15 @@ def healthy_by_corner(full_called: dict) -> dict:
 def main() -> None:
     ap = argparse.ArgumentParser()
     ap.add_argument("--models", nargs="+", default=[str(DEFAULT_MODEL)])
-    ap.add_argument("--checks", nargs="+", choices=("out_of_family", *V2_CHECKS),
+    ap.add_argument("--checks", nargs="+", choices=("out_of_family", *V2_CHECKS, "field_equipment",
+                                                        "field_record_well"),
                     default=["out_of_family", "v2_family"])
     ap.add_argument("--wells", nargs="+", default=list(WELLS))
     ap.add_argument("--severities", type=float, nargs="+", default=[0.4, 0.8])
     ap.add_argument("--taus", type=float, nargs="+", default=[0.0, 0.02])
     ap.add_argument("--v2-wells", type=int, default=12)
     ap.add_argument("--v2-severity", type=float, default=0.6)
+    ap.add_argument("--field-record", default=FIELD_RECORD, help="check field_record_well's record (JSON)")
     ap.add_argument("--out", help="also write the lines as one JSON report")
     a = ap.parse_args()
     clfs = {m: CardClassifier.load(m) for m in a.models}
@@ -155,18 +232,23 @@ def main() -> None:
         checks["v2_family_synth"] = score(clfs, synthesised(v2))
     if "v2_family_smooth" in a.checks:
         checks["v2_family_smooth"] = score(clfs, smoothed(v2))
+    if "field_equipment" in a.checks:
+        checks["field_equipment"] = score(clfs, equipment_cards(a.wells, a.v2_wells, a.v2_severity))
+    reported = {}  # checks outside the score (run 7's check (f))
+    if "field_record_well" in a.checks:
+        reported["field_record_well"] = score(clfs, record_well_cards(a.field_record, a.v2_severity))
     for check in V2_CHECKS:
         for r in checks.get(check, {}).values():
             r["healthy_full_by_corner"] = healthy_by_corner(r["full_called"])
     rows = []
     for m in clfs:
-        row = {"model": m, **{k: v[m] for k, v in checks.items()},
-               "score": round(sum(v[m]["right"] / max(v[m]["of"], 1) for v in checks.values()) / len(checks), 4)}
+        row = {"model": m, **{k: v[m] for k, v in checks.items()}, **{k: v[m] for k, v in reported.items()},
+               "score": round(sum(v[m]["right"] / max(v[m]["of"], 1) for v in checks.values()) / max(len(checks), 1), 4)}
         rows.append(row)
         print(json.dumps(row))
     if a.out:
         with open(a.out, "w") as f:
-            json.dump({"checks": list(checks), "v2_wells": a.v2_wells, "v2_severity": a.v2_severity,
+            json.dump({"checks": list(checks), "reported_only": list(reported), "v2_wells": a.v2_wells, "v2_severity": a.v2_severity,
                        "severities": a.severities, "taus": a.taus,
                        **({"smooth_k": SMOOTH_K} if "v2_family_smooth" in checks else {}), "models": rows}, f, indent=1)
             f.write("\n")

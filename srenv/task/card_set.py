@@ -19,6 +19,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..physics.conditions import LABELS
+from . import card_equipment
 
 N_POINTS = 256          # samples per card, equally spaced in time over the last stroke
 CARDS_PER_WELL = 4
@@ -70,6 +71,7 @@ class Draw:
     oil_compressibility_per_pa: float = 0.0  # 0: incompressible liquid
     unanchored: bool = False
     surface: str = "family"  # "v2": driven by the well's v2 unit (its geometry drawn from the well's seed)
+    equipment: card_equipment.Equipment | None = None  # --equipment field (run 7): drag, sinker bars, fiberglass
 
 
 def _corner_weighted(rng) -> float:
@@ -78,7 +80,8 @@ def _corner_weighted(rng) -> float:
     return 0.0 if u < CORNER_SHARE else (1.0 if u < 2 * CORNER_SHARE else v)
 
 
-def draw(seed: int, index: int, attempt: int, labels: tuple[str, ...], surface: str = "family") -> Draw:
+def draw(seed: int, index: int, attempt: int, labels: tuple[str, ...], surface: str = "family",
+         equipment: str = "none") -> Draw:
     rng = np.random.default_rng(np.random.SeedSequence([seed, index, attempt]))
     well_seed = WELL_SEED0 + seed * 1_000_003 + index // CARDS_PER_WELL + attempt * 100_000_007
     label = labels[int(rng.integers(len(labels)))]
@@ -97,8 +100,13 @@ def draw(seed: int, index: int, attempt: int, labels: tuple[str, ...], surface: 
         base = (_corner_weighted(rng), _corner_weighted(rng), base[2], False)
     elif surface != "family":
         raise ValueError(f"surface = {surface!r}: expected one of {', '.join(SURFACES)}")
+    if equipment not in card_equipment.EQUIPMENT:
+        raise ValueError(f"equipment = {equipment!r}: expected one of {', '.join(card_equipment.EQUIPMENT)}")
+    # drawn after every older field (the v2 surface's too): a set without it is what it was
+    eq = card_equipment.draw_equipment(rng) if equipment == "field" else None
     return Draw(well_seed, label, severity, *base, kv_tau_s=tau, column_mass=column_mass,
-                oil_compressibility_per_pa=c_oil if compressible else 0.0, unanchored=unanchored, surface=surface)
+                oil_compressibility_per_pa=c_oil if compressible else 0.0, unanchored=unanchored, surface=surface,
+                equipment=eq)
 
 
 def field_overrides(d: Draw, well) -> dict[str, object]:
@@ -147,8 +155,8 @@ def card_config(d: Draw):
     from ..analysis.condition_card import condition_config
     from .well_family import draw_params, spec_from_params
 
-    spec = spec_from_params(draw_params(d.well_seed), f"card{d.well_seed}")
-    well = spec.cfg
+    spec = spec_from_params(card_equipment.deviated(draw_params(d.well_seed), d.equipment), f"card{d.well_seed}")
+    well = card_equipment.with_equipment(spec.cfg, d.equipment)  # before the condition: heavy oil adds to the drag
     c = well.control
     spm = round(c.spm_min + d.spm * (c.spm_max - c.spm_min), 3)
     stroke = round(c.stroke_min_m + d.stroke_length_m * (c.stroke_max_m - c.stroke_min_m), 4)
@@ -182,13 +190,14 @@ def resample(t: np.ndarray, y: np.ndarray, n: int = N_POINTS) -> np.ndarray:
     return np.interp(tt, t, y)
 
 
-def make_card(seed: int, index: int, labels: tuple[str, ...], surface: str = "family") -> dict:
+def make_card(seed: int, index: int, labels: tuple[str, ...], surface: str = "family",
+              equipment: str = "none") -> dict:
     """Card ``index`` of set ``seed``: arrays, label, severity, the well's numbers."""
     from ..analysis.condition_card import simulate_card
     from ..errors import ConfigError, NumericFailure, SolverFailure
 
     for attempt in range(MAX_ATTEMPTS):
-        d = draw(seed, index, attempt, labels, surface)
+        d = draw(seed, index, attempt, labels, surface, equipment)
         try:
             cfg = card_config(d)
             card = simulate_card(cfg)
@@ -206,6 +215,8 @@ def make_card(seed: int, index: int, labels: tuple[str, ...], surface: str = "fa
                 "kv_tau_s": cfg.damping.stiffness_proportional_s, "fluid_column_mass_kg": cfg.pump.fluid_column_mass_kg,
                 "liquid_compressibility_per_pa": cfg.pump.liquid_compressibility_per_pa,
                 "tubing_anchored": float(cfg.tubing.anchored)}
+        if d.equipment is not None:
+            well.update(card_equipment.columns(cfg))
         return {"arrays": arrays, "label": d.label, "severity": d.severity, "well_seed": d.well_seed,
                 "fillage": card.fillage, "period_s": float(card.t_s[-1]), "well": well,
                 "surface": surface, "unit_geometry": unit_geometry(cfg)}
@@ -226,6 +237,9 @@ def columns(cards: list[dict]) -> dict[str, np.ndarray]:
         out[k] = np.array([c["well"][k] for c in cards], dtype=np.float64)
     if any(c.get("surface", "family") != "family" for c in cards):  # a column of --surface v2 sets only
         out["unit_geometry"] = np.array([c["unit_geometry"] for c in cards])
+    if any(card_equipment.COLUMNS[0] in c["well"] for c in cards):  # columns of --equipment field sets only
+        for k in card_equipment.COLUMNS:
+            out[k] = np.array([c["well"][k] for c in cards], dtype=np.float64)
     return out
 
 
@@ -249,7 +263,8 @@ def load_cards(path: str) -> dict[str, np.ndarray]:
 
 def described_well(well_seed: int):
     """The description an engineer holds of a card's well: the family well of its seed in the *full* condition (the
-    well and the liquid over its pump, not its condition, nor the card's drawn damping, operating point or unit)."""
+    well and the liquid over its pump, not its condition, nor the card's drawn damping, operating point or unit; nor
+    an equipment set's drag, string and deviation: runs P2 and P3 read sets 2 and 4 only)."""
     from ..analysis.condition_card import condition_config
     from .well_family import draw_params, spec_from_params
 

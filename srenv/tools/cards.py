@@ -1,4 +1,5 @@
-"""``srenv cards --n N --out DIR [--conditions ...] [--seed S] [--workers W] [--surface family|v2]``: a labelled synthetic card set.
+"""``srenv cards --n N --out DIR [--conditions ...] [--seed S] [--workers W] [--surface family|v2]
+[--equipment none|field]``: a labelled synthetic card set.
 
 Writes ``DIR/cards.npz`` (columns in docs/cards_dataset.md; the same seed gives the same bytes whatever
 the number of workers) and ``DIR/dataset_card.json`` (the schema, the labels, the split counts). Cards are
@@ -41,6 +42,10 @@ def add_parser(sub) -> None:
                    help="family (default; sets 1-3): harmonic or the nearest catalogue unit, operating point "
                         "uniform; v2: each well's own v2 unit (conventional / Mark II / air-balanced), the "
                         "operating corners populated (docs/cards_dataset.md)")
+    c.add_argument("--equipment", choices=("none", "field"), default="none",
+                   help="none (default; sets 1-6): the family's API steel strings, 500 N plunger drag, deviation to "
+                        "35 deg; field (run 7): per card a plunger drag of 0.2-4 kN, sinker bars, a fiberglass top, "
+                        "deviation to 60 deg (docs/cards_dataset.md)")
     c.add_argument("--no-progress", action="store_true", help="no progress bar")
     c.set_defaults(func=main)
 
@@ -77,11 +82,11 @@ def _one(job: tuple) -> dict:
 
 
 def simulate_set(n: int, seed: int, labels: tuple[str, ...], workers: int, progress: bool,
-                 surface: str = "family") -> list[dict]:
+                 surface: str = "family", equipment: str = "none") -> list[dict]:
     """Cards 0..n-1 of set ``seed``, in order (each card depends on (seed, index) only)."""
     from tqdm import tqdm
 
-    jobs = [(seed, i, labels, surface) for i in range(n)]
+    jobs = [(seed, i, labels, surface, equipment) for i in range(n)]
     bar = tqdm(total=n, desc="cards", unit="card", file=sys.stderr, disable=not progress)
     try:
         if workers <= 1:
@@ -105,18 +110,21 @@ def simulate_set(n: int, seed: int, labels: tuple[str, ...], workers: int, progr
         bar.close()
 
 
-def dataset_card(cols: dict, seed: int, labels: tuple[str, ...], surface: str = "family") -> dict:
+def dataset_card(cols: dict, seed: int, labels: tuple[str, ...], surface: str = "family",
+                 equipment: str = "none") -> dict:
     import numpy as np
 
+    from ..task.card_equipment import COLUMNS
     from ..task.card_set import ARRAYS, N_POINTS, SPLITS, WELL_COLUMNS
 
     names = list(cols["label_names"])
     return {"format": "srenv card set 1", "file": "cards.npz", "seed": seed, "n_cards": len(cols["label"]),
             "points_per_card": N_POINTS, "labels": names, "conditions_drawn": list(labels),
-            "arrays": list(ARRAYS), "well_columns": list(WELL_COLUMNS),
+            "arrays": list(ARRAYS), "well_columns": list(WELL_COLUMNS) + (list(COLUMNS) if equipment != "none" else []),
             "splits": {s: int(np.sum(cols["split"] == s)) for s in SPLITS},
             "cards_per_label": {names[k]: int(np.sum(cols["label"] == k)) for k in range(len(names))},
-            "doc": "docs/cards_dataset.md", **({"surface": surface} if surface != "family" else {})}
+            "doc": "docs/cards_dataset.md", **({"surface": surface} if surface != "family" else {}),
+            **({"equipment": equipment} if equipment != "none" else {})}
 
 
 def main(args: argparse.Namespace) -> int:
@@ -128,12 +136,12 @@ def main(args: argparse.Namespace) -> int:
     labels = args.conditions or LABELS
     workers = args.workers or max(1, len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity")
                                   else (os.cpu_count() or 1))
-    surface = getattr(args, "surface", "family")
-    cards = simulate_set(args.n, args.seed, labels, min(workers, args.n), not args.no_progress, surface)
+    surface, equipment = getattr(args, "surface", "family"), getattr(args, "equipment", "none")
+    cards = simulate_set(args.n, args.seed, labels, min(workers, args.n), not args.no_progress, surface, equipment)
     cols = columns(cards)
     out.mkdir(exist_ok=True)
     atomic_write(out / "cards.npz", lambda tmp: write_npz(tmp, cols))
-    meta = dataset_card(cols, args.seed, labels, surface)
+    meta = dataset_card(cols, args.seed, labels, surface, equipment)
     atomic_write(out / "dataset_card.json",
                  lambda tmp: Path(tmp).write_text(json.dumps(meta, indent=1, sort_keys=True) + "\n"))
     print(json.dumps({"out": str(out), "n_cards": meta["n_cards"], "splits": meta["splits"]}))

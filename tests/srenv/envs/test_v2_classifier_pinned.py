@@ -1,5 +1,5 @@
 """srenv/SuckerRod-v2's observation carries the card classifier's probabilities, so v2 reads run 2's model, pinned
-as package data (``srenv/models/classifier_run2.npz``), while ``srenv classify`` ships a later run's (run 5's,
+as package data (``srenv/models/classifier_run2.npz``), while ``srenv classify`` ships a later run's (run 7's,
 docs/conditions.md): v2 keeps its numbers."""
 
 from __future__ import annotations
