@@ -61,6 +61,7 @@ class SurfaceMotion:
         # a stroke's top velocity and start state recur stroke after stroke at one setpoint: kept per
         # (SPM, stroke, steps) (the same arrays, computed once; the unit's linkage costs ~0.2 ms a stroke)
         self._strokes: dict[tuple, tuple[np.ndarray, tuple[float, float]]] = {}
+        self._columns: dict = {}  # and a stroke's gearbox columns (gearbox.stroke_columns)
         if self.kind == "measured":
             self._measured = load_measured_motion(cfg.measured_card_csv, cfg.measured_spm)
         # surface.motor (opt-in): the crank speed follows the gearbox torque (motor.py); None = constant speed
@@ -187,5 +188,5 @@ class SurfaceMotion:
             counterbalance_moment_nm=moment,
             counterbalance_offset_rad=offset_rad,
             motor_efficiency=self.cfg.motor_efficiency,
-            crank=None if self.motor is None else (lambda r: self.motor.crank_of(unit, r)),
+            crank=None if self.motor is None else (lambda r: self.motor.crank_of(unit, r)), keep=self._columns,
         )
