@@ -20,6 +20,7 @@ stroke: the setting a field crew approximates by "balancing" the unit on equal u
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from dataclasses import dataclass
 from typing import TYPE_CHECKING
@@ -53,9 +54,19 @@ class GearboxReport:
     time_step_s: FloatArray
     torque_rating_nm: float
     counterbalance_moment_nm: float
-    optimal_counterbalance_nm: float
+    optimal_counterbalance_nm: float | None  # None while deferred (see completed)
     motor_efficiency: float
     air_balanced: bool = False  # the counterbalance is a cylinder force B at the polished rod (N), not M
+    # (w_i, s_i) of optimal_counterbalance_nm while it and the powers are deferred (analyse(defer=True)): the
+    # summary then holds None for them until completed() computes them
+    deferred: tuple | None = None
+
+    def completed(self) -> GearboxReport:
+        """The report with its deferred figures computed (itself when none are): the figures analyse computes
+        without ``defer``."""
+        if self.deferred is None:
+            return self
+        return dataclasses.replace(self, optimal_counterbalance_nm=_optimal(*self.deferred), deferred=None)
 
     @property
     def peak_torque_nm(self) -> float:
@@ -90,11 +101,13 @@ class GearboxReport:
     def _motor_power_w(self, total_s: float | None = None) -> float:
         return self._time_mean(np.maximum(self.crank_power_w, 0.0), total_s) / self.motor_efficiency
 
-    def summary(self) -> dict[str, float]:
+    def summary(self) -> dict[str, float | None]:
         """The JSON keys :func:`srenv.stroke_summary.summarize` adds for a conventional unit (the properties'
-        arithmetic with the peak and the steps' sum taken once: they were taken two and three times)."""
+        arithmetic with the peak and the steps' sum taken once: they were taken two and three times). A report
+        with deferred figures gives None for the optimal counterbalance and the powers, in their places."""
         peak = self.peak_torque_nm
-        total_s = np.sum(self.time_step_s)
+        later = self.deferred is not None
+        total_s = None if later else np.sum(self.time_step_s)
         return {
             "peak_gearbox_torque_nm": peak,
             "max_gearbox_torque_nm": float(np.max(self.net_torque_nm)),
@@ -105,8 +118,8 @@ class GearboxReport:
                 "optimal_counterbalance_force_n": self.optimal_counterbalance_nm} if self.air_balanced else
                {"counterbalance_moment_nm": self.counterbalance_moment_nm,
                 "optimal_counterbalance_nm": self.optimal_counterbalance_nm}),
-            "polished_rod_power_w": self._time_mean(self.polished_rod_power_w, total_s),
-            "motor_power_w": self._motor_power_w(total_s),
+            "polished_rod_power_w": None if later else self._time_mean(self.polished_rod_power_w, total_s),
+            "motor_power_w": None if later else self._motor_power_w(total_s),
         }
 
 
@@ -209,11 +222,13 @@ def analyse(
     counterbalance_offset_rad: float = 0.0,
     motor_efficiency: float = 1.0,
     factors: tuple[FloatArray, FloatArray] | None = None,
+    defer: bool = False,
 ) -> GearboxReport:
     """Torque and power at each sample (arrays of equal length; velocity upward, ω > 0). On an air-balanced
     unit ``counterbalance_moment_nm`` is the cylinder's force B at the polished rod, in N. ``factors``: the
     unit's (torque factor, counterbalance arm) at these angles with this offset, when the caller keeps them
-    (:func:`stroke_columns`)."""
+    (:func:`stroke_columns`). ``defer``: the optimal counterbalance (and the summary's powers) left for
+    :meth:`GearboxReport.completed` (a stroke whose figures may never be read: srenv.task.interval)."""
     if not 0.0 < motor_efficiency <= 1.0:
         raise ValueError(f"motor_efficiency = {motor_efficiency!r}: expected a number in (0, 1]")
     theta = np.asarray(crank_angle_rad, dtype=float)
@@ -227,25 +242,32 @@ def analyse(
     su = unit.geometry.structural_unbalance_n
     if unit.air_balanced:  # the torque by net_torque_nm: its 0·sin(θ + τ + φ) signs the torque's exact zeros
         torque = np.asarray(unit.net_torque_nm(theta, load, moment, counterbalance_offset_rad, force))
-        optimal = _optimal(tf * (load - su - 0.0), tf)
+        well, arm = tf * (load - su - 0.0), tf
     else:  # net_torque_nm's arithmetic (force = 0)
         well = tf * (load - su - force)
         arm = unit.counterbalance_arm(theta, counterbalance_offset_rad) if factors is None else factors[1]
         torque = well - moment * arm
-        optimal = _optimal(well, arm)
     shape = theta.shape
     return GearboxReport(
         crank_angle_rad=theta,
         net_torque_nm=torque,
         polished_rod_power_w=load * np.asarray(polished_rod_velocity_m_s, dtype=float),
-        crank_power_w=torque * np.broadcast_to(np.asarray(crank_speed_rad_s, dtype=float), shape),
-        time_step_s=np.broadcast_to(np.asarray(time_step_s, dtype=float), shape).copy(),
+        crank_power_w=torque * _of_shape(crank_speed_rad_s, shape),
+        time_step_s=np.array(_of_shape(time_step_s, shape)),
         torque_rating_nm=unit.geometry.torque_rating_nm,
         counterbalance_moment_nm=float(counterbalance_moment_nm),
-        optimal_counterbalance_nm=optimal,
+        optimal_counterbalance_nm=None if defer else _optimal(well, arm),
         motor_efficiency=float(motor_efficiency),
         air_balanced=unit.air_balanced,
+        deferred=(well, arm) if defer else None,
     )
+
+
+def _of_shape(values: npt.ArrayLike, shape: tuple) -> FloatArray:
+    """``values`` as floats broadcast to ``shape``; np.broadcast_to (~5 µs a call) only when they are not already
+    of it (the same elements either way)."""
+    arr = np.asarray(values, dtype=float)
+    return arr if arr.shape == shape else np.broadcast_to(arr, shape)
 
 
 def stroke_crank_angle_rad(unit: ConventionalUnit, result: RunResult) -> FloatArray:
@@ -296,11 +318,12 @@ def analyse_runs(
     motor_efficiency: float = 1.0,
     crank=None,
     keep: dict | None = None,
+    defer: bool = False,
 ) -> GearboxReport:
     """:func:`analyse` over recorded strokes (``run_stroke(record=True)``), each at its own SPM; ``crank``
     (result -> (θ, ω) at its steps) replaces the constant crank speed (a motor's, ``motor.MotorDrive``). ``keep``
     (a dict the caller holds per well): one stroke at constant speed takes its setpoint's columns from it
-    (:func:`stroke_columns`; the same arrays as computed here, so the same report)."""
+    (:func:`stroke_columns`; the same arrays as computed here, so the same report). ``defer``: see :func:`analyse`."""
     if not results or any(r.trace is None or r.spm <= 0 for r in results):
         raise ValueError("gearbox analysis needs recorded strokes (record=True, SPM > 0)")
     if keep is not None and crank is None and len(results) == 1 and len(results[0].trace["t_s"]) == results[0].n_steps:
@@ -309,7 +332,7 @@ def analyse_runs(
         return analyse(unit, c.theta, r.trace["polished_rod_load_n"], r.trace["polished_rod_velocity_m_s"], c.omega,
                        c.dt, counterbalance_moment_nm=counterbalance_moment_nm,
                        counterbalance_offset_rad=counterbalance_offset_rad, motor_efficiency=motor_efficiency,
-                       factors=c.factors)
+                       factors=c.factors, defer=defer)
     columns: dict[str, list[FloatArray]] = {k: [] for k in ("theta", "load", "vel", "omega", "dt")}
     for r in results:
         n = r.n_steps
@@ -331,4 +354,5 @@ def analyse_runs(
         counterbalance_moment_nm=counterbalance_moment_nm,
         counterbalance_offset_rad=counterbalance_offset_rad,
         motor_efficiency=motor_efficiency,
+        defer=defer,
     )

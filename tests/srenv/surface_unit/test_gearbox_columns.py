@@ -73,3 +73,40 @@ def test_two_strokes_in_one_report_keep_nothing() -> None:
     rep = sim.surface.gearbox_report(runs)
     assert rep.net_torque_nm.size == sum(r.n_steps for r in runs)
     assert not sim.surface._columns
+
+
+@pytest.mark.parametrize("geometry", ["conventional", "air_balanced"])
+def test_a_deferred_summary_completes_to_the_full_one(geometry: str) -> None:
+    """stroke_figures(defer=True) leaves the optimal counterbalance and the powers None, in their places;
+    completed() gives the summary of stroke_figures without defer, key for key and in order."""
+    from srenv.task.interval import IntervalRunner, completed
+
+    sim = _sim(geometry)
+    runner = IntervalRunner(sim)
+    r = sim.run_stroke(record=True)
+    full = runner._figures(r)
+    later = runner._figures(r, defer=True)
+    assert full.gearbox is None and later.gearbox is not None
+    lazy = [k for k, v in later.summary.items() if v is None]
+    key = "optimal_counterbalance_force_n" if geometry == "air_balanced" else "optimal_counterbalance_nm"
+    assert sorted(lazy) == sorted([key, "polished_rod_power_w", "motor_power_w"])
+    assert list(later.summary) == list(full.summary)
+    assert completed(later) is later and later.gearbox is None
+    assert list(later.summary.items()) == list(full.summary.items())
+    assert sim.surface._deferring is None  # the surface reports in full again
+
+
+def test_an_intervals_last_stroke_is_complete() -> None:
+    """Every exact stroke of an interval is summarised with its gearbox figures deferred; the one the interval
+    keeps (its last, the env's observation and the reused stroke) is completed."""
+    from srenv.task.interval import IntervalRunner
+
+    sim = _sim("mark_ii")
+    runner = IntervalRunner(sim, reuse_periodic=True, carry=True, draw_at_top=True)
+    for avg, stroke in ((sim.cfg.surface.spm, 1.2), (sim.cfg.surface.spm, 1.2), (5.0, 1.0)):
+        res = runner.run(avg, stroke, 300.0)
+        assert res.exact_strokes >= 1 or res.last is not None
+        assert res.last.gearbox is None
+        assert all(v is not None for v in res.last.summary.values())
+    for f, _, _ in runner._periodic.values():
+        assert f.gearbox is None and all(v is not None for v in f.summary.values())
