@@ -278,6 +278,16 @@ def stroke_crank_angle_rad(unit: ConventionalUnit, result: RunResult) -> FloatAr
     return np.asarray(unit.crank_angle_rad(since_bottom_s, result.spm), dtype=float)
 
 
+def _step_column(result: RunResult) -> FloatArray:
+    return np.full(result.n_steps, result.duration_s / result.n_steps)
+
+
+def _constant_speed_columns(unit: ConventionalUnit, result: RunResult) -> tuple[FloatArray, FloatArray, FloatArray]:
+    """(θ, ω, step) at each recorded step of one stroke at constant crank speed."""
+    return (stroke_crank_angle_rad(unit, result), np.full(result.n_steps, 2.0 * math.pi * result.spm / 60.0),
+            _step_column(result))
+
+
 @dataclass(frozen=True)
 class StrokeColumns:
     """The columns of one constant-speed stroke that its setpoint fixes (read-only arrays): θ at each recorded
@@ -296,10 +306,9 @@ def stroke_columns(unit: ConventionalUnit, result: RunResult, offset_rad: float,
     key = (id(unit), result.spm, result.n_steps, result.duration_s, offset_rad)
     got = keep.get(key)
     if got is None or got.unit is not unit:
-        n = result.n_steps
-        theta = stroke_crank_angle_rad(unit, result)
-        cols = (theta, np.full(n, 2.0 * math.pi * result.spm / 60.0), np.full(n, result.duration_s / n),
-                np.asarray(unit.torque_factor_m(theta), dtype=float), unit.counterbalance_arm(theta, offset_rad))
+        theta, omega, dt = _constant_speed_columns(unit, result)
+        cols = (theta, omega, dt, np.asarray(unit.torque_factor_m(theta), dtype=float),
+                unit.counterbalance_arm(theta, offset_rad))
         for c in cols:
             c.setflags(write=False)  # shared by every report of the setpoint
         got = StrokeColumns(unit, *cols[:3], cols[3:])
@@ -326,8 +335,8 @@ def analyse_runs(
     (:func:`stroke_columns`; the same arrays as computed here, so the same report). ``defer``: see :func:`analyse`."""
     if not results or any(r.trace is None or r.spm <= 0 for r in results):
         raise ValueError("gearbox analysis needs recorded strokes (record=True, SPM > 0)")
-    if keep is not None and crank is None and len(results) == 1 and len(results[0].trace["t_s"]) == results[0].n_steps:
-        r = results[0]
+    r = results[0]
+    if keep is not None and crank is None and len(results) == 1 and len(r.trace["t_s"]) == r.n_steps:
         c = stroke_columns(unit, r, counterbalance_offset_rad, keep)
         return analyse(unit, c.theta, r.trace["polished_rod_load_n"], r.trace["polished_rod_velocity_m_s"], c.omega,
                        c.dt, counterbalance_moment_nm=counterbalance_moment_nm,
@@ -339,15 +348,14 @@ def analyse_runs(
         if len(r.trace["t_s"]) != n:
             raise ValueError(f"a stroke recorded {len(r.trace['t_s'])} of its {n} steps: cannot place θ")
         if crank is not None:
-            theta, omega = crank(r)
-            columns["theta"].append(theta)
-            columns["omega"].append(omega)
+            (theta, omega), dt = crank(r), _step_column(r)
         else:
-            columns["theta"].append(stroke_crank_angle_rad(unit, r))
-            columns["omega"].append(np.full(n, 2.0 * math.pi * r.spm / 60.0))
+            theta, omega, dt = _constant_speed_columns(unit, r)
+        columns["theta"].append(theta)
+        columns["omega"].append(omega)
         columns["load"].append(r.trace["polished_rod_load_n"])
         columns["vel"].append(r.trace["polished_rod_velocity_m_s"])
-        columns["dt"].append(np.full(n, r.duration_s / n))
+        columns["dt"].append(dt)
     joined = {k: np.concatenate(v) for k, v in columns.items()}
     return analyse(
         unit, joined["theta"], joined["load"], joined["vel"], joined["omega"], joined["dt"],
