@@ -20,6 +20,10 @@ Env steps/s of srenv/SuckerRod-v1 with the acceptance's protocol (train scenario
 The same for v2 against a checkout that has it (``--env-id``, both sides):
 
     python scripts/bench_interleaved.py /tmp/main . --env --env-id srenv/SuckerRod-v2 --repeats 10
+
+CPU ms per reset of a well not seen before (v2 and v1, train wells 11-40 after a warm-up reset and step on seed 3):
+
+    python scripts/bench_interleaved.py /tmp/main . --resets --repeats 6
 """
 import argparse
 import json
@@ -35,6 +39,7 @@ ap.add_argument("--strokes", type=int, default=30)
 ap.add_argument("--env", action="store_true", help="env steps/s of srenv/SuckerRod-v1 instead of strokes/s")
 ap.add_argument("--kernel", action="store_true",
                 help="srenv bench's kernel block (µs/step, the floor's, floor_ratio) instead of strokes/s")
+ap.add_argument("--resets", action="store_true", help="CPU ms per reset of an unseen well (v2, v1)")
 ap.add_argument("--fast-stepping", action="store_true", help="the after side's env with fast_stepping=True")
 ap.add_argument("--env-id", default="srenv/SuckerRod-v1", help="the env of --env (both sides: e.g. srenv/SuckerRod-v2 "
                 "against a checkout that has it)")
@@ -74,6 +79,20 @@ for label, a0 in (("full_speed", 1.0), ("vsd_minimum", -0.6)):
     out[label] = n / (time.process_time() - t0)
 print(json.dumps(out))
 '''
+reset_code = r'''
+import json, time, warnings
+warnings.filterwarnings("ignore")
+import numpy as np, gymnasium as gym
+import srenv  # noqa: F401  (registers the envs)
+out = {}
+for env_id in ("srenv/SuckerRod-v2", "srenv/SuckerRod-v1"):
+    env = gym.make(env_id, scenario="train"); env.reset(seed=3); env.step(np.array([1.0, 1.0], np.float32))
+    t0 = time.process_time()
+    for seed in range(11, 41):
+        env.reset(seed=seed)
+    out[f"reset_ms {env_id}"] = 1e3 * (time.process_time() - t0) / 30
+print(json.dumps(out))
+'''
 kernel_code = r'''
 import json
 from srenv.tools.bench_kernel import kernel_figures
@@ -89,10 +108,12 @@ for r in range(reps):
             [sys.executable, "-c", code, str(strokes)]
         if args.kernel:
             argv = [sys.executable, "-c", kernel_code]
+        if args.resets:
+            argv = [sys.executable, "-c", reset_code]
         p = subprocess.run(argv, env={"PYTHONPATH": trees[side], "PATH": "/usr/bin"}, capture_output=True, text=True,
                            check=True, cwd=trees[side])
         res[side].append(json.loads(p.stdout.strip().splitlines()[-1]))
-unit = "env steps/s" if args.env else ("" if args.kernel else "strokes/s")
+unit = "env steps/s" if args.env else ("" if args.kernel or args.resets else "strokes/s")
 for case in res["before"][0]:
     ratios = [a[case] / b[case] for a, b in zip(res["after"], res["before"])]
     print(f"{case}: before {statistics.median(x[case] for x in res['before']):.3g} {unit}, after "

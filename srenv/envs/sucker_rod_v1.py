@@ -227,8 +227,7 @@ class SuckerRodV1Env(CardWindow, gym.Env):
             self._step_fraction = task.inflow_step_fraction
             self._step_time_s = 0.5 * self.horizon_s
             level0 = cfg.inflow.initial_fluid_level_m
-        self.sim = Simulator(cfg)
-        self.sim.reset(fluid_level_m=level0)
+        self.sim = Simulator(cfg, fluid_level_m=level0)  # one reset, at the episode's level
         self.runner = self._interval_runner()
         self.econ = EconomicReward(cfg.economics)
         s = cfg.surface

@@ -158,6 +158,18 @@ def kstar(stiffness, mass, damping, dt_s: float, beta: float, gamma: float, kv_t
     return (c1 * md + cd + c2 * kd)[1:].copy(), (c1 * mo + c2 * ko)[1:].copy()
 
 
+class Shared(NamedTuple):
+    """What a run's arguments share with the next run's at one model, time step and record flag
+    (:func:`shared`); :func:`for_run` adds a run's own."""
+
+    const: np.ndarray
+    rod_friction: np.ndarray
+    side: tuple
+    model: Model                  # K* of the factor 1 on C; the others' in kstar_by_factor
+    matrices: tuple               # (stiffness, mass, damping) of the whole string, for K* at another factor
+    kstar_by_factor: dict         # damping factor -> (ksd, kso) as kstar gives them (never handed to a run)
+
+
 def build(*, dt_s: float, beta: float, gamma: float, stiffness, mass, damping: np.ndarray, load_n: np.ndarray,
           ea_len_n_m: np.ndarray, side, rod_friction: np.ndarray, valve: np.ndarray, state: State,
           scratch: Work, energy: np.ndarray, n_steps: int, record: bool, max_corrections: int,
@@ -167,9 +179,26 @@ def build(*, dt_s: float, beta: float, gamma: float, stiffness, mass, damping: n
           kv_tau_s: float = 0.0, damping_factors: tuple[float, float] = (1.0, 1.0),
           damping_now: float = 1.0) -> Stepper:
     """The kernel's arguments for one run of `n_steps` steps from the whole string's matrices (top node first:
-    ``stiffness`` and ``mass`` as (diagonal, off-diagonal), ``damping`` and ``load_n`` diagonals)."""
+    ``stiffness`` and ``mass`` as (diagonal, off-diagonal), ``damping`` and ``load_n`` diagonals): :func:`shared`
+    and :func:`for_run` (a caller that runs often keeps the first, srenv.simulation.kernel_args)."""
+    sh = shared(dt_s=dt_s, beta=beta, gamma=gamma, stiffness=stiffness, mass=mass, damping=damping, load_n=load_n,
+                ea_len_n_m=ea_len_n_m, side=side, rod_friction=rod_friction, record=record,
+                max_corrections=max_corrections, dc_max_iterations=dc_max_iterations,
+                dc_tolerance_m_s=dc_tolerance_m_s, tol_v_m_s=tol_v_m_s, tol_lambda=tol_lambda, always_qp=always_qp,
+                nonsmooth=nonsmooth, pump_pressure_force_n=pump_pressure_force_n,
+                top_pressure_force_n=top_pressure_force_n, kv_tau_s=kv_tau_s, damping_factors=damping_factors)
+    return for_run(sh, valve=valve, state=state, scratch=scratch, energy=energy, n_steps=n_steps,
+                   plunger_dir=plunger_dir, ub_extremes_m=ub_extremes_m, damping_now=damping_now)
+
+
+def shared(*, dt_s: float, beta: float, gamma: float, stiffness, mass, damping: np.ndarray, load_n: np.ndarray,
+           ea_len_n_m: np.ndarray, side, rod_friction: np.ndarray, record: bool, max_corrections: int,
+           dc_max_iterations: int, dc_tolerance_m_s: float, tol_v_m_s: float = 1e-13, tol_lambda: float = 1e-12,
+           always_qp: bool = False, nonsmooth: bool = True, pump_pressure_force_n: float = 0.0,
+           top_pressure_force_n: float = 0.0, kv_tau_s: float = 0.0,
+           damping_factors: tuple[float, float] = (1.0, 1.0)) -> Shared:
+    """The arguments of :func:`build` that do not change from run to run (the kernel reads them only)."""
     (kd, ko), (md, mo) = stiffness, mass
-    n = len(kd) - 1
     const = np.zeros(1, CONSTANTS)
     c = const[0]
     c["dt_s"], c["beta"], c["gamma"] = dt_s, beta, gamma
@@ -181,15 +210,33 @@ def build(*, dt_s: float, beta: float, gamma: float, stiffness, mass, damping: n
     c["pump_pressure_force_n"], c["top_pressure_force_n"] = pump_pressure_force_n, top_pressure_force_n
     c["kv_tau_s"] = kv_tau_s
     c["damp_up"], c["damp_down"] = damping_factors
-    c["damp_split"] = split = int(tuple(damping_factors) != (1.0, 1.0))
+    c["damp_split"] = int(tuple(damping_factors) != (1.0, 1.0))
+    ksd, kso = kstar(stiffness, mass, damping, dt_s, beta, gamma, kv_tau_s)
+    model = Model(ksd, kso, kd[1:], ko[1:], md[1:], mo[1:], damping[1:], load_n[1:], ea_len_n_m)
+    return Shared(const, rod_friction, tuple(side), model, (stiffness, mass, damping), {1.0: (ksd, kso)})
+
+
+def for_run(sh: Shared, *, valve: np.ndarray, state: State, scratch: Work, energy: np.ndarray, n_steps: int,
+            plunger_dir: int = 0, ub_extremes_m=(0.0, 0.0), damping_now: float = 1.0) -> Stepper:
+    """One run's arguments on ``sh``: its valve record, state, scratch and energy arrays, fresh progress,
+    counters and output, and a fresh copy of K* (the kernel adds the gas spring and the direction's damping to
+    its diagonal in place) with the factor on C that the last run ended with (damping per direction)."""
+    c = sh.const[0]
+    split = int(c["damp_split"])
+    factor = damping_now if split else 1.0
     progress = np.zeros(1, PROGRESS)
-    progress["damp_s"] = progress["damp_prev"] = damping_now if split else 1.0
+    progress["damp_s"] = progress["damp_prev"] = factor
     progress["plunger_dir"] = plunger_dir
     progress["ub_max_m"], progress["ub_min_m"] = ub_extremes_m
-    # K* with the factor on C that the last run ended with (damping per direction; 1 otherwise)
-    ksd, kso = kstar(stiffness, mass, damping * damping_now if split else damping, dt_s, beta, gamma, kv_tau_s)
-    model = Model(ksd, kso, kd[1:], ko[1:], md[1:], mo[1:], damping[1:], load_n[1:], ea_len_n_m)
-    out = Output(np.empty((N_REC, n_steps if record else 0)), energy, np.full(n, -np.inf), np.full(n, np.inf),
+    pair = sh.kstar_by_factor.get(factor)
+    if pair is None:
+        stiffness, mass, damping = sh.matrices
+        pair = kstar(stiffness, mass, damping * factor, float(c["dt_s"]), float(c["beta"]), float(c["gamma"]),
+                     float(c["kv_tau_s"]))
+        sh.kstar_by_factor[factor] = pair
+    model = sh.model._replace(ksd=pair[0].copy(), kso=pair[1].copy())
+    n = len(model.ksd)
+    out = Output(np.empty((N_REC, n_steps if c["record"] else 0)), energy, np.full(n, -np.inf), np.full(n, np.inf),
                  np.zeros(n, dtype=np.int64))
-    return Stepper(const, rod_friction, valve, progress, np.zeros(1, COUNTERS), model, tuple(side), state,
+    return Stepper(sh.const, sh.rod_friction, valve, progress, np.zeros(1, COUNTERS), model, sh.side, state,
                    scratch, out)

@@ -36,6 +36,7 @@ from ..physics.rod import (
 )
 from ..physics.survey import Survey
 from ..surface_unit.surface import SurfaceMotion
+from .kernel_args import KernelArgs
 from .pump_cycle import GAS_MIN_DELAY_FRACTION, PumpCycle  # noqa: F401 - GAS_MIN_DELAY_FRACTION: public
 from .run_result import TRACE_COLUMNS, RunResult, concat_traces, trace_from_record  # noqa: F401 - public
 
@@ -44,7 +45,8 @@ class Simulator(PumpCycle):
     """Exact nonsmooth FE sucker-rod string (design §2-§3)."""
 
     def __init__(self, cfg: WellConfig, *, always_qp: bool | None = None, qp_solver: str | None = None,
-                 persistent_qp: bool = False, linear_reference: bool = False) -> None:
+                 persistent_qp: bool = False, linear_reference: bool = False,
+                 fluid_level_m: float | None = None) -> None:
         self.cfg = cfg
         sim = cfg.simulation
         self.always_qp = sim.always_qp if always_qp is None else always_qp
@@ -55,8 +57,9 @@ class Simulator(PumpCycle):
         self.mesh = build_mesh(cfg.rod, sim.element_length_m)
         self.survey = Survey.from_config(cfg.survey, cfg.rod_length_m)
         self.surface = SurfaceMotion(cfg.surface)
+        self._kernel_args = KernelArgs()
         self._assemble()
-        self.reset()
+        self.reset(fluid_level_m)  # the state reset(fluid_level_m) gives: an env starts its episode here
 
     # ------------------------------------------------------------------------------------------ model
     def _assemble(self) -> None:
@@ -307,21 +310,8 @@ class Simulator(PumpCycle):
         return self._run(np.ascontiguousarray(top_velocity_m_s, dtype=float), float(dt), record, 0.0, 0.0)
 
     def _stepper(self, dt: float, n_steps: int, record: bool) -> L.Stepper:
-        """The kernel's arguments for a run (kernel_layout.build, the builder every caller uses)."""
-        s = self.cfg.simulation
-        state = L.State(self.u, self.v, self.a, self.uav, self.status, self.prev_lam, self.prev_v, self.prev_stuck)
-        return L.build(
-            dt_s=dt, beta=s.newmark_beta, gamma=s.newmark_gamma, stiffness=self._k, mass=self._m,
-            damping=self._c, load_n=self._f_all, ea_len_n_m=self._ea_len, side=self.side_force,
-            rod_friction=self._friction_record(), valve=self._valve_record(), state=state, scratch=self._work,
-            energy=self.energy, n_steps=n_steps, record=record, max_corrections=s.max_corrections,
-            dc_max_iterations=s.dc_max_iterations, dc_tolerance_m_s=s.dc_tolerance_m_s,
-            always_qp=self.always_qp, nonsmooth=not self.linear_reference,
-            pump_pressure_force_n=self.p_pump_pa * self.area_bottom_m2,
-            top_pressure_force_n=self.p_top_pa * self.area_top_m2, plunger_dir=self.pl_dir,
-            ub_extremes_m=(self._ub_max, self._ub_min), kv_tau_s=self.cfg.damping.stiffness_proportional_s,
-            damping_factors=(self.cfg.damping.upstroke_factor, self.cfg.damping.downstroke_factor),
-            damping_now=self._damp_s)
+        """The kernel's arguments for a run (kernel_layout.build's, their shared part kept: .kernel_args)."""
+        return self._kernel_args.stepper(self, dt, n_steps, record)
 
     def _run(self, va: np.ndarray, dt: float, record: bool, spm: float, stroke: float) -> RunResult:
         n_steps = len(va)

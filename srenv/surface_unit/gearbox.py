@@ -20,6 +20,7 @@ stroke: the setting a field crew approximates by "balancing" the unit on equal u
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from dataclasses import dataclass
 from typing import TYPE_CHECKING
@@ -39,6 +40,7 @@ FloatArray = npt.NDArray[np.float64]
 # far below any torque a gearbox rating resolves, so the loop ends on the tolerance, not the pass limit.
 _BISECTION_PASSES = 100
 _BISECTION_RTOL = 1e-12
+COLUMNS_KEPT = 16  # setpoints whose stroke columns a well keeps (stroke_columns)
 
 
 @dataclass(frozen=True)
@@ -52,9 +54,19 @@ class GearboxReport:
     time_step_s: FloatArray
     torque_rating_nm: float
     counterbalance_moment_nm: float
-    optimal_counterbalance_nm: float
+    optimal_counterbalance_nm: float | None  # None while deferred (see completed)
     motor_efficiency: float
     air_balanced: bool = False  # the counterbalance is a cylinder force B at the polished rod (N), not M
+    # (w_i, s_i) of optimal_counterbalance_nm while it and the powers are deferred (analyse(defer=True)): the
+    # summary then holds None for them until completed() computes them
+    deferred: tuple | None = None
+
+    def completed(self) -> GearboxReport:
+        """The report with its deferred figures computed (itself when none are): the figures analyse computes
+        without ``defer``."""
+        if self.deferred is None:
+            return self
+        return dataclasses.replace(self, optimal_counterbalance_nm=_optimal(*self.deferred), deferred=None)
 
     @property
     def peak_torque_nm(self) -> float:
@@ -63,11 +75,16 @@ class GearboxReport:
 
     @property
     def loading_pct(self) -> float:
-        return 100.0 * self.peak_torque_nm / self.torque_rating_nm
+        return self._loading_pct(self.peak_torque_nm)
 
-    def _time_mean(self, values: FloatArray) -> float:
-        # strokes at different SPM have different steps: weight each sample by its own step
-        return float(np.sum(values * self.time_step_s) / np.sum(self.time_step_s))
+    def _loading_pct(self, peak_nm: float) -> float:
+        return 100.0 * peak_nm / self.torque_rating_nm
+
+    def _time_mean(self, values: FloatArray, total_s: float | None = None) -> float:
+        # strokes at different SPM have different steps: weight each sample by its own step (``total_s``: the
+        # steps' sum when the caller has it)
+        total = np.sum(self.time_step_s) if total_s is None else total_s
+        return float(np.sum(values * self.time_step_s) / total)
 
     @property
     def mean_polished_rod_power_w(self) -> float:
@@ -79,22 +96,30 @@ class GearboxReport:
 
     @property
     def motor_power_w(self) -> float:
-        return self._time_mean(np.maximum(self.crank_power_w, 0.0)) / self.motor_efficiency
+        return self._motor_power_w()
 
-    def summary(self) -> dict[str, float]:
-        """The JSON keys :func:`srenv.stroke_summary.summarize` adds for a conventional unit."""
+    def _motor_power_w(self, total_s: float | None = None) -> float:
+        return self._time_mean(np.maximum(self.crank_power_w, 0.0), total_s) / self.motor_efficiency
+
+    def summary(self) -> dict[str, float | None]:
+        """The JSON keys :func:`srenv.stroke_summary.summarize` adds for a conventional unit (the properties'
+        arithmetic with the peak and the steps' sum taken once: they were taken two and three times). A report
+        with deferred figures gives None for the optimal counterbalance and the powers, in their places."""
+        peak = self.peak_torque_nm
+        later = self.deferred is not None
+        total_s = None if later else np.sum(self.time_step_s)
         return {
-            "peak_gearbox_torque_nm": self.peak_torque_nm,
+            "peak_gearbox_torque_nm": peak,
             "max_gearbox_torque_nm": float(np.max(self.net_torque_nm)),
             "min_gearbox_torque_nm": float(np.min(self.net_torque_nm)),
             "gearbox_torque_rating_nm": self.torque_rating_nm,
-            "gearbox_loading_pct": self.loading_pct,
+            "gearbox_loading_pct": self._loading_pct(peak),
             **({"counterbalance_force_n": self.counterbalance_moment_nm,
                 "optimal_counterbalance_force_n": self.optimal_counterbalance_nm} if self.air_balanced else
                {"counterbalance_moment_nm": self.counterbalance_moment_nm,
                 "optimal_counterbalance_nm": self.optimal_counterbalance_nm}),
-            "polished_rod_power_w": self.mean_polished_rod_power_w,
-            "motor_power_w": self.motor_power_w,
+            "polished_rod_power_w": None if later else self._time_mean(self.polished_rod_power_w, total_s),
+            "motor_power_w": None if later else self._motor_power_w(total_s),
         }
 
 
@@ -196,9 +221,14 @@ def analyse(
     counterbalance_moment_nm: float,
     counterbalance_offset_rad: float = 0.0,
     motor_efficiency: float = 1.0,
+    factors: tuple[FloatArray, FloatArray] | None = None,
+    defer: bool = False,
 ) -> GearboxReport:
     """Torque and power at each sample (arrays of equal length; velocity upward, ω > 0). On an air-balanced
-    unit ``counterbalance_moment_nm`` is the cylinder's force B at the polished rod, in N."""
+    unit ``counterbalance_moment_nm`` is the cylinder's force B at the polished rod, in N. ``factors``: the
+    unit's (torque factor, counterbalance arm) at these angles with this offset, when the caller keeps them
+    (:func:`stroke_columns`). ``defer``: the optimal counterbalance (and the summary's powers) left for
+    :meth:`GearboxReport.completed` (a stroke whose figures may never be read: srenv.task.interval)."""
     if not 0.0 < motor_efficiency <= 1.0:
         raise ValueError(f"motor_efficiency = {motor_efficiency!r}: expected a number in (0, 1]")
     theta = np.asarray(crank_angle_rad, dtype=float)
@@ -208,29 +238,36 @@ def analyse(
     # optimal_counterbalance_nm's w is net_torque_nm(θ, load, 0) = TF·(load - SU - 0) - 0·sin(θ + φ): TF·(load - SU
     # - 0) up to the sign of its zeros, which _optimal does not see; its arm is TF on an air-balanced unit, the
     # torque's crank arm on the others: each taken once here (tests/srenv/simulation/test_fast_paths_rl.py)
-    tf = np.asarray(unit.torque_factor_m(theta))
+    tf = np.asarray(unit.torque_factor_m(theta)) if factors is None else factors[0]
     su = unit.geometry.structural_unbalance_n
     if unit.air_balanced:  # the torque by net_torque_nm: its 0·sin(θ + τ + φ) signs the torque's exact zeros
         torque = np.asarray(unit.net_torque_nm(theta, load, moment, counterbalance_offset_rad, force))
-        optimal = _optimal(tf * (load - su - 0.0), tf)
+        well, arm = tf * (load - su - 0.0), tf
     else:  # net_torque_nm's arithmetic (force = 0)
         well = tf * (load - su - force)
-        arm = unit.counterbalance_arm(theta, counterbalance_offset_rad)
+        arm = unit.counterbalance_arm(theta, counterbalance_offset_rad) if factors is None else factors[1]
         torque = well - moment * arm
-        optimal = _optimal(well, arm)
     shape = theta.shape
     return GearboxReport(
         crank_angle_rad=theta,
         net_torque_nm=torque,
         polished_rod_power_w=load * np.asarray(polished_rod_velocity_m_s, dtype=float),
-        crank_power_w=torque * np.broadcast_to(np.asarray(crank_speed_rad_s, dtype=float), shape),
-        time_step_s=np.broadcast_to(np.asarray(time_step_s, dtype=float), shape).copy(),
+        crank_power_w=torque * _of_shape(crank_speed_rad_s, shape),
+        time_step_s=np.array(_of_shape(time_step_s, shape)),
         torque_rating_nm=unit.geometry.torque_rating_nm,
         counterbalance_moment_nm=float(counterbalance_moment_nm),
-        optimal_counterbalance_nm=optimal,
+        optimal_counterbalance_nm=None if defer else _optimal(well, arm),
         motor_efficiency=float(motor_efficiency),
         air_balanced=unit.air_balanced,
+        deferred=(well, arm) if defer else None,
     )
+
+
+def _of_shape(values: npt.ArrayLike, shape: tuple) -> FloatArray:
+    """``values`` as floats broadcast to ``shape``; np.broadcast_to (~5 µs a call) only when they are not already
+    of it (the same elements either way)."""
+    arr = np.asarray(values, dtype=float)
+    return arr if arr.shape == shape else np.broadcast_to(arr, shape)
 
 
 def stroke_crank_angle_rad(unit: ConventionalUnit, result: RunResult) -> FloatArray:
@@ -241,6 +278,46 @@ def stroke_crank_angle_rad(unit: ConventionalUnit, result: RunResult) -> FloatAr
     return np.asarray(unit.crank_angle_rad(since_bottom_s, result.spm), dtype=float)
 
 
+def _step_column(result: RunResult) -> FloatArray:
+    return np.full(result.n_steps, result.duration_s / result.n_steps)
+
+
+def _constant_speed_columns(unit: ConventionalUnit, result: RunResult) -> tuple[FloatArray, FloatArray, FloatArray]:
+    """(θ, ω, step) at each recorded step of one stroke at constant crank speed."""
+    return (stroke_crank_angle_rad(unit, result), np.full(result.n_steps, 2.0 * math.pi * result.spm / 60.0),
+            _step_column(result))
+
+
+@dataclass(frozen=True)
+class StrokeColumns:
+    """The columns of one constant-speed stroke that its setpoint fixes (read-only arrays): θ at each recorded
+    step (:func:`stroke_crank_angle_rad`), ω, the step, and the unit's torque factor and counterbalance arm there."""
+
+    unit: ConventionalUnit
+    theta: FloatArray
+    omega: FloatArray
+    dt: FloatArray
+    factors: tuple[FloatArray, FloatArray]
+
+
+def stroke_columns(unit: ConventionalUnit, result: RunResult, offset_rad: float, keep: dict) -> StrokeColumns:
+    """:class:`StrokeColumns` of a stroke, kept in ``keep`` (the caller's, per well: its last setpoints). Every
+    stroke at one setpoint has the same columns: computing them was ~15 µs of a stroke's gearbox report."""
+    key = (id(unit), result.spm, result.n_steps, result.duration_s, offset_rad)
+    got = keep.get(key)
+    if got is None or got.unit is not unit:
+        theta, omega, dt = _constant_speed_columns(unit, result)
+        cols = (theta, omega, dt, np.asarray(unit.torque_factor_m(theta), dtype=float),
+                unit.counterbalance_arm(theta, offset_rad))
+        for c in cols:
+            c.setflags(write=False)  # shared by every report of the setpoint
+        got = StrokeColumns(unit, *cols[:3], cols[3:])
+        if len(keep) >= COLUMNS_KEPT:
+            keep.clear()
+        keep[key] = got
+    return got
+
+
 def analyse_runs(
     unit: ConventionalUnit,
     results: list[RunResult],
@@ -249,30 +326,41 @@ def analyse_runs(
     counterbalance_offset_rad: float = 0.0,
     motor_efficiency: float = 1.0,
     crank=None,
+    keep: dict | None = None,
+    defer: bool = False,
 ) -> GearboxReport:
     """:func:`analyse` over recorded strokes (``run_stroke(record=True)``), each at its own SPM; ``crank``
-    (result -> (θ, ω) at its steps) replaces the constant crank speed (a motor's, ``motor.MotorDrive``)."""
+    (result -> (θ, ω) at its steps) replaces the constant crank speed (a motor's, ``motor.MotorDrive``). ``keep``
+    (a dict the caller holds per well): one stroke at constant speed takes its setpoint's columns from it
+    (:func:`stroke_columns`; the same arrays as computed here, so the same report). ``defer``: see :func:`analyse`."""
     if not results or any(r.trace is None or r.spm <= 0 for r in results):
         raise ValueError("gearbox analysis needs recorded strokes (record=True, SPM > 0)")
+    r = results[0]
+    if keep is not None and crank is None and len(results) == 1 and len(r.trace["t_s"]) == r.n_steps:
+        c = stroke_columns(unit, r, counterbalance_offset_rad, keep)
+        return analyse(unit, c.theta, r.trace["polished_rod_load_n"], r.trace["polished_rod_velocity_m_s"], c.omega,
+                       c.dt, counterbalance_moment_nm=counterbalance_moment_nm,
+                       counterbalance_offset_rad=counterbalance_offset_rad, motor_efficiency=motor_efficiency,
+                       factors=c.factors, defer=defer)
     columns: dict[str, list[FloatArray]] = {k: [] for k in ("theta", "load", "vel", "omega", "dt")}
     for r in results:
         n = r.n_steps
         if len(r.trace["t_s"]) != n:
             raise ValueError(f"a stroke recorded {len(r.trace['t_s'])} of its {n} steps: cannot place θ")
         if crank is not None:
-            theta, omega = crank(r)
-            columns["theta"].append(theta)
-            columns["omega"].append(omega)
+            (theta, omega), dt = crank(r), _step_column(r)
         else:
-            columns["theta"].append(stroke_crank_angle_rad(unit, r))
-            columns["omega"].append(np.full(n, 2.0 * math.pi * r.spm / 60.0))
+            theta, omega, dt = _constant_speed_columns(unit, r)
+        columns["theta"].append(theta)
+        columns["omega"].append(omega)
         columns["load"].append(r.trace["polished_rod_load_n"])
         columns["vel"].append(r.trace["polished_rod_velocity_m_s"])
-        columns["dt"].append(np.full(n, r.duration_s / n))
+        columns["dt"].append(dt)
     joined = {k: np.concatenate(v) for k, v in columns.items()}
     return analyse(
         unit, joined["theta"], joined["load"], joined["vel"], joined["omega"], joined["dt"],
         counterbalance_moment_nm=counterbalance_moment_nm,
         counterbalance_offset_rad=counterbalance_offset_rad,
         motor_efficiency=motor_efficiency,
+        defer=defer,
     )

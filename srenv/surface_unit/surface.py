@@ -15,7 +15,9 @@ trapezoidal rule reproduces a periodic motion without drift.
 
 from __future__ import annotations
 
+import contextlib
 import math
+from collections.abc import Iterator
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -61,6 +63,8 @@ class SurfaceMotion:
         # a stroke's top velocity and start state recur stroke after stroke at one setpoint: kept per
         # (SPM, stroke, steps) (the same arrays, computed once; the unit's linkage costs ~0.2 ms a stroke)
         self._strokes: dict[tuple, tuple[np.ndarray, tuple[float, float]]] = {}
+        self._columns: dict = {}  # and a stroke's gearbox columns (gearbox.stroke_columns)
+        self._deferring: list | None = None  # see deferring()
         if self.kind == "measured":
             self._measured = load_measured_motion(cfg.measured_card_csv, cfg.measured_spm)
         # surface.motor (opt-in): the crank speed follows the gearbox torque (motor.py); None = constant speed
@@ -163,6 +167,19 @@ class SurfaceMotion:
         s = np.where(t_s >= ramp, 1.0, 0.5 * (1 - np.cos(np.pi * np.clip(t_s, 0, ramp) / ramp)))
         return -speed_m_s * s
 
+    @contextlib.contextmanager
+    def deferring(self) -> Iterator[list]:
+        """Within it, :meth:`gearbox_report` defers its optimal counterbalance and powers
+        (``GearboxReport.completed`` computes them) and appends each report it makes to the list yielded: a
+        caller whose summaries may never be read (srenv.task.interval: an exact stroke that is not an
+        interval's last) completes only the one it keeps."""
+        made: list = []
+        self._deferring = made
+        try:
+            yield made
+        finally:
+            self._deferring = None
+
     def gearbox_report(
         self, results: list[RunResult], counterbalance_moment_nm: float | None = None
     ) -> GearboxReport | None:
@@ -182,10 +199,14 @@ class SurfaceMotion:
         if self._follows and not unit.air_balanced and counterbalance_moment_nm is None:
             # a crew that changes the crank hole rebalances: the counterbalance effect at the rod stays (M ~ R)
             moment *= unit.stroke_m / self._unit.stroke_m
-        return analyse_runs(
+        report = analyse_runs(
             unit, results,
             counterbalance_moment_nm=moment,
             counterbalance_offset_rad=offset_rad,
             motor_efficiency=self.cfg.motor_efficiency,
-            crank=None if self.motor is None else (lambda r: self.motor.crank_of(unit, r)),
+            crank=None if self.motor is None else (lambda r: self.motor.crank_of(unit, r)), keep=self._columns,
+            defer=self._deferring is not None,
         )
+        if self._deferring is not None:
+            self._deferring.append(report)
+        return report

@@ -24,6 +24,7 @@ strokes (:mod:`srenv.task.reuse`).
 
 from __future__ import annotations
 
+import contextlib
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -56,6 +57,7 @@ class StrokeFigures:
     impact_m_s: float
     power_mean_w: float
     power_peak_w: float
+    gearbox: object = None  # its gearbox report while the summary's optimal counterbalance and powers wait (completed)
 
 
 @dataclass
@@ -116,8 +118,12 @@ def controller_fillage(sim: Simulator, summary: dict, tr: dict) -> float:
 
 
 def stroke_figures(sim: Simulator, r: RunResult, fatigue_life: float, fatigue_exponent: float,
-                   stiffness_n_m: float) -> StrokeFigures:
-    m = summarize(sim, [r])
+                   stiffness_n_m: float, defer: bool = False) -> StrokeFigures:
+    """``defer``: the summary's gearbox figures no cost reads (the optimal counterbalance, the powers) are None
+    until :func:`completed` (an exact stroke of an interval is summarised before it is known to be the last)."""
+    made: list = []
+    with sim.surface.deferring() if defer else contextlib.nullcontext(made) as made:
+        m = summarize(sim, [r])
     tr = r.trace
     a_pl = plunger_area_m2(sim.cfg.pump)
     disp = a_pl * max(m["pump_stroke_m"], 0.0)
@@ -131,7 +137,16 @@ def stroke_figures(sim: Simulator, r: RunResult, fatigue_life: float, fatigue_ex
         stick_slip_j=cf.stick_slip_energy_j(tr["pump_position_m"], tr["pump_velocity_m_s"], tr["pump_load_n"],
                                             stiffness_n_m),
         impact_m_s=cf.impact_speed_m_s(tr["pump_position_m"], tr["pump_velocity_m_s"], tr["pump_load_n"]),
-        power_mean_w=p_mean, power_peak_w=p_peak)
+        power_mean_w=p_mean, power_peak_w=p_peak, gearbox=made[-1] if made else None)
+
+
+def completed(f: StrokeFigures) -> StrokeFigures:
+    """``f`` with the figures its summary deferred, in their places: the summary ``stroke_figures`` gives without
+    ``defer``."""
+    if f.gearbox is not None:
+        f.summary.update(f.gearbox.completed().summary())
+        f.gearbox = None
+    return f
 
 
 class IntervalRunner:
@@ -160,9 +175,9 @@ class IntervalRunner:
         self._setpoint: tuple[float, float] | None = None
         self._restart = False
 
-    def _figures(self, r: RunResult) -> StrokeFigures:
+    def _figures(self, r: RunResult, defer: bool = False) -> StrokeFigures:
         return stroke_figures(self.sim, r, self.econ.fatigue_life_cycles, self.econ.fatigue_exponent,
-                              self.stiffness)
+                              self.stiffness, defer)
 
     def warm_up(self, spm: float, stroke_m: float) -> StrokeFigures:
         """One exact stroke outside any interval (the env's reset), for the first observation."""
@@ -340,7 +355,7 @@ class IntervalRunner:
             remaining = n_total - done
             if need_exact and len(exact) < max(exact_max, 1) and (remaining >= 1.0 - 1e-9 or not exact):
                 r = sim.run_stroke(spm, stroke_m, record=True)
-                f = self._figures(r)
+                f = self._figures(r, defer=True)  # the last one kept is completed below
                 p_exact = self._intake_pa() if self.reuse_periodic else None
                 w = min(1.0, remaining)
                 lifted = f.lifted_m3
@@ -372,7 +387,7 @@ class IntervalRunner:
                                                   exact_max, need_exact)
         if transient_w and exact:  # no settled stroke followed: the transient stroke prices itself
             self._add_costs(res, exact[0], transient_w)
-        res.last = exact[-1] if exact else None
+        res.last = completed(exact[-1]) if exact else None
         if p_exact is not None and (not need_exact or self._quasi_steady(exact)):
             self._remember(key, exact[-1], p_exact)
         sim.replan_upstroke(period)
