@@ -85,10 +85,6 @@ def load_benchmark_config(path: str | Path, quick: bool = False) -> dict[str, An
         raise BenchmarkConfigError(f"benchmark config: agents.runs = {runs!r}: expected a mapping algo -> run")
     for algo, run in runs.items():
         _check_run(algo, run)
-        base = (run.get("residual") or {}).get("base")
-        if base in OPTIONAL_BASELINES and base not in bl:  # a base is a tuned baseline of this config
-            raise BenchmarkConfigError(f"benchmark config: agents.runs.{algo}.residual.base = {base!r}: expected a "
-                                       f"baseline this config tunes (add baselines.{base})")
     for algo, run in runs.items():
         if run.get("teacher") is not None:
             _check_teacher(algo, run, runs, sets["tuning"] | sets["validation"])
@@ -185,7 +181,7 @@ def _check_run(algo: str, run: Any) -> None:
     if res is not None and (not isinstance(res, dict) or res.get("base", "best_tuned") not in
                             ("best_tuned", *RESIDUAL_BASES)):
         raise BenchmarkConfigError(f"benchmark config: agents.runs.{algo}.residual = {res!r}: expected "
-                                   f"{{base: best_tuned | {' | '.join(RESIDUAL_BASES)}, scale: S}}")
+                                   "{base: best_tuned | best_constant | pump_off | fillage_pi, scale: S}")
     if res is not None and res.get("shaping") not in (None, "potential"):
         raise BenchmarkConfigError(f"benchmark config: agents.runs.{algo}.residual.shaping = "
                                    f"{res.get('shaping')!r}: expected potential or nothing")

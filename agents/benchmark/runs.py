@@ -15,7 +15,7 @@ from typing import Any
 
 from ..envs import env_tag
 from ..evaluation.normalizer import ObsNormalizer
-from ..policies.residual import BEST_TUNED_BASES, RESIDUAL_BASES
+from ..policies.residual import RESIDUAL_BASES
 from ..training.tuning import refuse_test_split
 from .config import BenchmarkConfigError
 
@@ -77,10 +77,10 @@ def residual_spec(run: dict[str, Any], tuned: dict[str, Any]) -> dict[str, Any] 
         return None
     base = res.get("base", "best_tuned")
     if base == "best_tuned":
-        base = max(BEST_TUNED_BASES, key=lambda n: tuned[n]["score"])
-    if base not in RESIDUAL_BASES or base not in tuned:
-        raise BenchmarkConfigError(f"residual base = {base!r}: expected a tuned baseline of this config among "
-                                   f"{', '.join(RESIDUAL_BASES)}, or best_tuned")
+        base = max(RESIDUAL_BASES, key=lambda n: tuned[n]["score"])
+    if base not in RESIDUAL_BASES:
+        raise BenchmarkConfigError(f"residual base = {base!r}: expected best_constant, pump_off, fillage_pi "
+                                   "or best_tuned")
     spec = {"base": base, "params": tuned[base]["params"], "scale": float(res.get("scale", 0.3))}
     if res.get("idle_scale") is not None:
         spec["idle_scale"] = float(res["idle_scale"])

@@ -20,11 +20,8 @@ import numpy as np
 from .factory import make_baseline
 from .field import IDLE, obs_names_of
 
-# the tuned field baselines a residual may sit on (not the oracle: it sees hidden state); ``best_tuned`` picks the
-# best tuning score among BEST_TUNED_BASES only, so a design registered with it keeps its base; the field controller
-# with alarms (v2's optional baseline) is a base only when a run names it
-BEST_TUNED_BASES = ("best_constant", "pump_off", "fillage_pi")
-RESIDUAL_BASES = (*BEST_TUNED_BASES, "alarm_pump_off")
+# the tuned field baselines a residual may sit on (not the oracle: it sees hidden state)
+RESIDUAL_BASES = ("best_constant", "pump_off", "fillage_pi")
 
 
 def check_scales(scale: Any, idle_scale: Any = None) -> None:

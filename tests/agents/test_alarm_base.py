@@ -86,36 +86,3 @@ def test_with_no_alarm_the_followed_base_is_the_plain_residual(env):
     followed = run_episode(env, pol, 3)
     assert pol.fired == 0  # no alarm on this well: the premise
     assert followed["reward"] == plain["reward"] and followed["cost"] == plain["cost"]
-
-
-def test_best_tuned_keeps_its_candidates_and_a_named_alarm_base_is_taken():
-    from agents.benchmark.runs import residual_spec
-
-    tuned = {"best_constant": {"params": {"a_spm": 0.0}, "score": 1.0}, "pump_off": {"params": {"a_spm": 0.4},
-             "score": 3.0}, "fillage_pi": {"params": {"kp": 0.5}, "score": 2.0},
-             "alarm_pump_off": {"params": {"a_spm": 0.4, "load_drop": 0.5}, "score": 4.0}}
-    # the highest score is alarm_pump_off's, but best_tuned picks among the registered candidates (designs unchanged)
-    assert residual_spec({"residual": {"base": "best_tuned", "scale": 0.5}}, tuned)["base"] == "pump_off"
-    res = residual_spec({"residual": {"base": "alarm_pump_off", "scale": 0.5}}, tuned)
-    assert res == {"base": "alarm_pump_off", "params": tuned["alarm_pump_off"]["params"], "scale": 0.5}
-
-
-def test_config_refuses_an_alarm_base_it_does_not_tune(tmp_path):
-    import yaml
-
-    from agents.benchmark.config import BenchmarkConfigError, load_benchmark_config
-
-    raw = yaml.safe_load((REPO / "configs/benchmark/v2_oracle_distilled.yaml").read_text())
-    raw["agents"]["runs"]["oracle_distilled"]["residual"]["base"] = "alarm_pump_off"
-    (tmp_path / "ok.yaml").write_text(yaml.safe_dump(raw))
-    cfg = load_benchmark_config(tmp_path / "ok.yaml")
-    assert cfg["agents"]["runs"]["oracle_distilled"]["residual"]["base"] == "alarm_pump_off"
-    del raw["baselines"]["alarm_pump_off"]
-    (tmp_path / "bad.yaml").write_text(yaml.safe_dump(raw))
-    with pytest.raises(BenchmarkConfigError, match=r"agents.runs.oracle_distilled.residual.base = 'alarm_pump_off': "
-                       r"expected a baseline this config tunes \(add baselines.alarm_pump_off\)"):
-        load_benchmark_config(tmp_path / "bad.yaml")
-    raw["agents"]["runs"]["oracle_distilled"]["residual"]["base"] = "oracle"
-    (tmp_path / "bad2.yaml").write_text(yaml.safe_dump(raw))
-    with pytest.raises(BenchmarkConfigError, match="alarm_pump_off, scale: S"):
-        load_benchmark_config(tmp_path / "bad2.yaml")
