@@ -63,12 +63,15 @@ def on_base(members: list[dict[str, str]], base: str, tuned: dict[str, Any], sca
     return guarded_spec(ens, "alarm_pump_off", tuned["alarm_pump_off"], FOLLOW_SHUT_IN)
 
 
-def variants(tuned: dict[str, Any], student: Path | None) -> dict[str, dict[str, Any]]:
+def variants(tuned: dict[str, Any], students: list[Path]) -> dict[str, dict[str, Any]]:
+    """The shipped students on both bases, and each DAgger student (seed k = its place in ``students``)."""
     shipped = [member(p) for p in SHIPPED]
     out = {"shipped_ensemble_on_pump_off": on_base(shipped, "pump_off", tuned),  # as trained and test-looked
            "shipped_ensemble_on_alarm_pump_off": on_base(shipped, "alarm_pump_off", tuned)}
-    if student is not None:
-        out["dagger_alarm_seed0"] = on_base([member(student / "student.zip")], "alarm_pump_off", tuned)
+    for k, d in enumerate(students):
+        out[f"dagger_alarm_seed{k}"] = on_base([member(d / "student.zip")], "alarm_pump_off", tuned)
+        # a diagnostic after the gate (no choice rests on it): the same student with the shut-in NOT followed
+        out[f"dagger_alarm_seed{k}_unfollowed"] = out[f"dagger_alarm_seed{k}"]["inner"]
     return out
 
 
@@ -88,14 +91,14 @@ def distill(out: Path, base: str, seed: int, seed_start: int, iterations: int, e
     (out / "distill.json").write_text(json.dumps({"residual": res, "seeds": seeds, "spec": spec}, indent=1))
 
 
-def evaluate(out: Path, student: Path | None, workers: int) -> None:
+def evaluate(out: Path, students: list[Path], workers: int) -> None:
     sys.path.insert(0, str(ROOT / "scripts"))
     from guard_pilot import BASES, summarise  # the same paired table as the guard pilot
 
     cfg = load_benchmark_config(str(CONFIG))
     tuned = tuned_params()
     specs = {b: {"kind": "baseline", "name": b, "params": tuned[b]} for b in BASELINES}
-    specs.update(variants(tuned, student))
+    specs.update(variants(tuned, students))
     kw = {**cfg["env_kwargs"], "scenario": "train"}  # the validation split: training wells, its own seeds
     out.mkdir(parents=True, exist_ok=True)
     cache = out / "episodes.json"
@@ -127,7 +130,8 @@ def main() -> None:
     ap.add_argument("--iterations", type=int, default=3)
     ap.add_argument("--episodes", type=int, default=16)
     ap.add_argument("--out", type=Path, help="evaluate the variants on validation into this directory")
-    ap.add_argument("--student", type=Path, help="a --distill directory: its student joins the variants")
+    ap.add_argument("--student", type=Path, nargs="*", default=[],
+                    help="--distill directories of seeds 0, 1, ...: their students join the variants")
     ap.add_argument("--workers", type=int, default=1)
     a = ap.parse_args()
     if a.distill:

@@ -47,7 +47,7 @@ def env():
 def test_the_base_choice_builds_the_design_spec():
     pilot = _pilot()
     tuned = pilot.tuned_params()
-    specs = pilot.variants(tuned, None)
+    specs = pilot.variants(tuned, [])
     plain, alarm = specs["shipped_ensemble_on_pump_off"], specs["shipped_ensemble_on_alarm_pump_off"]
     assert plain["kind"] == "ensemble" and plain["residual"]["base"] == "pump_off"
     assert plain["residual"]["params"] == tuned["pump_off"] and plain["residual"]["scale"] == 0.5
