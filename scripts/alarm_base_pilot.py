@@ -13,8 +13,8 @@ Two steps, validation only (training wells, seeds 20000..20015, as scripts/guard
 2. evaluation: the tuned baselines and the variants (``variants``) on the validation episodes; paired differences
    per episode (USD/h = return / 144) against fillage_pi and alarm_pump_off, and the mean constraint cost.
 
-The gate (written 2026-12-03 16:12 UTC (commit 39b11b5), after the shipped students' two rows and before the DAgger student's): a
-variant goes on to a pre-registered test look only if, on these 16 validation episodes, its paired difference over
+The gate (written 2026-12-03 16:12 UTC, commit 39b11b5, after the shipped students' two rows and before the DAgger
+student's): a variant goes on to a pre-registered test look only if, on these 16 validation episodes, its paired difference over
 alarm_pump_off has a 95 % CI above zero AND its mean constraint cost is not higher than alarm_pump_off's - the
 judge's own rule, on validation. Otherwise the result is a documented negative and no test episode is played.
 
