@@ -27,7 +27,9 @@ import math
 
 import pytest
 
+from srenv.config_unit import BeamUnitConfig
 from srenv.surface_unit.beam_unit import BeamUnitGeometry, ConventionalUnit
+from srenv.surface_unit.inline_unit import inline_unit
 
 IN_M = 0.0254
 LBF_N = 4.4482216152605
@@ -86,3 +88,18 @@ def test_torque_factor_is_the_position_derivative_on_the_real_unit() -> None:
         theta = unit.theta_bottom + math.radians(15.0 * k)
         slope = (unit.position_m(theta + step) - unit.position_m(theta - step)) / (2.0 * step)
         assert unit.torque_factor_m(theta) == pytest.approx(slope, abs=1e-6 * unit.stroke_m)
+
+
+def test_inline_nameplate_block_is_the_same_unit() -> None:
+    """The unit as a user gives it (`surface.beam_unit`, K from I and H − G) moves exactly as the one above."""
+    block = BeamUnitConfig(
+        geometry="mark_ii", rotation="counterclockwise", designation="M-912D-365-168",
+        a_m=334.0 * IN_M, c_m=270.0 * IN_M, i_m=202.56 * IN_M,
+        k_m=math.hypot(202.56, 295.13 - 112.13) * IN_M, p_m=193.5 * IN_M, r_m=63.56 * IN_M,
+    )
+    inline, direct = inline_unit(block), ConventionalUnit(_m912())
+    assert 360.0 * inline.upstroke_fraction() == pytest.approx(PUBLISHED_UPSTROKE_DEG, abs=UPSTROKE_TOLERANCE_DEG)
+    for k in range(24):
+        theta = direct.theta_bottom + math.radians(15.0 * k)
+        assert inline.position_m(theta) == pytest.approx(direct.position_m(theta), abs=1e-12)
+        assert inline.torque_factor_m(theta) == pytest.approx(direct.torque_factor_m(theta), abs=1e-12)
