@@ -12,7 +12,7 @@
    :func:`agents.benchmark.stages.validate` plays them); paired differences per episode (USD/h = return / 144,
    mean [95 % CI]) against the baselines, and the mean constraint cost per episode and its terms.
 
-THE GATE (written and committed 2026-12-03 ~17:12 UTC, before any number of the variants below was seen): a variant
+THE GATE (written and committed 2026-12-03 17:05 UTC, commit abdd912, before any number of the variants below was seen): a variant
 goes on to a pre-registered test look only if, on these 16 validation episodes, against alarm_pump_off (the best
 tuned baseline on validation), with d = (variant's return - alarm_pump_off's) / 144 per episode,
   (a) the 95 % CI of mean d (normal approximation, agents.benchmark.report.mean_ci) is above zero, OR
