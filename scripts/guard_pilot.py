@@ -51,13 +51,18 @@ FALLBACK = "alarm_pump_off"
 # excess of PPRL over the rod/unit rating (and Goodman, gearbox); the field observation's ``pprl`` is that ratio for
 # the last card, so a limit just under 1 hands the next intervals to pump-off before the excess, 0.9 earlier
 POUND_MINSPM = {"below": {"fillage_est": 0.85, "spm": 0.45}, "hold_intervals": 3}  # the first pilot's choice
-VARIANTS: dict[str, dict[str, Any] | None] = {
+VARIANTS: dict[str, dict[str, Any] | tuple[dict[str, Any], float] | None] = {  # guard, or (guard, deployed scale)
     "ensemble_unguarded": None,  # reference: as trained and test-looked
     "guard_pound_minspm": POUND_MINSPM,  # reference: the guard the guarded look played (on pump_off)
     "guard_load95": {"above": {"pprl": 0.95}, "hold_intervals": 3},
     "guard_load90": {"above": {"pprl": 0.90}, "hold_intervals": 3},
     "guard_pound_load95": {"below": {"fillage_est": 0.85}, "above": {"pprl": 0.95}, "hold_intervals": 3},
     "guard_minspm_load95": {"below": {"fillage_est": 0.85, "spm": 0.45}, "above": {"pprl": 0.95}, "hold_intervals": 3},
+    # round 2, added at 17:11 UTC after the six above were seen (none passed; the guards cut cost but not reward up),
+    # the same gate: a larger deployed residual scale under the pound+load guard, and a 1-interval hold
+    "guard_pound_load95_s0.75": ({"below": {"fillage_est": 0.85}, "above": {"pprl": 0.95}, "hold_intervals": 3}, 0.75),
+    "guard_pound_load95_s1.0": ({"below": {"fillage_est": 0.85}, "above": {"pprl": 0.95}, "hold_intervals": 3}, 1.0),
+    "guard_pound_load95_hold1": {"below": {"fillage_est": 0.85}, "above": {"pprl": 0.95}, "hold_intervals": 1},
 }
 
 
@@ -69,9 +74,12 @@ def shipped(report: Path = REPORT, agent: str = AGENT) -> tuple[dict[str, Any], 
     return ens, {k: v["params"] for k, v in rep["tuned"].items()}
 
 
-def variant_specs(ens: dict[str, Any], tuned: dict[str, Any],
-                  variants: dict[str, dict[str, Any] | None]) -> dict[str, dict[str, Any]]:
-    return {n: ens if g is None else guarded_spec(ens, FALLBACK, tuned[FALLBACK], g) for n, g in variants.items()}
+def variant_specs(ens: dict[str, Any], tuned: dict[str, Any], variants: dict[str, Any]) -> dict[str, dict[str, Any]]:
+    out = {}
+    for n, v in variants.items():
+        g, scale = v if isinstance(v, tuple) else (v, None)
+        out[n] = ens if g is None else guarded_spec(ens, FALLBACK, tuned[FALLBACK], g, scale)
+    return out
 
 
 def gate(row: dict[str, Any], base: dict[str, Any]) -> bool:
