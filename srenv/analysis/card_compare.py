@@ -16,7 +16,7 @@ RESAMPLE_POINTS = 200
 TRIM_FRACTION = 0.01
 
 
-def _branches(x: np.ndarray, f: np.ndarray) -> tuple[tuple[np.ndarray, np.ndarray], tuple[np.ndarray, np.ndarray]]:
+def stroke_branches(x: np.ndarray, f: np.ndarray) -> tuple[tuple[np.ndarray, np.ndarray], tuple[np.ndarray, np.ndarray]]:
     """(upstroke, downstroke) of a periodic one-stroke card, each as (position, load)."""
     i0 = int(np.argmin(x))
     x2, f2 = np.roll(x, -i0), np.roll(f, -i0)
@@ -38,7 +38,7 @@ def card_difference(x_ref: np.ndarray, f_ref: np.ndarray, x: np.ndarray, f: np.n
     lo, hi = max(x_ref.min(), x.min()), min(x_ref.max(), x.max())
     span = hi - lo
     grid = np.linspace(lo + TRIM_FRACTION * span, hi - TRIM_FRACTION * span, RESAMPLE_POINTS)
-    (ru, rd), (su, sd) = _branches(x_ref, f_ref), _branches(x, f)
+    (ru, rd), (su, sd) = stroke_branches(x_ref, f_ref), stroke_branches(x, f)
     return np.r_[_on_grid(*su, grid) - _on_grid(*ru, grid), _on_grid(*sd, grid) - _on_grid(*rd, grid)]
 
 

@@ -29,7 +29,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .card_compare import _branches
+from .card_compare import stroke_branches
 
 LINE_BAND = (0.25, 0.75)   # the middle half of each valve's open travel
 FILL_BAND = 0.10           # the transfer ends within 10 % of the fluid load above the downstroke line
@@ -59,7 +59,7 @@ def load_lines(position_m, load_n) -> dict:
     them, the pickup and transfer positions and the fillage (module docstring)."""
     x = np.asarray(position_m, dtype=float)
     f = np.asarray(load_n, dtype=float)
-    (xu, fu), (xd, fd) = _branches(x, f)
+    (xu, fu), (xd, fd) = stroke_branches(x, f)
     bottom, top = float(x.min()), float(x.max())
     hi, lo = (float(v) for v in np.percentile(f, (85.0, 10.0)))
     for _ in range(MAX_PASSES):

@@ -24,19 +24,19 @@ from __future__ import annotations
 
 import numpy as np
 
-from .card_compare import _branches
+from .card_compare import stroke_branches
 
 MIN_TRAVEL_M = 1e-3  # a transfer shorter than this is read as rigid (no series spring)
 
 
 def upstroke(x: np.ndarray, f: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """The card's rising part, from its lowest to its highest position (positions from the bottom)."""
-    xu, fu = _branches(x, f)[0]
+    xu, fu = stroke_branches(x, f)[0]
     return xu - x.min(), fu
 
 
 def downstroke(x: np.ndarray, f: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    xd, fd = _branches(x, f)[1]
+    xd, fd = stroke_branches(x, f)[1]
     return xd - x.min(), fd
 
 
