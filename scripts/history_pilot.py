@@ -86,7 +86,11 @@ def evaluate(out: Path, students: dict[str, Path], workers: int) -> None:
         eps[n] = recs[i * n_v:(i + 1) * n_v]
     cache.write_text(json.dumps(eps))
     bases = ("alarm_pump_off", "pump_off", *list(students)[:1])
-    res = {"specs": specs, "summary": summarise(eps, bases)}
+    runs = {n: json.loads((d / "distill.json").read_text()) for n, d in students.items()}
+    res = {"specs": specs, "summary": summarise(eps, bases),
+           "dagger": {n: {"seeds": [r["seeds"][0], r["seeds"][-1]], "history": r["history"],
+                          "iterations": r["spec"]["distill"], "wall_time_s": r["spec"]["wall_time_s"]}
+                      for n, r in runs.items()}}
     (out / "pilot.json").write_text(json.dumps(res, indent=1))
     print("| policy | USD/h | cost | " + " | ".join(f"vs {b} [95 % CI] wins" for b in bases) + " |")
     for k, r in res["summary"].items():

@@ -101,3 +101,39 @@ def test_k1_spec_keeps_todays_keys(tmp_path):
         spec = distill_oracle(runner, {"iterations": 1, "episodes": 1}, ORACLE, RES, ENV, KW, {"net_arch": [8, 8]},
                               [50000], 0, tmp_path / "student.zip")
     assert "history" not in spec
+
+
+def _pilot():
+    import importlib.util
+    from pathlib import Path
+
+    path = Path(__file__).resolve().parents[2] / "scripts" / "history_pilot.py"
+    spec = importlib.util.spec_from_file_location("history_pilot", path)
+    mod = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(mod)
+    return mod
+
+
+@pytest.mark.parametrize("k", [1, 3])
+def test_pilot_plays_a_student_with_the_history_it_was_trained_with(tmp_path, k):
+    import json
+
+    (tmp_path / "distill.json").write_text(json.dumps({"history": k}))
+    spec = _pilot().student_spec(tmp_path, {"pump_off": PO})
+    assert spec["residual"] == {"base": "pump_off", "scale": 0.5, "params": PO}
+    assert spec.get("history", 1) == k and ("history" in spec) == (k != 1)  # K = 1: today's spec
+
+
+def test_pilot_refuses_bad_k_with_one_line(tmp_path):
+    import subprocess
+    import sys
+    from pathlib import Path
+
+    repo = Path(__file__).resolve().parents[2]
+    r = subprocess.run([sys.executable, "scripts/history_pilot.py", "--distill", str(tmp_path / "d"), "--history",
+                        "0"], check=False, capture_output=True, text=True, cwd=repo, timeout=120,
+                       env={"PYTHONPATH": str(repo), "PATH": "/usr/bin:/bin"})
+    assert r.returncode == 2 and "Traceback" not in r.stderr
+    want = "history_pilot: history = 0: expected an integer in 1..16 (field observations stacked)"
+    assert r.stderr.strip().splitlines() == [want]
+    assert not (tmp_path / "d").exists()
