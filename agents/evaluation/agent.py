@@ -4,7 +4,8 @@ run in worker processes that build their own env and policy:
 - ``{"kind": "baseline", "name": "pump_off", "params": {...}}`` (:mod:`agents.policies.factory`),
 - ``{"kind": "agent", "path": "x.zip", "obs_norm": "x_obs_norm.npz" | None}`` (an SB3 model and the
   observation normalisation it was trained with, stored as npz; both are read as data, nothing is unpickled),
-  optionally with ``"residual": {"base", "params", "scale"[, "idle_scale"]}`` (:mod:`agents.policies.residual`),
+  optionally with ``"residual": {"base", "params", "scale"[, "idle_scale"]}`` (:mod:`agents.policies.residual`)
+  and, for a residual student that sees the last K observations, ``"history": K`` (:mod:`agents.policies.history`),
 - ``{"kind": "ensemble", "members": [{"path", "obs_norm"}, ...], "residual": ... | None}``: the mean of the
   members' actions (:mod:`agents.policies.ensemble`);
 - ``{"kind": "guarded", "inner": <agent or ensemble spec>, "fallback": {"name", "params"}, "guard": {...},
@@ -76,13 +77,16 @@ def build_policy(spec: dict[str, Any], env: Any) -> Any:
     if spec["kind"] == "baseline":
         return make_baseline(spec["name"], spec.get("params", {}), obs_names_of(env))
     if spec["kind"] in ("agent", "ensemble"):
+        res = spec.get("residual")
+        if spec.get("history", 1) != 1 and not res:  # before any file is read: the spec itself is wrong
+            raise ValueError(f"policy spec history = {spec['history']!r}: a history needs a residual student")
         if spec["kind"] == "agent":
             agent: Any = AgentPolicy(spec["path"], spec.get("obs_norm"))
         else:
             agent = EnsemblePolicy([AgentPolicy(m["path"], m.get("obs_norm")) for m in spec["members"]])
-        res = spec.get("residual")
         if res:
-            return ResidualAgentPolicy(agent, res["base"], res["params"], res["scale"], res.get("idle_scale"))
+            return ResidualAgentPolicy(agent, res["base"], res["params"], res["scale"], res.get("idle_scale"),
+                                       spec.get("history", 1))
         return agent
     raise ValueError(f"policy spec kind = {spec.get('kind')!r}: expected baseline, agent, ensemble or guarded")
 

@@ -19,6 +19,7 @@ import numpy as np
 
 from .factory import make_baseline
 from .field import IDLE, obs_names_of
+from .history import History
 
 # the tuned field baselines a residual may sit on (not the oracle: it sees hidden state)
 RESIDUAL_BASES = ("best_constant", "pump_off", "fillage_pi")
@@ -68,10 +69,11 @@ class ResidualAgentPolicy:
     """Evaluation twin of :class:`agents.training.residual_env.ResidualEnv`: baseline action + scale x the model's, on the plain env."""
 
     def __init__(self, model_policy: Any, base: str, base_params: dict[str, Any], scale: float,
-                 idle_scale: float | None = None) -> None:
+                 idle_scale: float | None = None, history: int = 1) -> None:
         check_scales(scale, idle_scale)
         self.model, self.base_name, self.base_params, self.scale = model_policy, base, base_params, float(scale)
         self.idle_scale = idle_scale
+        self.history = History(history)  # the model sees the last K observations; the base the current one
         self.base: _Base | None = None
 
     def reset(self, env: Any, index: int | None = None) -> None:
@@ -79,6 +81,7 @@ class ResidualAgentPolicy:
             raise ValueError("ResidualAgentPolicy drives one env")
         self.base = _Base(self.base_name, self.base_params, env)
         self.base.reset(env)
+        self.history.reset()
 
     def predict(self, observation: Any, state: Any = None, episode_start: Any = None,
                 deterministic: bool = True) -> tuple[np.ndarray, Any]:
@@ -86,6 +89,6 @@ class ResidualAgentPolicy:
             raise RuntimeError("ResidualAgentPolicy: call reset(env) after env.reset")
         obs = np.asarray(observation, np.float32)
         b = self.base.act(obs)
-        r, state = self.model.predict(augment(obs, b), state=state, episode_start=episode_start,
+        r, state = self.model.predict(augment(self.history.push(obs), b), state=state, episode_start=episode_start,
                                       deterministic=deterministic)
         return compose(b, np.asarray(r).reshape(b.shape), self.scale, self.idle_scale), state

@@ -31,6 +31,7 @@ from typing import Any
 
 import numpy as np
 
+from ..policies.history import History, check_history
 from ..policies.residual import _Base, augment, compose
 from .tuning import refuse_test_split
 
@@ -62,7 +63,8 @@ def _student(job: dict[str, Any]) -> Any:
 
 def oracle_episode_job(job: dict[str, Any]) -> dict[str, Any]:
     """Worker entry: one labelled episode ``{env_id, env_kwargs, oracle, residual, student, seed, run_seed,
-    beta}`` -> the student's raw inputs, the oracle's actions, the base's, the labels and the return."""
+    beta[, history]}`` -> the student's raw inputs (the last ``history`` field observations stacked, and the
+    base action), the oracle's actions, the base's, the labels and the return."""
     import torch
 
     from ..evaluation.rollout import _cached_env
@@ -79,13 +81,14 @@ def oracle_episode_job(job: dict[str, Any]) -> dict[str, Any]:
     base = _Base(res["base"], res["params"], env)
     base.reset(env)
     oracle.reset(env)
+    hist = History(job.get("history", 1))  # the same stack the evaluation's residual policy builds
     rows: dict[str, list[np.ndarray]] = {"x": [], "a_oracle": [], "a_base": [], "label": []}
     done, total = False, 0.0
     while not done:
         b = base.act(obs)
         a_o = np.asarray(oracle.predict(obs)[0], np.float32).reshape(2)  # plans on a deep copy of this true state
         label = label_of(a_o, b, res["scale"], res.get("idle_scale"))
-        x = augment(obs, b)
+        x = augment(hist.push(obs), b)
         own = np.zeros(2, np.float32)  # a fresh student is the base until its first fit
         if student is not None:
             own = np.asarray(student.predict(x, deterministic=True)[0], np.float32).reshape(2)
@@ -133,20 +136,25 @@ def save_obs_norm(x: np.ndarray, path: Path) -> None:
 
 
 def oracle_jobs(env_id: str, env_kwargs: dict[str, Any], oracle: dict[str, Any], residual: dict[str, Any],
-                student: dict[str, Any] | None, seeds: Sequence[int], beta: float, run_seed: int) -> list[dict]:
+                student: dict[str, Any] | None, seeds: Sequence[int], beta: float, run_seed: int,
+                history: int = 1) -> list[dict]:
     return [{"env_id": env_id, "env_kwargs": env_kwargs, "oracle": oracle, "residual": residual,
-             "student": student, "seed": int(s), "beta": float(beta), "run_seed": int(run_seed)} for s in seeds]
+             "student": student, "seed": int(s), "beta": float(beta), "run_seed": int(run_seed),
+             "history": int(history)} for s in seeds]
 
 
 def distill_oracle(runner: Any, teacher: dict[str, Any], oracle: dict[str, Any], residual: dict[str, Any],
                    env_id: str, env_kwargs: dict[str, Any], policy_kwargs: dict[str, Any], seeds: Sequence[int],
                    seed: int, dest_zip: Path, log: Callable[[str], None] | None = None) -> dict[str, Any]:
     """DAgger from the causal oracle into a fresh field student (``teacher``: the run's checked teacher block;
-    ``oracle``: the CausalOraclePolicy kwargs with the tuned baselines); the student's policy spec."""
+    ``oracle``: the CausalOraclePolicy kwargs with the tuned baselines; its ``history`` K, default 1, is how many
+    field observations the student sees, stacked); the student's policy spec."""
     from ..evaluation.agent import AgentPolicy
     from .distill import fit_actor, write_student
 
     refuse_test_split(env_kwargs.get("scenario", "train"), "train")
+    k_hist = check_history(teacher.get("history", 1))
+    hist_key = {"history": k_hist} if k_hist != 1 else {}  # K = 1: today's spec, key for key
     t0 = time.perf_counter()
     init = dest_zip.with_name(dest_zip.stem + "_init.zip")
     norm = dest_zip.with_name(dest_zip.stem + "_obs_norm.npz")
@@ -158,7 +166,7 @@ def distill_oracle(runner: Any, teacher: dict[str, Any], oracle: dict[str, Any],
     history, student, spec = [], None, None
     for it in range(n_it):
         jobs = oracle_jobs(env_id, env_kwargs, oracle, residual, spec, seeds[it * per:(it + 1) * per],
-                           float(teacher.get("beta0", 0.5)) if it == 0 else 0.0, seed)
+                           float(teacher.get("beta0", 0.5)) if it == 0 else 0.0, seed, k_hist)
         eps = runner.map(jobs, fn=oracle_episode_job)
         xs += [e["x"] for e in eps]
         ys += [e["label"] for e in eps]
@@ -170,7 +178,7 @@ def distill_oracle(runner: Any, teacher: dict[str, Any], oracle: dict[str, Any],
         x = np.concatenate(xs)
         loss = fit_actor(student.model, student.norm(x), np.concatenate(ys), seed + it)
         write_student(init, student.model, dest_zip)
-        spec = {"path": str(dest_zip), "obs_norm": str(norm)}
+        spec = {"path": str(dest_zip), "obs_norm": str(norm), **hist_key}
         a_o, a_b = np.concatenate([e["a_oracle"] for e in eps]), np.concatenate([e["a_base"] for e in eps])
         history.append({"iteration": it, "episodes": len(eps), "labels": len(x), "mse": loss,
                         "rollout_mean_return": float(np.mean([e["reward"] for e in eps])),
@@ -184,5 +192,5 @@ def distill_oracle(runner: Any, teacher: dict[str, Any], oracle: dict[str, Any],
     a = np.concatenate(acts)
     np.savez(dest_zip.with_name(dest_zip.stem + "_labels.npz"), x=np.concatenate(xs), label=np.concatenate(ys),
              a_oracle=a[:, :2], a_base=a[:, 2:])
-    return {"kind": "agent", "path": str(dest_zip), "obs_norm": str(norm), "distill": history,
+    return {"kind": "agent", "path": str(dest_zip), "obs_norm": str(norm), **hist_key, "distill": history,
             "wall_time_s": time.perf_counter() - t0}
