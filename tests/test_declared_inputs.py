@@ -194,8 +194,10 @@ def test_ctrl_c_to_a_sweep_and_its_workers_is_one_line_and_leaves_nothing(tmp_pa
     import time
 
     root = Path(__file__).resolve().parents[1]
+    # 24 cases of 600 s (~6 s of work on 2 cores): with numba's caches warm, 4 cases of 30 s ended before the signal
+    values = ",".join(str(0.25 * i) for i in range(1, 25))
     p = subprocess.Popen([sys.executable, "-m", "srenv.tools.cli", "sweep", "paper_fig7_pullout", "--param",
-                          "surface.pull_velocity_m_s", "--values", "0.5,1,2,3", "--duration-s", "30", "--workers", "2",
+                          "surface.pull_velocity_m_s", "--values", values, "--duration-s", "600", "--workers", "2",
                           "--out", str(tmp_path / "s.csv")], cwd=tmp_path, stdout=subprocess.PIPE,
                          stderr=subprocess.PIPE, text=True, start_new_session=True,
                          env={**os.environ, "PYTHONPATH": str(root)})
