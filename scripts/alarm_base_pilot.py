@@ -34,7 +34,7 @@ from pathlib import Path
 from typing import Any
 
 from agents.benchmark.config import load_benchmark_config
-from agents.evaluation.rollout import Runner, episode_jobs
+from agents.evaluation.rollout import Runner
 from agents.policies.guarded import guarded_spec
 from agents.training.config import load_train_config
 from agents.training.oracle_distill import ORACLE_POLICIES, distill_oracle
@@ -75,42 +75,40 @@ def variants(tuned: dict[str, Any], students: list[Path]) -> dict[str, dict[str,
     return out
 
 
-def distill(out: Path, base: str, seed: int, seed_start: int, iterations: int, episodes: int, workers: int) -> None:
+def distill_student(out: Path, res: dict[str, Any], seed: int, seed_start: int, iterations: int, episodes: int,
+                    workers: int, teacher_extra: dict[str, Any] | None = None) -> tuple[list[int], dict[str, Any]]:
+    """One DAgger student of the causal oracle (the shipped design's teacher block, ``iterations`` x ``episodes``
+    training episodes from ``seed_start``) as the residual ``res``, written to ``out/student.zip``; the pilots' one
+    trainer. Returns the training seeds and the student's spec."""
     cfg = load_benchmark_config(str(CONFIG))
     tuned = tuned_params()
     run = cfg["agents"]["runs"]["oracle_distilled"]
-    teacher = {**run["teacher"], "iterations": iterations, "episodes": episodes}
+    teacher = {**run["teacher"], "iterations": iterations, "episodes": episodes, **(teacher_extra or {})}
     oracle = {**teacher["params"], "policies": [[b, tuned[b]] for b in ORACLE_POLICIES]}
-    res = {"base": base, "params": tuned[base], "scale": 0.5}
     pk = load_train_config(run["config"]).policy_kwargs
     seeds = list(range(seed_start, seed_start + iterations * episodes))
     out.mkdir(parents=True, exist_ok=True)
     with Runner(workers) as runner:
         spec = distill_oracle(runner, teacher, oracle, res, cfg["env_id"], {**cfg["env_kwargs"], "scenario": "train"},
                               pk, seeds, seed, out / "student.zip", log=lambda m: print(m, file=sys.stderr, flush=True))
+    return seeds, spec
+
+
+def distill(out: Path, base: str, seed: int, seed_start: int, iterations: int, episodes: int, workers: int) -> None:
+    res = {"base": base, "params": tuned_params()[base], "scale": 0.5}
+    seeds, spec = distill_student(out, res, seed, seed_start, iterations, episodes, workers)
     (out / "distill.json").write_text(json.dumps({"residual": res, "seeds": seeds, "spec": spec}, indent=1))
 
 
 def evaluate(out: Path, students: list[Path], workers: int) -> None:
     sys.path.insert(0, str(ROOT / "scripts"))
-    from guard_pilot import BASES, summarise  # the same paired table as the guard pilot
+    from guard_pilot import BASES, play_validation, summarise  # the guard pilot's player and paired table
 
     cfg = load_benchmark_config(str(CONFIG))
     tuned = tuned_params()
     specs = {b: {"kind": "baseline", "name": b, "params": tuned[b]} for b in BASELINES}
     specs.update(variants(tuned, students))
-    kw = {**cfg["env_kwargs"], "scenario": "train"}  # the validation split: training wells, its own seeds
-    out.mkdir(parents=True, exist_ok=True)
-    cache = out / "episodes.json"
-    eps: dict[str, Any] = json.loads(cache.read_text()) if cache.exists() else {}
-    todo = [n for n in specs if n not in eps]
-    jobs = [j for n in todo for j in episode_jobs(cfg["env_id"], kw, specs[n], cfg["validation"]["seeds"])]
-    with Runner(workers) as runner:
-        recs = runner.map(jobs)
-    n_v = len(cfg["validation"]["seeds"])
-    for i, n in enumerate(todo):
-        eps[n] = recs[i * n_v:(i + 1) * n_v]
-    cache.write_text(json.dumps(eps))
+    eps = play_validation(cfg, specs, out, workers)
     res = {"specs": specs, "summary": summarise(eps)}
     (out / "pilot.json").write_text(json.dumps(res, indent=1))
     print("| policy | USD/h | cost | vs fillage_pi [95 % CI] wins | vs alarm_pump_off [95 % CI] wins |")

@@ -103,6 +103,25 @@ def summarise(eps: dict[str, list[dict[str, Any]]], bases: tuple[str, ...] = BAS
     return out
 
 
+def play_validation(cfg: dict[str, Any], specs: dict[str, dict[str, Any]], out: Path,
+                    workers: int) -> dict[str, list[dict[str, Any]]]:
+    """Every spec on the config's validation episodes (training wells, the validation seeds), cached by name in
+    ``out/episodes.json``: a later call plays only the names not there yet. The pilots' one player."""
+    kw = {**cfg["env_kwargs"], "scenario": "train"}  # the validation split: training wells, its own seeds
+    out.mkdir(parents=True, exist_ok=True)
+    cache = out / "episodes.json"
+    eps: dict[str, Any] = json.loads(cache.read_text()) if cache.exists() else {}
+    todo = [n for n in specs if n not in eps]
+    jobs = [j for n in todo for j in episode_jobs(cfg["env_id"], kw, specs[n], cfg["validation"]["seeds"])]
+    with Runner(workers) as runner:
+        recs = runner.map(jobs)
+    n_v = len(cfg["validation"]["seeds"])
+    for i, n in enumerate(todo):
+        eps[n] = recs[i * n_v:(i + 1) * n_v]
+    cache.write_text(json.dumps(eps))
+    return eps
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("config")
@@ -116,17 +135,7 @@ def main() -> None:
     ens, tuned = shipped(a.report)
     specs: dict[str, dict[str, Any]] = {b: {"kind": "baseline", "name": b, "params": tuned[b]} for b in BASES}
     specs.update(variant_specs(ens, tuned, {n: VARIANTS[n] for n in a.variants or VARIANTS}))
-    kw = {**cfg["env_kwargs"], "scenario": "train"}  # the validation split: training wells, its own seeds
-    cache = a.out / "episodes.json"
-    eps: dict[str, Any] = json.loads(cache.read_text()) if cache.exists() else {}
-    todo = [n for n in specs if n not in eps]
-    jobs = [j for n in todo for j in episode_jobs(cfg["env_id"], kw, specs[n], cfg["validation"]["seeds"])]
-    with Runner(a.workers) as runner:
-        recs = runner.map(jobs)
-    n_v = len(cfg["validation"]["seeds"])
-    for i, n in enumerate(todo):
-        eps[n] = recs[i * n_v:(i + 1) * n_v]
-    cache.write_text(json.dumps(eps))
+    eps = play_validation(cfg, specs, a.out, a.workers)
     summ = summarise(eps)
     passed = {n: gate(summ[n], summ[FALLBACK]) for n in summ if n in VARIANTS}
     res = {"report": str(a.report), "seeds": cfg["validation"]["seeds"], "specs": specs, "summary": summ,

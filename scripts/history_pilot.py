@@ -27,14 +27,11 @@ from pathlib import Path
 from typing import Any
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from alarm_base_pilot import CONFIG, SHIPPED, member, on_base, tuned_params
-from guard_pilot import summarise
+from alarm_base_pilot import CONFIG, SHIPPED, distill_student, member, on_base, tuned_params
+from guard_pilot import play_validation, summarise
 
 from agents.benchmark.config import load_benchmark_config
-from agents.evaluation.rollout import Runner, episode_jobs
 from agents.policies.history import check_history
-from agents.training.config import load_train_config
-from agents.training.oracle_distill import ORACLE_POLICIES, distill_oracle
 
 BASELINES = ("pump_off", "fillage_pi", "alarm_pump_off")
 RESIDUAL = {"base": "pump_off", "scale": 0.5}  # the shipped students' base and scale
@@ -43,18 +40,8 @@ RESIDUAL = {"base": "pump_off", "scale": 0.5}  # the shipped students' base and 
 def distill(out: Path, history: int, seed: int, seed_start: int, iterations: int, episodes: int,
             workers: int) -> None:
     check_history(history)  # refused before anything is written
-    cfg = load_benchmark_config(str(CONFIG))
-    tuned = tuned_params()
-    run = cfg["agents"]["runs"]["oracle_distilled"]
-    teacher = {**run["teacher"], "iterations": iterations, "episodes": episodes, "history": history}
-    oracle = {**teacher["params"], "policies": [[b, tuned[b]] for b in ORACLE_POLICIES]}
-    res = {**RESIDUAL, "params": tuned[RESIDUAL["base"]]}
-    pk = load_train_config(run["config"]).policy_kwargs
-    seeds = list(range(seed_start, seed_start + iterations * episodes))
-    out.mkdir(parents=True, exist_ok=True)
-    with Runner(workers) as runner:
-        spec = distill_oracle(runner, teacher, oracle, res, cfg["env_id"], {**cfg["env_kwargs"], "scenario": "train"},
-                              pk, seeds, seed, out / "student.zip", log=lambda m: print(m, file=sys.stderr, flush=True))
+    res = {**RESIDUAL, "params": tuned_params()[RESIDUAL["base"]]}
+    seeds, spec = distill_student(out, res, seed, seed_start, iterations, episodes, workers, {"history": history})
     (out / "distill.json").write_text(json.dumps({"residual": res, "seeds": seeds, "history": history,
                                                   "seed": seed, "spec": spec}, indent=1))
 
@@ -73,18 +60,7 @@ def evaluate(out: Path, students: dict[str, Path], workers: int) -> None:
     specs["shipped_seed0"] = on_base([member(SHIPPED[0])], "pump_off", tuned)
     specs["shipped_ensemble"] = on_base([member(p) for p in SHIPPED], "pump_off", tuned)
     specs.update({n: student_spec(d, tuned) for n, d in students.items()})
-    kw = {**cfg["env_kwargs"], "scenario": "train"}  # the validation split: training wells, its own seeds
-    out.mkdir(parents=True, exist_ok=True)
-    cache = out / "episodes.json"
-    eps: dict[str, Any] = json.loads(cache.read_text()) if cache.exists() else {}
-    todo = [n for n in specs if n not in eps]
-    jobs = [j for n in todo for j in episode_jobs(cfg["env_id"], kw, specs[n], cfg["validation"]["seeds"])]
-    with Runner(workers) as runner:
-        recs = runner.map(jobs)
-    n_v = len(cfg["validation"]["seeds"])
-    for i, n in enumerate(todo):
-        eps[n] = recs[i * n_v:(i + 1) * n_v]
-    cache.write_text(json.dumps(eps))
+    eps = play_validation(cfg, specs, out, workers)
     bases = ("alarm_pump_off", "pump_off", *list(students)[:1])
     runs = {n: json.loads((d / "distill.json").read_text()) for n, d in students.items()}
     res = {"specs": specs, "summary": summarise(eps, bases),
