@@ -254,11 +254,9 @@ def summary(cfg: WellConfig, card: PumpCard, convention: str = "true") -> dict:
     st = read_pump_state(card.pump_position_m, card.pump_load_n, p_out, plunger_area_m2(cfg.pump), friction,
                          cfg.pump.discharge_overpressure_pa)
     p_in = None if cfg.pump.load_source == "loads" else max(0.0, st["intake_pressure_pa"])
-    lines = {"upstroke_n": load_in_convention(st["upstroke_line_n"], convention, card.rod_end_pressure_pa,
-                                              card.rod_end_area_m2),
-             "downstroke_n": load_in_convention(st["downstroke_line_n"], convention, card.rod_end_pressure_pa,
-                                                card.rod_end_area_m2),
-             "fluid_load_n": st["fluid_load_n"], "fillage": st["fillage"]}
+    lines = {f"{k}_n": load_in_convention(st[f"{k}_line_n"], convention, card.rod_end_pressure_pa,
+                                          card.rod_end_area_m2) for k in ("upstroke", "downstroke")}
+    lines.update(fluid_load_n=st["fluid_load_n"], fillage=st["fillage"])
     return {
         "period_s": card.period_s,
         "spm": 60.0 / card.period_s,
