@@ -4,10 +4,12 @@ docs/realism.md, "The static load budget")."""
 from __future__ import annotations
 
 import dataclasses
+import json
 from pathlib import Path
 
 import numpy as np
 import pytest
+from conftest import assert_cli_refuses
 
 from srenv.analysis.field_model import pump_tvd_m, survey_stations
 from srenv.analysis.field_record import read_dynacard_json
@@ -71,3 +73,13 @@ def test_survey_weight_tvd_refuses_a_record_without_a_tvd_column():
         survey_stations(dataclasses.replace(rec, survey=rows), "tvd")
     with pytest.raises(ConfigError, match="survey-weight"):
         survey_stations(rec, "md")
+
+
+def test_validate_refuses_tvd_without_a_tvd_column_in_one_line(tmp_path):
+    """`srenv validate R.json --survey-weight tvd` on a record whose survey lacks a TVD: one line, exit 2."""
+    d = json.loads(RECORD.read_text())
+    del d["surveyData"][5]["TVD"]
+    rec = tmp_path / "no_tvd.json"
+    rec.write_text(json.dumps(d))
+    assert_cli_refuses(["validate", str(rec), "--survey-weight", "tvd", "--plot", str(tmp_path / "p.png")],
+                       tmp_path / "p.png", "surveyData[5].TVD", "--survey-weight tvd")
