@@ -25,7 +25,7 @@ def _archimedes_n(cfg) -> float:
 def test_couplings_are_buoyed_like_the_rod_body(with_couplings):
     """A vertical string with couplings hangs with its air weight times (1 - rho_f / rho_s), in the simulator's
     static state and in the diagnosis's weight per length. Before the fix the couplings' mass had no buoyancy:
-    rho_f / rho_s of their weight too heavy (347 N on this string)."""
+    rho_f / rho_s of their weight too heavy (341 N on this string)."""
     cfg = with_couplings("paper_fig3_vertical")
     sim = Simulator(cfg)
     expected = _archimedes_n(cfg)
