@@ -247,6 +247,8 @@ def validate(rec, params: list[str], strokes: int, convention: str, overrides: d
         csv = os.path.join(work, "motion.csv")
         _write_motion_csv(card, csv)
         if rec.config is not None:  # srenv's own record: its well YAML is the model, driven by the card
+            if survey_weight != "inclination":  # its YAML's survey is the model; it has no TVD column
+                raise ConfigError("--survey-weight", survey_weight, "inclination for a CSV record with --config")
             pump = rec.config.get("pump") or {}
             state = {"intake_pressure_pa": pump.get("intake_pressure_pa"), "fillage": pump.get("fillage"),
                      "plunger_friction_n": pump.get("plunger_friction_n"), "source": "config"}

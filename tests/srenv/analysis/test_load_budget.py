@@ -83,3 +83,14 @@ def test_validate_refuses_tvd_without_a_tvd_column_in_one_line(tmp_path):
     rec.write_text(json.dumps(d))
     assert_cli_refuses(["validate", str(rec), "--survey-weight", "tvd", "--plot", str(tmp_path / "p.png")],
                        tmp_path / "p.png", "surveyData[5].TVD", "--survey-weight tvd")
+
+
+def test_validate_refuses_tvd_for_a_csv_record(tmp_path):
+    """srenv's own record (card CSV + YAML) has no TVD column: --survey-weight tvd is refused in one line."""
+    card = tmp_path / "c.csv"
+    t = np.linspace(0.0, 10.0, 64, endpoint=False)
+    x = 0.75 * (1 - np.cos(2 * np.pi * t / 10.0))
+    np.savetxt(card, np.c_[t, x, 2e4 + 5e3 * np.sin(2 * np.pi * t / 10.0)], delimiter=",", comments="",
+               header="t_s,polished_rod_position_m,polished_rod_load_n")
+    assert_cli_refuses(["validate", str(card), "--config", "paper_fig3_vertical", "--survey-weight", "tvd",
+                        "--plot", str(tmp_path / "p.png")], tmp_path / "p.png", "--survey-weight", "CSV record")
