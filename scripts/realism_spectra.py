@@ -26,6 +26,7 @@ RIGID_TRANSFER = {"pump.liquid_compressibility_per_pa": 0.0}  # the realistic mo
 UNANCHORED = {"tubing.anchored": False}  # what-if: the records do not say whether the tubing is anchored
 MOTOR_WHAT_IFS = {"constant_crank_speed": {"enabled": False}, "motor_inertia_1e4": {"inertia_kg_m2": 1e4},
                   "motor_slip_0.13": {"rated_slip": 0.13}}
+FRICTION_WHAT_IFS = (0.1, 0.2)  # rod-tubing friction coefficients, what-ifs (the records give none)
 VERTICAL = {"survey.stations": []}  # the string's weight taken as if vertical (the vendor's diagnosis?)
 FIGURES = ("pprl_error_pct", "mprl_error_pct", "card_rms_pct_of_pprl", "pump_card_rms_pct_of_range",
            "pump_card_offset_n", "spectrum")
@@ -115,6 +116,12 @@ def main() -> None:
             "rigid_transfer": {key: validate(rec, [], 4, "effective", RIGID_TRANSFER)[0][key] for key in FIGURES},
             "vertical_weight": {key: validate(rec, [], 4, "effective", VERTICAL)[0][key] for key in FIGURES},
             "unanchored_tubing": {key: validate(rec, [], 4, "effective", UNANCHORED)[0][key] for key in FIGURES},
+            # the record's TVD column instead of its inclinations (validate --survey-weight tvd; docs/realism.md,
+            # "The static load budget") and rod-tubing friction the records do not give (validate: 0)
+            "survey_weight_tvd": {key: validate(rec, [], 4, "effective", survey_weight="tvd")[0][key]
+                                  for key in FIGURES},
+            **{f"rod_tubing_friction_{mu:g}": {key: validate(rec, [], 4, "effective", {"friction.coefficient": mu})[0][
+                key] for key in (*FIGURES, "card_offset_n")} for mu in FRICTION_WHAT_IFS},
             # the record's motor (used where the motion is the record's unit's, 11708328): off (constant crank
             # speed, the previous model) and the what-ifs of its unknowns (docs/realism.md, "The record's motor")
             **{name: {key: got[key] for key in (*FIGURES, "motor")} for name, got in (

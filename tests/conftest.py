@@ -209,3 +209,20 @@ def run_on_avx2_numpy(code: str) -> str:
                           text=True)
     assert done.returncode == 0, done.stderr[-2000:]
     return done.stdout
+
+
+@pytest.fixture
+def with_couplings():
+    """A shipped well with every taper's couplings at `coupling_kg_m` and a wellhead pressure (the couplings'
+    buoyancy and the static load budget: tests/srenv/physics/test_coupling_buoyancy.py, test_load_budget.py)."""
+    from srenv.config import apply_overrides, config_from_dict, read_raw
+
+    def make(name: str, coupling_kg_m: float = 0.3, p_wh: float = 5e5):
+        raw = read_raw(name)
+        tapers = raw["rod"]["tapers"]
+        for t in tapers:
+            t["coupling_mass_kg_per_m"] = coupling_kg_m
+        return config_from_dict(apply_overrides(raw, {"rod.tapers": tapers, "fluid.wellhead_pressure_pa": p_wh}))
+
+    return make
+

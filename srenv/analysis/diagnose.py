@@ -30,7 +30,7 @@ import numpy as np
 from ..config import WellConfig
 from ..physics.fluid import tubing_pressure_pa
 from ..physics.pump_inputs import column_below_rods_pa
-from ..physics.rod import GRAVITY_M_S2, build_mesh, damping_per_length
+from ..physics.rod import GRAVITY_M_S2, build_mesh, coupling_buoyancy_n_m, damping_per_length
 from ..physics.survey import Survey
 from ..surface_unit.measured_motion import read_card_csv, stroke_period_s
 
@@ -73,7 +73,8 @@ def segments(cfg: WellConfig, segment_length_m: float | None = None, damping_sca
     xm = 0.5 * (mesh.x_m[1:] + mesh.x_m[:-1])
     incl = survey.inclination(xm)
     rho_rod = mesh.rho_a_kg_m / mesh.area_m2
-    w_b = (rho_rod - cfg.fluid.density_kg_m3) * GRAVITY_M_S2 * mesh.area_m2
+    w_b = (rho_rod - cfg.fluid.density_kg_m3) * GRAVITY_M_S2 * mesh.area_m2 - coupling_buoyancy_n_m(
+        mesh, cfg.fluid.density_kg_m3)
     mu = cfg.friction.coefficient
     turn = survey.turn_rate(xm) if cfg.survey.three_d else np.zeros_like(xm)
     c = damping_per_length(mesh, cfg.damping)

@@ -72,31 +72,62 @@ def fluid_column_kg(rec: FieldRecord, tubing_inner_diameter_m: float = TUBING_ID
                      for h, t in zip(lengths, rec.tapers)))
 
 
-def pump_tvd_m(rec: FieldRecord) -> float:
+SURVEY_WEIGHTS = ("inclination", "tvd")
+
+
+def survey_stations(rec: FieldRecord, survey_weight: str = "inclination") -> list[dict]:
+    """The survey the model takes from the record (md_m, inclination_deg, azimuth_deg; [] = vertical).
+
+    ``inclination`` (the physics, the default): the record's inclinations. ``tvd``: the record's own TVD
+    column, each interval's inclination arccos(dTVD / dMD) - the convention of a record whose TVD column was
+    written vertical (7699227: TVD = MD at every station while the inclination reaches 40 deg; the vendor's
+    diagnosis follows it, docs/realism.md "The static load budget"). A station without a TVD is refused."""
+    if survey_weight not in SURVEY_WEIGHTS:
+        raise ConfigError("--survey-weight", survey_weight, f"one of {', '.join(SURVEY_WEIGHTS)}")
+    rows = [s for s in rec.survey if s["md_m"] > 0.0]
+    if not rows:
+        return []
+    if survey_weight == "inclination":
+        incl = [s["inclination_deg"] for s in rows]
+    else:
+        missing = [i for i, s in enumerate(rec.survey) if s.get("tvd_m") is None]
+        if missing:
+            raise ConfigError(f"surveyData[{missing[0]}].TVD", "missing", "a TVD at every station for "
+                              "--survey-weight tvd")
+        prev = [{"md_m": 0.0, "tvd_m": 0.0}] + rows[:-1]
+        incl = [math.degrees(math.acos(min(max((s["tvd_m"] - p["tvd_m"]) / (s["md_m"] - p["md_m"]), -1.0), 1.0)))
+                if s["md_m"] > p["md_m"] else 0.0 for s, p in zip(rows, prev)]
+    return [{"md_m": 0.0, "inclination_deg": 0.0, "azimuth_deg": 0.0}] + [
+        {"md_m": s["md_m"], "inclination_deg": i, "azimuth_deg": s["azimuth_deg"]} for s, i in zip(rows, incl)]
+
+
+def pump_tvd_m(rec: FieldRecord, survey_weight: str = "inclination") -> float:
     """True vertical depth of the pump from the record's survey (minimum curvature approximated by the
     trapezoidal rule on cos(inclination) every metre; vertical without a survey)."""
-    if not rec.survey:
+    stations = survey_stations(rec, survey_weight)
+    if not stations:
         return rec.pump_depth_m
-    md = np.array([s["md_m"] for s in rec.survey])
-    inc = np.radians([s["inclination_deg"] for s in rec.survey])
+    md = np.array([s["md_m"] for s in stations])
+    inc = np.radians([s["inclination_deg"] for s in stations])
     grid = np.linspace(0.0, rec.pump_depth_m, max(int(rec.pump_depth_m), 2))
     c = np.cos(np.interp(grid, md, inc))
     return float(np.sum(0.5 * (c[1:] + c[:-1]) * np.diff(grid)))
 
 
-def discharge_pressure_pa(rec: FieldRecord) -> float:
+def discharge_pressure_pa(rec: FieldRecord, survey_weight: str = "inclination") -> float:
     """Hydrostatic tubing pressure at the pump: tubing-head pressure plus the liquid column."""
-    return rec.tubing_pressure_pa + rec.fluid_density_kg_m3 * GRAVITY_M_S2 * pump_tvd_m(rec)
+    return rec.tubing_pressure_pa + rec.fluid_density_kg_m3 * GRAVITY_M_S2 * pump_tvd_m(rec, survey_weight)
 
 
-def pump_drag_n(rec: FieldRecord, fluid_load_n: float | None, intake_pressure_pa: float) -> float:
+def pump_drag_n(rec: FieldRecord, fluid_load_n: float | None, intake_pressure_pa: float,
+                survey_weight: str = "inclination") -> float:
     """The plunger's friction read off a diagnosed fluid load: the diagnosed load step between the upstroke
     and downstroke plateaus is (p_d - p_in) A_pl + 2 P_f, so P_f = (F_fluid - (p_d - p_in) A_pl) / 2 with the
     hydrostatic p_d (0 when the diagnosis carries no more than the pressures)."""
     if fluid_load_n is None:
         return 0.0
     a_pl = math.pi / 4 * rec.plunger_diameter_m ** 2
-    return max(0.0, 0.5 * (fluid_load_n - (discharge_pressure_pa(rec) - intake_pressure_pa) * a_pl))
+    return max(0.0, 0.5 * (fluid_load_n - (discharge_pressure_pa(rec, survey_weight) - intake_pressure_pa) * a_pl))
 
 
 def liquid_compressibility_per_pa(rec: FieldRecord) -> float:
@@ -107,10 +138,9 @@ def liquid_compressibility_per_pa(rec: FieldRecord) -> float:
 
 def well_config(rec: FieldRecord, card_csv: str, intake_pressure_pa: float, fillage: float = 1.0,
                 plunger_friction_n: float = 0.0, damping_factor: float = DEFAULT_DAMPING_FACTOR,
-                friction_coefficient: float = 0.0) -> dict:
+                friction_coefficient: float = 0.0, survey_weight: str = "inclination") -> dict:
     """The config dict of the record's well, driven by the measured motion in `card_csv` (t_s, position)."""
-    stations = [{"md_m": 0.0, "inclination_deg": 0.0, "azimuth_deg": 0.0}] + [
-        s for s in rec.survey if 0.0 < s["md_m"]] if rec.survey else []
+    stations = survey_stations(rec, survey_weight)
     # a pump below the listed rods is pump.depth_m; the intake at the pump is read as one atmosphere at least
     depth = rec.pump_depth_m if rec.pump_depth_m > rec.rod_length_m else None
     return {

@@ -35,7 +35,7 @@ class FieldRecord:
     plunger_diameter_m: float
     tubing_pressure_pa: float
     fluid_density_kg_m3: float
-    survey: list[dict] = field(default_factory=list)   # md_m, inclination_deg, azimuth_deg
+    survey: list[dict] = field(default_factory=list)   # md_m, inclination_deg, azimuth_deg, tvd_m (or None)
     water_cut: float | None = None
     intake_pressure_pa: float | None = None            # the vendor's analysis, where it has one
     fillage: float | None = None
@@ -287,7 +287,9 @@ def _survey(rows) -> list[dict]:
         w = f"surveyData[{i}]"
         out.append({"md_m": _num(s, "MD", w, 0.0, 100000.0, "ft"),
                     "inclination_deg": _num(s, "Inclination", w, 0.0, 180.0, "-", optional=True) or 0.0,
-                    "azimuth_deg": _num(s, "Azimuth", w, -360.0, 360.0, "-", optional=True) or 0.0})
+                    "azimuth_deg": _num(s, "Azimuth", w, -360.0, 360.0, "-", optional=True) or 0.0,
+                    # the record's own TVD column, read for `validate --survey-weight tvd` only (docs/realism.md)
+                    "tvd_m": _num(s, "TVD", w, 0.0, 100000.0, "ft", optional=True)})
     out.sort(key=lambda s: s["md_m"])
     return out if any(s["inclination_deg"] > 0 for s in out) else []
 

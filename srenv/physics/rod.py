@@ -25,6 +25,7 @@ class Mesh:
     rho_a_kg_m: np.ndarray     # element mass per length (rod + couplings)
     taper: np.ndarray          # element -> taper index
     damping_scale: np.ndarray | None = None  # per taper (rod.tapers[i].damping_scale); None = all 1
+    coupling_area_m2: np.ndarray | None = None  # steel beyond the body per length (couplings); None = none
 
     @property
     def n_nodes(self) -> int:
@@ -40,7 +41,7 @@ class Mesh:
 
 
 def build_mesh(rod: RodConfig, element_length_m: float) -> Mesh:
-    xs, lens, areas, ea, rhoa, taper = [0.0], [], [], [], [], []
+    xs, lens, areas, ea, rhoa, taper, extra = [0.0], [], [], [], [], [], []
     for k, t in enumerate(rod.tapers):
         n = max(1, math.ceil(t.length_m / element_length_m - 1e-9))
         h = t.length_m / n
@@ -51,10 +52,22 @@ def build_mesh(rod: RodConfig, element_length_m: float) -> Mesh:
             areas.append(area)
             ea.append(t.youngs_modulus_pa * area)
             rhoa.append(t.density_kg_m3 * area + t.coupling_mass_kg_per_m)
+            extra.append(t.coupling_mass_kg_per_m / t.density_kg_m3)  # the couplings' steel volume per length
             taper.append(k)
     scale = np.array([t.damping_scale for t in rod.tapers], dtype=float)
     return Mesh(np.array(xs), np.array(lens), np.array(areas), np.array(ea), np.array(rhoa), np.array(taper),
-                scale if np.any(scale != 1.0) else None)
+                scale if np.any(scale != 1.0) else None, np.array(extra) if any(extra) else None)
+
+
+def coupling_buoyancy_n_m(mesh: Mesh, fluid_density_kg_m3: float) -> np.ndarray:
+    """The buoyancy of the couplings per length of each element, rho_f g V_c (V_c = coupling mass / steel
+    density), before the survey's cos. The FE's pressure-area terms give the rod body's buoyancy, rho_f g A;
+    the fluid pushing on a coupling's two shoulders, a coupling length apart, adds its own volume's (all the
+    steel displaces liquid: buoyed weight = air weight (1 - rho_f / rho_s)). Zeros without couplings, so the
+    callers' arithmetic is unchanged there (docs/realism.md, "The static load budget")."""
+    if mesh.coupling_area_m2 is None:
+        return np.zeros_like(mesh.area_m2)
+    return fluid_density_kg_m3 * GRAVITY_M_S2 * mesh.coupling_area_m2
 
 
 def tridiag_assemble(elem: np.ndarray, diag_w: float, off_w: float) -> tuple[np.ndarray, np.ndarray]:

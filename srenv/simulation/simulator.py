@@ -28,6 +28,7 @@ from ..physics.pump_inputs import intake_at_pump_pa, pump_at_rod_end
 from ..physics.rod import (
     GRAVITY_M_S2,
     build_mesh,
+    coupling_buoyancy_n_m,
     damping,
     first_natural_frequency_hz,
     mass,
@@ -78,11 +79,14 @@ class Simulator(PumpCycle):
         self._k = (kd, ko)
         self._m = (md, mo)
         self._c = cd
-        # distributed load: buoyed weight along MD, (rho - rho_f) g cos(alpha) A, lumped per element half
+        # distributed load: buoyed weight along MD, ((rho - rho_f) A - rho_f V_c) g cos(alpha) (V_c: couplings),
+        # lumped per element half
         x_mid = 0.5 * (x[1:] + x[:-1])
         cos_mid = np.cos(self.survey.inclination(x_mid))
         rho_rod = mesh.rho_a_kg_m / mesh.area_m2
-        w_elem = (rho_rod - cfg.fluid.density_kg_m3) * GRAVITY_M_S2 * cos_mid * mesh.area_m2 * mesh.length_m
+        w_c = coupling_buoyancy_n_m(mesh, cfg.fluid.density_kg_m3)  # zeros without couplings
+        w_elem = ((rho_rod - cfg.fluid.density_kg_m3) * GRAVITY_M_S2 * cos_mid * mesh.area_m2
+                  - w_c * cos_mid) * mesh.length_m
         f_all = np.zeros(n + 1)
         f_all[:-1] += 0.5 * w_elem
         f_all[1:] += 0.5 * w_elem
@@ -92,7 +96,7 @@ class Simulator(PumpCycle):
         area_node = mesh.node_area_m2()
         rho_node = np.r_[rho_rod, rho_rod[-1]]
         incl = self.survey.inclination(x)
-        w_b = (rho_node - cfg.fluid.density_kg_m3) * GRAVITY_M_S2 * area_node
+        w_b = (rho_node - cfg.fluid.density_kg_m3) * GRAVITY_M_S2 * area_node - np.r_[w_c, w_c[-1]]
         turn = self.survey.turn_rate(x) if cfg.survey.three_d else np.zeros_like(x)
         self.side_force = rod_friction.side_force(cfg.friction.coefficient, trib, self.survey.build_rate(x), w_b,
                                                   incl, turn)

@@ -70,7 +70,7 @@ def _diagnose(cfg_dict: dict, rec) -> tuple[object, dict]:
     return card, summary(cfg, card)
 
 
-def pump_state(rec, work_dir: str) -> dict:
+def pump_state(rec, work_dir: str, survey_weight: str = "inclination") -> dict:
     """Intake pressure (Pa), fillage and plunger friction (N): the record's own analysis where it has one,
     else srenv's diagnosis of the measured card (never a fit to the surface card)."""
     from ..analysis.field_model import MIN_INTAKE_PA, pump_drag_n, well_config
@@ -82,11 +82,13 @@ def pump_state(rec, work_dir: str) -> dict:
         # srenv's diagnosis of the measured card read as the field reads it: the load lines' fluid load at the
         # pump's own depth, p_in = p_d - F_o / A_pl (no plunger friction: the whole fluid load is pressure),
         # held at one atmosphere at least, and the fillage where the transfer ends (analysis/pump_intake.py)
-        _, s = _diagnose(well_config(rec, os.path.join(work_dir, "motion.csv"), MIN_INTAKE_PA), rec)
+        _, s = _diagnose(well_config(rec, os.path.join(work_dir, "motion.csv"), MIN_INTAKE_PA,
+                                     survey_weight=survey_weight), rec)
         lines = s["load_lines"]
         p_in = max(float(s["intake_pressure_pa"]), MIN_INTAKE_PA)
         fill, fluid, source = float(lines["fillage"]), float(lines["fluid_load_n"]), "srenv diagnose"
-    return {"intake_pressure_pa": p_in, "fillage": fill, "plunger_friction_n": pump_drag_n(rec, fluid, p_in),
+    return {"intake_pressure_pa": p_in, "fillage": fill,
+            "plunger_friction_n": pump_drag_n(rec, fluid, p_in, survey_weight),
             "source": source, "load_lines": lines}
 
 
@@ -230,10 +232,11 @@ def compare(rec, sim, result, pump_card, convention: str) -> dict:
 
 
 def validate(rec, params: list[str], strokes: int, convention: str, overrides: dict | None = None,
-             motor: dict | None = None) -> tuple[dict, object]:
+             motor: dict | None = None, survey_weight: str = "inclination") -> tuple[dict, object]:
     """Predict, diagnose and compare one record (`overrides`: config fields set on the realistic model,
     e.g. for the baseline of docs/realism.md; `motor`: fields set over the record's motor, e.g.
-    ``{"inertia_kg_m2": 1e4}``, or ``{"enabled": False}`` for constant crank speed)."""
+    ``{"inertia_kg_m2": 1e4}``, or ``{"enabled": False}`` for constant crank speed; `survey_weight`: the
+    survey column the string follows, ``field_model.survey_stations``)."""
     from dataclasses import replace
 
     from ..analysis.field_model import well_config
@@ -244,15 +247,18 @@ def validate(rec, params: list[str], strokes: int, convention: str, overrides: d
         csv = os.path.join(work, "motion.csv")
         _write_motion_csv(card, csv)
         if rec.config is not None:  # srenv's own record: its well YAML is the model, driven by the card
+            if survey_weight != "inclination":  # its YAML's survey is the model; it has no TVD column
+                raise ConfigError("--survey-weight", survey_weight, "inclination for a CSV record with --config")
             pump = rec.config.get("pump") or {}
             state = {"intake_pressure_pa": pump.get("intake_pressure_pa"), "fillage": pump.get("fillage"),
                      "plunger_friction_n": pump.get("plunger_friction_n"), "source": "config"}
             cfg = apply_overrides(rec.config, {"surface.motion": "measured", "surface.measured_card_csv": csv,
                                                "surface.measured_spm": rec.spm, **dict(overrides or {})})
         else:
-            state = pump_state(rec, work)
+            state = pump_state(rec, work, survey_weight)
             cfg = apply_overrides(well_config(rec, csv, state["intake_pressure_pa"], state["fillage"],
-                                              state["plunger_friction_n"]), dict(overrides or {}))
+                                              state["plunger_friction_n"], survey_weight=survey_weight),
+                                  dict(overrides or {}))
         fitted = None
         if params:
             fitted = _fit(cfg, card, params, strokes, work)
@@ -280,7 +286,7 @@ def validate(rec, params: list[str], strokes: int, convention: str, overrides: d
                 "motion_source": "record unit" if getattr(card, "motion_from_unit", False) else "card",
                 "card_time_reversed": bool(getattr(rec, "time_reversed", False)),
                 "record_card_type": getattr(rec, "card_type", None),
-                "pump_state": state,
+                "pump_state": state, "survey_weight": survey_weight,
                 "diagnosis": {k: diag[k] for k in ("fillage", "card_class", "fluid_load_n", "intake_pressure_pa")},
                 "fit": fitted, "model": {"damping_factor": cfg.get("damping", {}).get("damping_factor"),
                                          "fillage": cfg.get("pump", {}).get("fillage")}})
@@ -300,7 +306,8 @@ def read_record(path: str, config: str | None, reverse: bool):
 def cmd_validate(args) -> int:
     check_output_path("--plot", args.plot, (".png",))
     rec = read_record(args.record, args.config, args.reverse)
-    out, parts = validate(rec, list(args.fit or []), args.strokes, args.load_convention)
+    out, parts = validate(rec, list(args.fit or []), args.strokes, args.load_convention,
+                          survey_weight=args.survey_weight)
     try:  # a figure that is not finite is a failure, not a result (and NaN is not JSON)
         line = json.dumps(out, default=float, allow_nan=False)
     except ValueError:
@@ -314,6 +321,7 @@ def cmd_validate(args) -> int:
 
 
 def add_parser(sub) -> None:
+    from ..analysis.field_model import SURVEY_WEIGHTS
     from ..declarations import add_number
 
     v = sub.add_parser("validate", help="predict and diagnose a field record, compared with its measured card")
@@ -324,6 +332,9 @@ def add_parser(sub) -> None:
     v.add_argument("--reverse", action="store_true", help="the card is stored in reverse time: reverse it")
     v.add_argument("--load-convention", choices=LOAD_CONVENTIONS, default="effective",
                    help="pump loads compared as true loads or effective (buoyant) loads (the vendor's)")
+    v.add_argument("--survey-weight", choices=SURVEY_WEIGHTS, default="inclination",
+                   help="the string follows the record's inclinations (the physics) or its TVD column (a vendor "
+                        "JSON's convention: 7699227's TVD column is vertical; docs/realism.md)")
     add_number(v, "validate", "--strokes", default=DEFAULT_STROKES,
                help=f"strokes simulated from the static state; the last is compared (default {DEFAULT_STROKES})")
     v.set_defaults(func=cmd_validate)

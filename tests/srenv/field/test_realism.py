@@ -204,38 +204,42 @@ def test_validate_prints_the_contract_keys(figures, well):
 @pytest.mark.parametrize("well", WELLS)
 def test_validate_figures_held_today(figures, well):
     """What the realistic model reaches today without fitting (docs/realism.md): PPRL within 5 % (7699227) and
-    10 % (11708328, whose pump state is now read off its diagnosis by the load lines: -8.9 %), MPRL within
-    12 %, the card within 9 % of PPRL, the load spectrum above the 20th harmonic within 3x the measured share
-    (38-39x with the previous damping)."""
+    10 % (11708328, whose pump state is now read off its diagnosis by the load lines: -9.6 %), MPRL within
+    9.5 % (11708328) and 13.5 %, the card within 9 % of PPRL, the load spectrum above the 20th harmonic within
+    3x the measured share (38-39x with the previous damping). Since the couplings' buoyancy (docs/realism.md,
+    "The static load budget") the strings weigh 0.36-0.39 kN less: 11708328 PPRL -8.9 -> -9.6 %, MPRL -7.9 ->
+    -9.1 %, card 5.19 -> 5.58 %, pump card 2.5 -> 4.2 % (a loss: the vendor's card sits lower still)."""
     d = figures[well]
     assert abs(d["pprl_error_pct"]) <= (10.0 if well == "11708328" else 5.0)
-    assert abs(d["mprl_error_pct"]) <= (9.0 if well == "11708328" else 13.5)
+    assert abs(d["mprl_error_pct"]) <= (9.5 if well == "11708328" else 13.5)
     assert d["card_rms_pct_of_pprl"] <= 9.0
     assert d["spectrum"]["ratio_above_h20"] <= 3.0
     if well == "11708328":  # srenv's diagnosis against the vendor's pump card, in its effective convention
-        assert d["pump_card_rms_pct_of_range"] <= 3.0
+        assert d["pump_card_rms_pct_of_range"] <= 4.5
         # its position channel is a synthesised cosine: driven by its own unit's four-bar, the card meets the
         # goal (7.1 -> 5.75 % of PPRL) while MPRL (-11.6 -> -13.0 %) and harmonics 4-20 (2.2x -> 3.1x) move off;
         # the record's 20 hp NEMA D motor then lets the crank slow under the torque: 5.68 %, -12.7 %, 2.92x;
         # the pump state read off the diagnosis by the load lines (4.13 MPa, fillage 0.63 instead of 284 kPa,
         # 0.815): PPRL +1.1 -> -8.9 %, MPRL -12.7 -> -7.9 %, card 5.68 -> 5.19 %, harmonics 2.92 -> 3.15x
         assert d["position_synthesised"] and d["motion_source"] == "record unit"
-        assert d["card_rms_pct_of_pprl"] <= 5.3 and d["spectrum"]["ratio_h4_20"] <= 3.3
+        assert d["card_rms_pct_of_pprl"] <= 5.7 and d["spectrum"]["ratio_h4_20"] <= 3.3
         assert d["pump_state"]["intake_pressure_pa"] > 3e6 and d["pump_state"]["plunger_friction_n"] < 1.0
         assert d["motor"]["used"] and d["motor"]["nema_design"] == "D" and d["motor"]["converged"]
     else:
         assert not d["position_synthesised"] and d["motion_source"] == "card"
         assert not d["motor"]["used"]  # a measured position already carries the motor's slip
         assert d["spectrum"]["ratio_h4_20"] <= 1.3
-        # 7699227's diagnosed pump card against the vendor's: shifted (+0.9 kN, the deviated string's weight
-        # explains a constant 1.3 kN) and short (its downstroke 1.2 kN further above; docs/realism.md)
+        # 7699227's diagnosed pump card against the vendor's: shifted (+1.2 kN, the deviated string's weight
+        # explains a constant 1.3 kN: the vendor's diagnosis follows the record's vertical TVD column) and
+        # short (its downstroke 1.2 kN further above; docs/realism.md)
         off = d["pump_card_offset_n"]
         assert off["downstroke"] - off["upstroke"] > 1000.0 and 0.0 < off["upstroke"] < 1500.0
 
 
-@pytest.mark.xfail(strict=True, reason="issue 27's goal, not reached yet: 11708328's PPRL 8.9 % and MPRL 7.9 % "
-                   "low, its harmonics 4-20 3.2x the measured share; 7699227's MPRL 7.7 % high, its card 8.7 % "
-                   "of PPRL RMS (a constant 3.3 kN) and its diagnosed pump card 8.5 % of range (docs/realism.md)")
+@pytest.mark.xfail(strict=True, reason="issue 27's goal, not reached yet: 11708328's PPRL 9.6 % and MPRL 9.1 % "
+                   "low, its harmonics 4-20 3.2x the measured share, its pump card 4.2 %; 7699227's MPRL 5.9 % "
+                   "high, its card 8.1 % of PPRL RMS (a constant 2.9 kN) and its diagnosed pump card 10.0 % of "
+                   "range (docs/realism.md)")
 @pytest.mark.parametrize("well", WELLS)
 def test_validate_meets_the_issue_goal(figures, well):
     d = figures[well]
@@ -439,9 +443,10 @@ def test_vendor_prediction_is_read_checked_and_scored_like_srenv(tmp_path, figur
 @pytest.mark.parametrize("well", WELLS)
 def test_card_difference_splits_into_level_and_shape(figures, well):
     """card RMS² = offset² + shape RMS² (the same difference, resampled on position); 7699227's prediction sits a
-    constant 3.3 kN above its measured card (docs/realism.md: a load cell's zero or the string's weight) and its
-    shape is within 6 % of PPRL; 11708328's error is mostly its shape (4.5 %), over a level 1.4 kN low since
-    its pump state is read off the load lines (a fluid load too small for the top of its upstroke)."""
+    constant 2.9 kN above its measured card (3.3 before the couplings' buoyancy; docs/realism.md "The static load
+    budget": no term of the description explains it) and its shape is within 6 % of PPRL; 11708328's error is
+    mostly its shape (4.5 %), over a level 1.8 kN low (1.4 before the couplings' buoyancy) since its pump state
+    is read off the load lines (a fluid load too small for the top of its upstroke)."""
     d = figures[well]
     pprl = d["measured_pprl_n"]
     total = math.hypot(100 * d["card_offset_n"] / pprl, d["card_shape_rms_pct_of_pprl"])
