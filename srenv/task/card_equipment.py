@@ -20,12 +20,17 @@ SINKER_DIAMETERS_MM = (31.75, 38.1, 44.45)  # API sinker bars 1.25 / 1.5 / 1.75 
 SINKER_FRACTION = (0.05, 0.20)  # of the string, from its bottom
 # the config wants the bottom rod thinner than the plunger (the pressure loads act on the difference): a drawn
 # size that is not is capped at the largest of these below the plunger (1.125 in for a 1.25-in plunger)
-SINKER_CAP_SIZES_MM = (28.575, 31.75, 38.1, 44.45)
+SINKER_CAP_SIZES_MM = (25.4, 28.575, 31.75, 38.1, 44.45)  # 25.4: under a 1.06-in plunger (--plungers api)
 FIBERGLASS_SHARE = 0.3
 FIBERGLASS_DIAMETERS_MM = (25.4, 31.75)  # API 11C fiberglass rods 1 / 1.25 in
 FIBERGLASS_FRACTION = (0.40, 0.70)  # of the string, from its top
 INCLINATION_RANGE_DEG = (8.0, 60.0)  # deviated wells' maximum inclination (the family's: 8-35 deg)
 MIN_TAPER_M = 1.0  # the config's shortest taper: a steel taper cut shorter is dropped
+# --plungers api (run 8): the API pump bores the family lacks at its small end. A full pump's card is a flowing
+# card's when the fluid load over the buoyant rod weight is low (docs/conditions.md, "Full against flowing"):
+# 1.06-in pumps on deep strings reach 0.12-0.2, below every full card of the family (0.22 at its 1st percentile)
+PLUNGER_SETS = ("family", "api")
+API_SMALL_BORE_MM = 26.9875  # 1.06 in (1 1/16 in)
 # the columns an equipment set adds (docs/cards_dataset.md); 0 = none
 COLUMNS = ("plunger_friction_n", "sinker_bar_diameter_mm", "sinker_bar_length_m", "fiberglass_diameter_mm",
            "fiberglass_length_m")
@@ -54,6 +59,17 @@ def draw_equipment(rng) -> Equipment:
     incl = float(rng.uniform(*INCLINATION_RANGE_DEG))
     return Equipment(round(drag, 1), d_sb if sinker else 0.0, round(f_sb, 4) if sinker else 0.0,
                      d_fg if glass else 0.0, round(f_fg, 4) if glass else 0.0, round(incl, 1))
+
+
+def api_plunger(params, u: float | None):
+    """The family's well parameters with the plunger drawn (``u`` uniform in [0, 1)) from the family's sizes at
+    the well's depth and the 1.06-in bore (--plungers api); ``None``: the family's own plunger."""
+    if u is None:
+        return params
+    from .well_family import plunger_sizes_mm
+
+    sizes = [API_SMALL_BORE_MM, *plunger_sizes_mm(params.depth_m)]
+    return dataclasses.replace(params, plunger_diameter_mm=sizes[min(int(u * len(sizes)), len(sizes) - 1)])
 
 
 def deviated(params, eq: Equipment | None):

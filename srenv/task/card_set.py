@@ -72,6 +72,7 @@ class Draw:
     unanchored: bool = False
     surface: str = "family"  # "v2": driven by the well's v2 unit (its geometry drawn from the well's seed)
     equipment: card_equipment.Equipment | None = None  # --equipment field (run 7): drag, sinker bars, fiberglass
+    plunger_u: float | None = None  # --plungers api (run 8): the plunger's draw among the API bores; None: family's
 
 
 def _corner_weighted(rng) -> float:
@@ -81,7 +82,7 @@ def _corner_weighted(rng) -> float:
 
 
 def draw(seed: int, index: int, attempt: int, labels: tuple[str, ...], surface: str = "family",
-         equipment: str = "none") -> Draw:
+         equipment: str = "none", plungers: str = "family") -> Draw:
     rng = np.random.default_rng(np.random.SeedSequence([seed, index, attempt]))
     well_seed = WELL_SEED0 + seed * 1_000_003 + index // CARDS_PER_WELL + attempt * 100_000_007
     label = labels[int(rng.integers(len(labels)))]
@@ -104,9 +105,12 @@ def draw(seed: int, index: int, attempt: int, labels: tuple[str, ...], surface: 
         raise ValueError(f"equipment = {equipment!r}: expected one of {', '.join(card_equipment.EQUIPMENT)}")
     # drawn after every older field (the v2 surface's too): a set without it is what it was
     eq = card_equipment.draw_equipment(rng) if equipment == "field" else None
+    if plungers not in card_equipment.PLUNGER_SETS:
+        raise ValueError(f"plungers = {plungers!r}: expected one of {', '.join(card_equipment.PLUNGER_SETS)}")
+    u_plunger = float(rng.uniform()) if plungers == "api" else None  # after every older draw, as the equipment
     return Draw(well_seed, label, severity, *base, kv_tau_s=tau, column_mass=column_mass,
                 oil_compressibility_per_pa=c_oil if compressible else 0.0, unanchored=unanchored, surface=surface,
-                equipment=eq)
+                equipment=eq, plunger_u=u_plunger)
 
 
 def field_overrides(d: Draw, well) -> dict[str, object]:
@@ -155,7 +159,8 @@ def card_config(d: Draw):
     from ..analysis.condition_card import condition_config
     from .well_family import draw_params, spec_from_params
 
-    spec = spec_from_params(card_equipment.deviated(draw_params(d.well_seed), d.equipment), f"card{d.well_seed}")
+    params = card_equipment.api_plunger(card_equipment.deviated(draw_params(d.well_seed), d.equipment), d.plunger_u)
+    spec = spec_from_params(params, f"card{d.well_seed}")
     well = card_equipment.with_equipment(spec.cfg, d.equipment)  # before the condition: heavy oil adds to the drag
     c = well.control
     spm = round(c.spm_min + d.spm * (c.spm_max - c.spm_min), 3)
@@ -191,13 +196,13 @@ def resample(t: np.ndarray, y: np.ndarray, n: int = N_POINTS) -> np.ndarray:
 
 
 def make_card(seed: int, index: int, labels: tuple[str, ...], surface: str = "family",
-              equipment: str = "none") -> dict:
+              equipment: str = "none", plungers: str = "family") -> dict:
     """Card ``index`` of set ``seed``: arrays, label, severity, the well's numbers."""
     from ..analysis.condition_card import simulate_card
     from ..errors import ConfigError, NumericFailure, SolverFailure
 
     for attempt in range(MAX_ATTEMPTS):
-        d = draw(seed, index, attempt, labels, surface, equipment)
+        d = draw(seed, index, attempt, labels, surface, equipment, plungers)
         try:
             cfg = card_config(d)
             card = simulate_card(cfg)

@@ -152,9 +152,7 @@ def draw_params(seed: int, stream: int | None = None) -> WellParams:
         return float(rng.uniform(lo, hi))
 
     depth = u("depth_m")
-    # larger plungers only in shallower wells: the fluid load grows with depth x plunger area
-    d_max = 63.5 - (63.5 - 38.1) * (depth - 500.0) / 2000.0
-    sizes = [d for d in PLUNGERS_MM if d <= d_max + 1e-9]
+    sizes = plunger_sizes_mm(depth)
     shape = SURVEY_SHAPES[int(rng.choice(3, p=[0.3, 0.4, 0.3]))]
     return WellParams(
         depth_m=round(depth, 1),
@@ -172,6 +170,13 @@ def draw_params(seed: int, stream: int | None = None) -> WellParams:
         decline_per_day=round(u("decline_per_day"), 3),
         dogleg_seed=int(rng.integers(2**31)),
     )
+
+
+def plunger_sizes_mm(depth_m: float) -> list[float]:
+    """The family's plunger sizes at a depth: larger plungers only in shallower wells (the fluid load grows with
+    depth x plunger area)."""
+    d_max = 63.5 - (63.5 - 38.1) * (depth_m - 500.0) / 2000.0
+    return [d for d in PLUNGERS_MM if d <= d_max + 1e-9]
 
 
 # ------------------------------------------------------------------------------------------- design

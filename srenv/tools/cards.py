@@ -1,5 +1,5 @@
 """``srenv cards --n N --out DIR [--conditions ...] [--seed S] [--workers W] [--surface family|v2]
-[--equipment none|field]``: a labelled synthetic card set.
+[--equipment none|field] [--plungers family|api]``: a labelled synthetic card set.
 
 Writes ``DIR/cards.npz`` (columns in docs/cards_dataset.md; the same seed gives the same bytes whatever
 the number of workers) and ``DIR/dataset_card.json`` (the schema, the labels, the split counts). Cards are
@@ -46,6 +46,9 @@ def add_parser(sub) -> None:
                    help="none (default; sets 1-6): the family's API steel strings, 500 N plunger drag, deviation to "
                         "35 deg; field (run 7): per card a plunger drag of 0.2-4 kN, sinker bars, a fiberglass top, "
                         "deviation to 60 deg (docs/cards_dataset.md)")
+    c.add_argument("--plungers", choices=("family", "api"), default="family",
+                   help="family (default; sets 1-8): the family's plunger sizes; api (run 8): per card the plunger "
+                        "drawn from those and the 1.06-in API bore (docs/cards_dataset.md)")
     c.add_argument("--no-progress", action="store_true", help="no progress bar")
     c.set_defaults(func=main)
 
@@ -82,11 +85,11 @@ def _one(job: tuple) -> dict:
 
 
 def simulate_set(n: int, seed: int, labels: tuple[str, ...], workers: int, progress: bool,
-                 surface: str = "family", equipment: str = "none") -> list[dict]:
+                 surface: str = "family", equipment: str = "none", plungers: str = "family") -> list[dict]:
     """Cards 0..n-1 of set ``seed``, in order (each card depends on (seed, index) only)."""
     from tqdm import tqdm
 
-    jobs = [(seed, i, labels, surface, equipment) for i in range(n)]
+    jobs = [(seed, i, labels, surface, equipment, plungers) for i in range(n)]
     bar = tqdm(total=n, desc="cards", unit="card", file=sys.stderr, disable=not progress)
     try:
         if workers <= 1:
@@ -111,7 +114,7 @@ def simulate_set(n: int, seed: int, labels: tuple[str, ...], workers: int, progr
 
 
 def dataset_card(cols: dict, seed: int, labels: tuple[str, ...], surface: str = "family",
-                 equipment: str = "none") -> dict:
+                 equipment: str = "none", plungers: str = "family") -> dict:
     import numpy as np
 
     from ..task.card_equipment import COLUMNS
@@ -124,7 +127,8 @@ def dataset_card(cols: dict, seed: int, labels: tuple[str, ...], surface: str = 
             "splits": {s: int(np.sum(cols["split"] == s)) for s in SPLITS},
             "cards_per_label": {names[k]: int(np.sum(cols["label"] == k)) for k in range(len(names))},
             "doc": "docs/cards_dataset.md", **({"surface": surface} if surface != "family" else {}),
-            **({"equipment": equipment} if equipment != "none" else {})}
+            **({"equipment": equipment} if equipment != "none" else {}),
+            **({"plungers": plungers} if plungers != "family" else {})}
 
 
 def main(args: argparse.Namespace) -> int:
@@ -137,11 +141,13 @@ def main(args: argparse.Namespace) -> int:
     workers = args.workers or max(1, len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity")
                                   else (os.cpu_count() or 1))
     surface, equipment = getattr(args, "surface", "family"), getattr(args, "equipment", "none")
-    cards = simulate_set(args.n, args.seed, labels, min(workers, args.n), not args.no_progress, surface, equipment)
+    plungers = getattr(args, "plungers", "family")
+    cards = simulate_set(args.n, args.seed, labels, min(workers, args.n), not args.no_progress, surface, equipment,
+                         plungers)
     cols = columns(cards)
     out.mkdir(exist_ok=True)
     atomic_write(out / "cards.npz", lambda tmp: write_npz(tmp, cols))
-    meta = dataset_card(cols, args.seed, labels, surface, equipment)
+    meta = dataset_card(cols, args.seed, labels, surface, equipment, plungers)
     atomic_write(out / "dataset_card.json",
                  lambda tmp: Path(tmp).write_text(json.dumps(meta, indent=1, sort_keys=True) + "\n"))
     print(json.dumps({"out": str(out), "n_cards": meta["n_cards"], "splits": meta["splits"]}))
