@@ -50,6 +50,12 @@ ap.add_argument("--env-id", default="srenv/SuckerRod-v1", help="the env of --env
                 "against a checkout that has it)")
 ap.add_argument("--after-runner", default="{}", help="JSON of interval-runner options for the after side's env")
 args = ap.parse_args()
+try:
+    after_runner = json.loads(args.after_runner)
+except ValueError:
+    after_runner = None
+if not isinstance(after_runner, dict):
+    ap.error(f"--after-runner = {args.after_runner!r}: expected a JSON object, e.g. '{{\"follow_drift\": true}}'")
 reps, strokes = args.repeats, args.strokes
 code = r'''
 import sys, time, json

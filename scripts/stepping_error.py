@@ -24,6 +24,8 @@ ap.add_argument("--follow-drift", action="store_true", help="v2 with IntervalRun
 ap.add_argument("--skip-v2-off", action="store_true", help="leave out v2 with fast_stepping=False")
 ap.add_argument("--json")
 args = ap.parse_args()
+if any(k < 0 for k in args.exact_min):
+    ap.error(f"--exact-min = {args.exact_min}: expected integers >= 0")
 options = ({"v1": {}, "fast_stepping": {"fast_stepping": True}} if args.version == "v1" else
            {"v2_fast_off": {"fast_stepping": False}, "v2": {}})
 if args.skip_v2_off:

@@ -7,15 +7,18 @@ the bound (by the standard error and by the first K strokes of the every-stroke 
 import argparse
 import json
 
+from srenv.tools.stepping_error import POLICIES
 from srenv.tools.stroke_variability import FIGURES, every_stroke_intervals, variability
 
 ap = argparse.ArgumentParser()
 ap.add_argument("--wells", type=int, nargs="+", default=[0, 1, 2, 3, 4, 5, 6, 7])
 ap.add_argument("--hours", type=float, default=2.0)
-ap.add_argument("--policies", nargs="+", default=["full_speed", "vsd_minimum"])
+ap.add_argument("--policies", nargs="+", default=["full_speed", "vsd_minimum"], choices=POLICIES)
 ap.add_argument("--bound", type=float, default=0.005)
 ap.add_argument("--json")
 args = ap.parse_args()
+if not 0 < args.bound < 1:
+    ap.error(f"--bound = {args.bound}: expected a fraction in (0, 1), e.g. 0.005")
 rows = []
 for policy in args.policies:
     for seed in args.wells:
