@@ -21,6 +21,11 @@ The same for v2 against a checkout that has it (``--env-id``, both sides):
 
     python scripts/bench_interleaved.py /tmp/main . --env --env-id srenv/SuckerRod-v2 --repeats 10
 
+An opt-in stepping option of the interval runner against the default, one tree on both sides (``--after-runner``:
+the after side's runner attributes set at every reset, srenv/task/stepping.py):
+
+    python scripts/bench_interleaved.py . . --env --env-id srenv/SuckerRod-v2 --after-runner '{"follow_drift": true}'
+
 CPU ms per reset of a well not seen before (v2 and v1, train wells 11-40 after a warm-up reset and step on seed 3):
 
     python scripts/bench_interleaved.py /tmp/main . --resets --repeats 6
@@ -43,7 +48,14 @@ ap.add_argument("--resets", action="store_true", help="CPU ms per reset of an un
 ap.add_argument("--fast-stepping", action="store_true", help="the after side's env with fast_stepping=True")
 ap.add_argument("--env-id", default="srenv/SuckerRod-v1", help="the env of --env (both sides: e.g. srenv/SuckerRod-v2 "
                 "against a checkout that has it)")
+ap.add_argument("--after-runner", default="{}", help="JSON of interval-runner options for the after side's env")
 args = ap.parse_args()
+try:
+    after_runner = json.loads(args.after_runner)
+except ValueError:
+    after_runner = None
+if not isinstance(after_runner, dict):
+    ap.error(f"--after-runner = {args.after_runner!r}: expected a JSON object, e.g. '{{\"follow_drift\": true}}'")
 reps, strokes = args.repeats, args.strokes
 code = r'''
 import sys, time, json
@@ -67,6 +79,7 @@ import numpy as np, gymnasium as gym
 import srenv  # noqa: F401  (registers the envs)
 kw = {"fast_stepping": True} if sys.argv[2] == "fast" else {}
 env_id = sys.argv[3]
+runner_kw = json.loads(sys.argv[4])
 out = {}
 for label, a0 in (("full_speed", 1.0), ("vsd_minimum", -0.6)):
     a = np.array([a0, 1.0], np.float32)
@@ -74,6 +87,8 @@ for label, a0 in (("full_speed", 1.0), ("vsd_minimum", -0.6)):
     n, t0 = 0, time.process_time()
     for seed in (11, 12):
         env.reset(seed=seed)
+        for k, v in runner_kw.items():  # a fresh runner: setting its options is building it with them
+            setattr(env.unwrapped.runner, k, v)
         for _ in range(12):
             env.step(a); n += 1
     out[label] = n / (time.process_time() - t0)
@@ -104,7 +119,8 @@ res = {k: [] for k in trees}
 for r in range(reps):
     for side in (("before", "after") if r % 2 == 0 else ("after", "before")):
         mode = "fast" if side == "after" and args.fast_stepping else "plain"
-        argv = [sys.executable, "-c", env_code, "0", mode, args.env_id] if args.env else \
+        argv = [sys.executable, "-c", env_code, "0", mode, args.env_id,
+                args.after_runner if side == "after" else "{}"] if args.env else \
             [sys.executable, "-c", code, str(strokes)]
         if args.kernel:
             argv = [sys.executable, "-c", kernel_code]

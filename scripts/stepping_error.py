@@ -2,6 +2,7 @@
 ``fast_stepping=True``; or, with ``--version v2``, v2 as it is (fast stepping on) and v2 with it off.
 
     python scripts/stepping_error.py --wells 0 1 2 3 --hours 1 [--version v2] [--json out.json]
+    python scripts/stepping_error.py --version v2 --follow-drift --exact-min 2 4 [--skip-v2-off]   # the options
 
 Wells are seeds of the benchmark's test scenario; each policy of srenv.tools.stepping_error runs one episode
 per well three ways (every stroke exact and the two options) and the relative errors are printed.
@@ -16,19 +17,34 @@ ap.add_argument("--wells", type=int, nargs="+", default=[0, 1, 2, 3])
 ap.add_argument("--hours", type=float, default=1.0)
 ap.add_argument("--policies", nargs="+", default=list(POLICIES), choices=POLICIES)
 ap.add_argument("--version", default="v1", choices=("v1", "v2"))
+ap.add_argument("--scenario", default="test", help="the wells' scenario (train wells for designing an option)")
+ap.add_argument("--exact-min", type=int, nargs="*", default=[],
+                help="v2 with IntervalRunner(exact_min=K) for each K (srenv/task/stepping.py)")
+ap.add_argument("--follow-drift", action="store_true", help="v2 with IntervalRunner(follow_drift=True)")
+ap.add_argument("--skip-v2-off", action="store_true", help="leave out v2 with fast_stepping=False")
 ap.add_argument("--json")
 args = ap.parse_args()
+if any(k < 0 for k in args.exact_min):
+    ap.error(f"--exact-min = {args.exact_min}: expected integers >= 0")
 options = ({"v1": {}, "fast_stepping": {"fast_stepping": True}} if args.version == "v1" else
            {"v2_fast_off": {"fast_stepping": False}, "v2": {}})
+if args.skip_v2_off:
+    options.pop("v2_fast_off", None)
+if args.follow_drift:
+    options["v2_drift"] = {"runner": {"follow_drift": True}}
+for k in args.exact_min:
+    options[f"v2_exact{k}"] = {"runner": {"exact_min": k}}
+    if args.follow_drift:
+        options[f"v2_exact{k}_drift"] = {"runner": {"exact_min": k, "follow_drift": True}}
 rows = []
 for policy in args.policies:
     for seed in args.wells:
-        r = compare(policy, seed, args.hours, options=options, version=args.version)
+        r = compare(policy, seed, args.hours, scenario=args.scenario, options=options, version=args.version)
         rows.append(r)
         for label in options:
             e = r[label]["relative_error"]
             worst = max(e, key=e.get)
-            print(f"{policy:16s} well {seed:3d} {label:14s}: production {100 * e['production_m3']:7.3f} %, PPRL "
+            print(f"{policy:16s} well {seed:3d} {label:16s}: production {100 * e['production_m3']:7.3f} %, PPRL "
                   f"{100 * e['pprl_max_n']:7.3f} %, return {100 * e['return']:7.3f} %, worst {worst} "
                   f"{100 * e[worst]:.3f} %; exact strokes {r[label]['figures']['exact_strokes']} of "
                   f"{r['reference']['exact_strokes']}", flush=True)

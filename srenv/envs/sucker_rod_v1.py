@@ -41,7 +41,7 @@ Flat float32 ``Box(-10, 10)``; names in ``FIELD_OBS_NAMES`` / ``PRIVILEGED_OBS_N
 :func:`obs_index`). Field (77): the last pumped stroke's surface card (load-cell load / the unit's PPRL rating on
 32 positions per branch), the running SPM and average SPM (/ ``spm_max``), stroke (-1..1 over its range), duty
 (fraction of the last interval pumped), idle time since the pump last ran (h), the controller's fillage
-estimate read off the downhole card (``task.fillage_estimator``: :func:`srenv.task.interval.controller_fillage`), mean and peak polished-rod power (/ rating x max speed), PPRL and
+estimate read off the downhole card (``task.fillage_estimator``: :func:`srenv.task.fillage_reading.controller_fillage`), mean and peak polished-rod power (/ rating x max speed), PPRL and
 MPRL (/ rating), time remaining (fraction of the horizon), the last acoustic fluid-level shot (level above the
 pump / pump depth, every ``task.level_shot_interval_h``) and its age (/ horizon). Privileged (88) adds the true
 annulus level, intake pressure, true fillage, current inflow (/ nominal) and the hidden well parameters.

@@ -19,7 +19,8 @@ by ``tests/test_interval.py`` (production and PPRL within 1 %).
 Options (off in v1; v2's default, docs/speed.md): ``reuse_periodic`` starts an interval from the stroke an
 earlier interval at the same setpoint converged to, while the intake pressure has barely moved and the physics
 is the same; ``carry`` also carries a kept stroke to a farther intake pressure along the slopes of two kept
-strokes (:mod:`srenv.task.reuse`).
+strokes (:mod:`srenv.task.reuse`). Opt-in, off everywhere: ``exact_min`` and ``follow_drift``
+(:mod:`srenv.task.stepping`).
 """
 
 from __future__ import annotations
@@ -33,7 +34,8 @@ from ..analysis import card_features as cf
 from ..analysis.stroke_summary import summarize
 from ..physics.pump import plunger_area_m2
 from ..simulation.simulator import RunResult, Simulator
-from . import reuse
+from . import reuse, stepping
+from .fillage_reading import controller_fillage
 
 # the fast option (IntervalRunner(reuse_periodic=True)): how far the intake pressure may move the plunger's
 # fluid load, as a fraction of the reused stroke's PPRL, and how many setpoints' strokes are kept
@@ -101,22 +103,6 @@ def string_stiffness_n_m(sim: Simulator) -> float:
     return float(1.0 / np.sum(sim.mesh.length_m / sim.mesh.ea_n))
 
 
-def controller_fillage(sim: Simulator, summary: dict, tr: dict) -> float:
-    """The fillage a pump-off controller reads (``task.fillage_estimator``): off the downhole card as modern
-    controllers compute it, or off the surface card."""
-    how = sim.cfg.task.fillage_estimator
-    if how == "pump_card":
-        return float(summary["card_fillage"])
-    if how == "diagnose":
-        from ..analysis.diagnose import diagnose_card
-        from ..analysis.pump_card import analyse_pump_card
-
-        pc = diagnose_card(sim.cfg, tr["t_s"], tr["polished_rod_position_m"], tr["polished_rod_load_n"],
-                           period_s=float(tr["t_s"][-1] - tr["t_s"][0] + (tr["t_s"][1] - tr["t_s"][0])))
-        return float(analyse_pump_card(pc.pump_position_m, pc.pump_load_n)["fillage"])
-    return cf.fillage_estimate(tr["polished_rod_position_m"], tr["polished_rod_load_n"])
-
-
 def stroke_figures(sim: Simulator, r: RunResult, fatigue_life: float, fatigue_exponent: float,
                    stiffness_n_m: float, defer: bool = False) -> StrokeFigures:
     """``defer``: the summary's gearbox figures no cost reads (the optimal counterbalance, the powers) are None
@@ -127,13 +113,13 @@ def stroke_figures(sim: Simulator, r: RunResult, fatigue_life: float, fatigue_ex
     tr = r.trace
     a_pl = plunger_area_m2(sim.cfg.pump)
     disp = a_pl * max(m["pump_stroke_m"], 0.0)
-    g = max(m["goodman_max_pct"], 0.0)
     p_mean, p_peak = cf.polished_rod_power_w(tr["polished_rod_position_m"], tr["polished_rod_velocity_m_s"],
                                              tr["polished_rod_load_n"], tr["t_s"])
     return StrokeFigures(
         summary=m, trace=tr, lifted_m3=r.pumped_m3, displacement_m3=disp, fillage=r.fillage,
         fillage_est=controller_fillage(sim, m, tr),
-        work_j=m["card_work_j_per_stroke"], damage=(g / 100.0) ** fatigue_exponent / fatigue_life,
+        work_j=m["card_work_j_per_stroke"], damage=reuse.fatigue_damage(m["goodman_max_pct"], fatigue_exponent,
+                                                                   fatigue_life),
         stick_slip_j=cf.stick_slip_energy_j(tr["pump_position_m"], tr["pump_velocity_m_s"], tr["pump_load_n"],
                                             stiffness_n_m),
         impact_m_s=cf.impact_speed_m_s(tr["pump_position_m"], tr["pump_velocity_m_s"], tr["pump_load_n"]),
@@ -153,8 +139,10 @@ class IntervalRunner:
     """Runs control intervals on one simulator (see the module docstring)."""
 
     def __init__(self, sim: Simulator, reuse_periodic: bool = False, carry: bool = False,
-                 draw_at_top: bool = False) -> None:
+                 draw_at_top: bool = False, exact_min: int = 0, follow_drift: bool = False) -> None:
         self.sim = sim
+        # opt-in (srenv/task/stepping.py): K exact strokes an interval, their mean repeated; figures along the drift
+        self.exact_min, self.follow_drift = stepping.check(exact_min, follow_drift, carry)
         # draw_at_top (v2): a fast-forwarded stroke draws its liquid at the upstroke's end as an exact stroke does
         # (v1 draws at the stroke's end: the annulus is then empty at the bottom where an exact stroke finds the
         # downstroke's inflow, and the exact strokes after a fast-forward pound on that; docs/speed.md)
@@ -193,6 +181,7 @@ class IntervalRunner:
         self._fast_forward = fast_forward
         if not fast_forward:
             exact_max = 10**9
+        exact_max = max(exact_max, self.exact_min)
         res = IntervalResult(duration_s=duration_s)
         t0 = sim.time_s
         res.annulus_start_m3 = ann.volume_m3 if ann is not None else 0.0
@@ -260,9 +249,11 @@ class IntervalRunner:
         area = plunger_area_m2(self.sim.cfg.pump)
         p_now = self._intake_pa()
         if abs(p_now - p_in) * area <= REUSE_LOAD_FRACTION * abs(f.summary["pprl_n"]):
+            self._held_pa = p_in  # the pressure the reused figures hold at (follow_drift moves them from there)
             return f
         s = self._slopes.get(key) if self.carry else None
         if s is not None and s.reaches(p_now):  # v2: carried along two kept strokes' slopes (srenv/task/reuse.py)
+            self._held_pa = p_now
             return reuse.carried(f, s, p_now - p_in)
         return None
 
@@ -346,9 +337,11 @@ class IntervalRunner:
         transient_w = 0.0 if setpoint == self._setpoint and not self._restart else None
         self._setpoint = setpoint
         key = (spm, stroke_m, self._restart)
-        reused = self._reusable(key, transient_w is not None or self._restart)
+        reused = self._reusable(key, (transient_w is not None or self._restart) and not self.exact_min)
+        pressures, settled = [], 0  # the pressure each of `exact` holds at; the first settled one (exact_min)
         if reused is not None:
             exact.append(reused)
+            pressures.append(self._held_pa)
             need_exact, transient_w = False, 0.0
         p_exact = None  # the intake pressure of the last stroke simulated here
         while done < n_total - 1e-9:
@@ -364,7 +357,7 @@ class IntervalRunner:
                     lifted *= w
                 if transient_w is None:  # the first stroke after a change: its costs wait for the next one
                     self._add(res, f, w, lifted, w * f.displacement_m3, costs=False)
-                    transient_w = w
+                    transient_w, settled = w, 1
                 else:
                     self._add(res, f, w, lifted, w * f.displacement_m3)
                     if transient_w > 0:
@@ -375,16 +368,18 @@ class IntervalRunner:
                 res.exact_strokes += 1
                 done += w
                 exact.append(f)
+                pressures.append(p_exact)
                 if len(exact) >= 2:
                     a, b = exact[-2].summary, exact[-1].summary
                     e1, e2 = exact[-2].stick_slip_j, exact[-1].stick_slip_j
                     need_exact = not self._fast_forward or not (abs(exact[-1].fillage - exact[-2].fillage) < 0.01
                                       and abs(b["pprl_n"] / a["pprl_n"] - 1.0) < 0.005
                                       and abs(e2 - e1) <= 0.1 * max(e1, e2) + 1.0)
+                need_exact = need_exact or res.exact_strokes < self.exact_min
                 continue
-            # fast-forward from the last exact stroke
-            done, need_exact = self._repeat_stroke(res, exact[-1], period, n_total, done, t_end, len(exact),
-                                                  exact_max, need_exact)
+            # fast-forward from the last exact stroke (or the options' stroke: srenv/task/stepping.py)
+            done, need_exact = stepping.fast_forward(self, res, exact, pressures, settled, key, period, n_total,
+                                                     done, t_end, exact_max, need_exact)
         if transient_w and exact:  # no settled stroke followed: the transient stroke prices itself
             self._add_costs(res, exact[0], transient_w)
         res.last = completed(exact[-1]) if exact else None

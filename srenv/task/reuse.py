@@ -53,3 +53,41 @@ def carried(f, s: Slopes, dp: float):
     summary = dict(f.summary)
     summary.update({k: f.summary[k] + s.of[k] * dp for k in SUMMARY if k in f.summary})
     return dataclasses.replace(f, summary=summary, **new)
+
+
+def fatigue_damage(goodman_pct: float, exponent: float, life_cycles: float) -> float:
+    """A stroke's fatigue damage from its Goodman loading in %: (G/100)^m / life (economics.fatigue_*)."""
+    return (max(goodman_pct, 0.0) / 100.0) ** exponent / life_cycles
+
+
+# --- the opt-in stepping options (IntervalRunner(exact_min=K, follow_drift=True); docs/speed.md §2g) ---
+
+def mean_stroke(strokes: list):
+    """One stroke standing for ``strokes`` (figures of one setpoint): each per-stroke figure their mean, the
+    impact speed their root mean square (the pound term sums its square), the card and summary the last's.
+    A fast-forward repeating it books the strokes' mean where repeating the last books one stroke's scatter."""
+    if len(strokes) == 1:
+        return strokes[0]
+    new = {k: sum(getattr(f, k) for f in strokes) / len(strokes) for k in SCALARS}
+    new["impact_m_s"] = (sum(f.impact_m_s ** 2 for f in strokes) / len(strokes)) ** 0.5
+    return dataclasses.replace(strokes[-1], **new)
+
+
+def drift(f, s: Slopes, p_f: float, weight: float, p_start: float, p_end: float,
+          damage_of=None) -> tuple[dict, list]:
+    """What ``weight`` fast-forwarded strokes repeating ``f`` (figures at intake pressure ``p_f``) book too much
+    or too little when the intake pressure moved from ``p_start`` to ``p_end`` over them: the figures at the run's
+    mean pressure (the level moves near-linearly over a run) less ``f``'s, times ``weight``, per interval sum; and
+    the summaries at the run's two ends for the peaks. ``damage_of(goodman_pct)``: the fatigue damage a stroke of
+    that Goodman loading does (a power law: carried linearly it falls behind as the loading grows), averaged over
+    the run by Simpson's rule."""
+    ends = [carried(f, s, p - p_f) for p in (p_start, p_end)]
+    g = carried(f, s, 0.5 * (p_start + p_end) - p_f)
+    damage = g.damage
+    if damage_of is not None:
+        damage = sum(w * damage_of(h.summary["goodman_max_pct"]) for w, h in zip((1, 4, 1), (ends[0], g, ends[1])))
+        damage /= 6.0
+    sums = {"work_j": g.work_j - f.work_j, "damage": damage - f.damage, "stick_slip_j": g.stick_slip_j
+            - f.stick_slip_j, "impact_sq_sum": g.impact_m_s ** 2 - f.impact_m_s ** 2,
+            "impact_sum": g.impact_m_s - f.impact_m_s}
+    return {k: weight * v for k, v in sums.items()}, [h.summary for h in ends]

@@ -82,7 +82,8 @@ def compare(policy: str, seed: int, hours: float, scenario: str = "test", interv
             options: dict | None = None, version: str = "v1") -> dict:
     """One episode of `hours` on well `seed` of `scenario` of task ``version`` ("v1" or "v2"; v2 draws the same
     conditions for every run of a seed): each of ``options`` (a label -> env kwargs; default v1 as it is and v1
-    with fast_stepping=True) against every stroke simulated exactly."""
+    with fast_stepping=True) against every stroke simulated exactly. An option's ``"runner"`` entry (a dict of
+    ``exact_min`` / ``follow_drift``, srenv/task/stepping.py) is set on the env's interval runner at its reset."""
     from ..task.interval import IntervalRunner
 
     cls = env_class(version)
@@ -93,7 +94,10 @@ def compare(policy: str, seed: int, hours: float, scenario: str = "test", interv
     ref = _episode_every_stroke(ref_env, seed, acts, functools.partial(IntervalRunner.run, fast_forward=False))
     out = {"policy": policy, "seed": seed, "hours": hours, "reference": ref}
     for label, kw in options.items():
-        got = episode(cls(scenario=scenario, episode_hours=hours, interval_s=interval_s, **kw), seed, acts)
+        kw = dict(kw)
+        runner_kw = kw.pop("runner", None)
+        env = cls(scenario=scenario, episode_hours=hours, interval_s=interval_s, **kw)
+        got = episode(env, seed, acts) if not runner_kw else _episode_with_runner_options(env, seed, acts, runner_kw)
         out[label] = {"figures": got, "relative_error": relative_errors(ref, got)}
     return out
 
@@ -108,6 +112,27 @@ def _episode_every_stroke(env, seed: int, acts: np.ndarray, run) -> dict:
         return obs, info
 
     env.reset = reset_every_stroke
+    try:
+        return episode(env, seed, acts)
+    finally:
+        env.reset = reset
+
+
+def _episode_with_runner_options(env, seed: int, acts: np.ndarray, runner_kw: dict) -> dict:
+    """episode() with the opt-in stepping options set on the env's fresh interval runner (it keeps no state before
+    its first interval, so this is the runner built with them)."""
+    from ..task import stepping
+
+    reset = env.reset
+
+    def reset_with_options(**kw):
+        obs, info = reset(**kw)
+        r = env.runner
+        r.exact_min, r.follow_drift = stepping.check(runner_kw.get("exact_min", 0), runner_kw.get("follow_drift",
+                                                     False), r.carry)
+        return obs, info
+
+    env.reset = reset_with_options
     try:
         return episode(env, seed, acts)
     finally:
