@@ -36,6 +36,10 @@ def make_baseline(name: str, params: dict[str, Any], obs_names: Sequence[str]) -
         from .causal_oracle import CausalOraclePolicy
 
         return CausalOraclePolicy(**dict(params))
+    if name == "estimated_mpc":  # the causal oracle's planner on an estimated model (agents/policies/estimated_mpc.py)
+        from .estimated_mpc import EstimatedMPCPolicy
+
+        return EstimatedMPCPolicy(**dict(params))
     if name not in FIELD_BASELINES and name != "constant":
         raise ValueError(f"baseline {name!r}: expected one of {', '.join(BASELINE_NAMES)}")
     return make_field_baseline(name, params, obs_names)
