@@ -32,6 +32,8 @@ from typing import Any
 
 import numpy as np
 
+from srenv.task.events import NORMAL
+
 from .causal_oracle import CausalOraclePolicy, freeze_future
 from .field import make_field_baseline, obs_names_of
 
@@ -97,13 +99,15 @@ class EstimatedMPCPolicy(CausalOraclePolicy):
 
     def __init__(self, horizon: int = 6, replan_every: int = 3, steps: Sequence[float] = (0.3, 0.1),
                  anchors: Sequence[Sequence[float]] = (), policies: Sequence[Sequence[Any]] = (),
-                 library: str | None = None) -> None:
+                 library: str | None = None, guard: dict[str, Any] | None = None) -> None:
         if not (isinstance(horizon, int) and not isinstance(horizon, bool) and 1 <= horizon <= 144):
             raise ValueError(f"estimated_mpc horizon = {horizon!r}: expected an integer in [1, 144] intervals")
         super().__init__(horizon=horizon, replan_every=replan_every, steps=steps, anchors=anchors, policies=policies)
         self.library_path = library
         self.library = WellLibrary.load(library or LIBRARY)
+        self.guard = check_guard(guard)
         self._twin: Any = None
+        self._fallback: list[Any] | None = None
 
     def reset(self, env: Any, index: int | None = None) -> None:
         if index not in (None, 0):
@@ -115,6 +119,8 @@ class EstimatedMPCPolicy(CausalOraclePolicy):
         self._plan, self._k, self._since, self._follow, self._live = None, 0, 0, None, {}
         self.planned_reward, self.plan_source, self.sim_steps = math.nan, "", 0
         self.model_well = -1
+        self.guarded_intervals = 0
+        self._fallback = None
         self._shot_age = math.inf
 
     def _start(self, obs: np.ndarray) -> None:
@@ -135,6 +141,11 @@ class EstimatedMPCPolicy(CausalOraclePolicy):
             if hasattr(pol, "reset"):
                 pol.reset(view)
             self._live[name] = [pol, None, True]
+        if self.guard is not None:
+            pol = make_field_baseline(*self.guard["fallback"], self._names)
+            if hasattr(pol, "reset"):
+                pol.reset(view)
+            self._fallback = [pol, None, True]
 
     def _set_level(self, level_m: float) -> None:
         ann = self._twin.sim.annulus
@@ -154,6 +165,13 @@ class EstimatedMPCPolicy(CausalOraclePolicy):
         elif real >= FULL > model:
             self._set_level(max(self._twin.sim.annulus.level_m, REFILL * depth))
 
+    def _alarmed(self, obs: np.ndarray) -> bool:
+        """The guard (:func:`check_guard`) on the real card: pounding, near overload, or an abnormal condition."""
+        g, i = self.guard, self._names.index
+        probs = [obs[i(n)] for n in self._names if n.startswith("prob_") and n[5:] not in NORMAL]
+        return bool(obs[i("fillage_est")] < g["pound_below"] or obs[i("pprl")] > g["load_above"]
+                    or (probs and max(probs) > g["condition_prob"]))
+
     def _model(self) -> Any:
         return freeze_future(copy.deepcopy(self._twin))
 
@@ -167,9 +185,40 @@ class EstimatedMPCPolicy(CausalOraclePolicy):
             self._start(row)
         self._correct(row)
         action, state = super().predict(observation, state, episode_start, deterministic)
+        if self._fallback is not None:  # the fallback runs all episode on the real observations (its state)
+            fb = self._fallback
+            a_fb, fb[1] = fb[0].predict(row, state=fb[1], episode_start=np.array([fb[2]]))
+            fb[2] = False
+            if self._alarmed(row):
+                action = np.asarray(a_fb, np.float32).reshape(np.shape(action))
+                self.guarded_intervals += 1
         self._twin.step(np.asarray(action, np.float32).reshape(2))
         self.sim_steps += 1
         return action, state
 
     def params(self) -> dict[str, Any]:
-        return {**super().params(), **({"library": self.library_path} if self.library_path else {})}
+        return {**super().params(), **({"library": self.library_path} if self.library_path else {}),
+                **({"guard": self.guard} if self.guard is not None else {})}
+
+
+GUARD_KEYS = ("fallback", "pound_below", "load_above", "condition_prob")
+
+
+def check_guard(guard: Any) -> dict[str, Any] | None:
+    """``guard``: None, or ``{fallback: [field baseline, params], pound_below, load_above, condition_prob}``: on an
+    interval whose real card pounds (``fillage_est`` < pound_below), nears overload (``pprl`` > load_above) or
+    shows a condition (a classifier probability of a label other than full / fluid_pound > condition_prob), the
+    fallback's action is played - where the twin, which has no conditions and an estimated level and well, is
+    least to be trusted."""
+    if guard is None:
+        return None
+    if not isinstance(guard, dict) or set(guard) != set(GUARD_KEYS):
+        raise ValueError(f"estimated_mpc guard = {guard!r}: expected None or a mapping of exactly {list(GUARD_KEYS)}")
+    fb = guard["fallback"]
+    if not (isinstance(fb, (list, tuple)) and len(fb) == 2 and isinstance(fb[0], str) and isinstance(fb[1], dict)):
+        raise ValueError(f"estimated_mpc guard.fallback = {fb!r}: expected [field baseline name, params]")
+    for k in GUARD_KEYS[1:]:
+        v = guard[k]
+        if isinstance(v, bool) or not isinstance(v, (int, float)) or not 0.0 <= v <= 1.5:
+            raise ValueError(f"estimated_mpc guard.{k} = {v!r}: expected a number in [0, 1.5]")
+    return {"fallback": [fb[0], dict(fb[1])], **{k: float(guard[k]) for k in GUARD_KEYS[1:]}}
