@@ -30,6 +30,7 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
+import yaml
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from guard_pilot import INTERVALS, summarise
@@ -95,6 +96,7 @@ def _job(job: dict[str, Any]) -> dict[str, Any]:
     rec["cpu_s"] = time.process_time() - t0
     rec["model_well"] = getattr(pol, "model_well", None)
     rec["sim_steps"] = getattr(pol, "sim_steps", None)
+    rec["guarded_intervals"] = getattr(pol, "guarded_intervals", None)
     return rec
 
 
@@ -117,7 +119,7 @@ def play(cfg: dict[str, Any], specs: dict[str, dict[str, Any]], seeds: list[int]
     return {n: sorted([e for e in eps[n] if e["seed"] in seeds], key=lambda e: e["seed"]) for n in specs}
 
 
-def specs_for(stage: str, tuned: dict[str, dict[str, Any]], design: dict[str, Any] | None) -> dict[str, Any]:
+def specs_for(stage: str, tuned: dict[str, dict[str, Any]], designs: dict[str, Any] | None) -> dict[str, Any]:
     weigh = {"policies": [[b, tuned[b]] for b in ("pump_off", "fillage_pi")]}
     out = {b: {"kind": "baseline", "name": b, "params": tuned[b]} for b in ("alarm_pump_off", "pump_off")}
     if stage == "voi":
@@ -125,7 +127,7 @@ def specs_for(stage: str, tuned: dict[str, dict[str, Any]], design: dict[str, An
         out.update({n: {"kind": "pilot", "name": n, "params": {**PLANNER, **weigh}} for n in DEGRADED})
         out["estimated_mpc"] = {"kind": "baseline", "name": "estimated_mpc", "params": {**PLANNER, **weigh}}
     else:
-        out["estimated_mpc"] = design
+        out.update(designs or {})
     return out
 
 
@@ -143,20 +145,22 @@ def main() -> None:
     ap.add_argument("--first", type=int, default=8, help="voi: the first N validation episodes")
     ap.add_argument("--workers", type=int, default=2)
     a = ap.parse_args()
-    cfg = load_benchmark_config(str(CONFIG if a.stage == "gate" else V2))
+    cfg = load_benchmark_config(str(V2))  # the env, its kwargs and the validation seeds (= the design file's)
     seeds = list(cfg["validation"]["seeds"])[: a.first if a.stage == "voi" else None]
     tuned = {k: v["params"] for k, v in load_report(REPORT)["tuned"].items()}
-    design = cfg.get("design_spec") if a.stage == "gate" else None
-    specs = specs_for(a.stage, tuned, design)
+    designs = yaml.safe_load(CONFIG.read_text())["designs"] if a.stage == "gate" else None
+    specs = specs_for(a.stage, tuned, designs)
     eps = play(cfg, specs, seeds, a.out, min(a.workers, 2))
     summ = summarise(eps, ("alarm_pump_off", "pump_off"))
     for n, e in eps.items():
         summ[n]["cpu_s_per_episode"] = float(np.mean([x["cpu_s"] for x in e]))
     res: dict[str, Any] = {"stage": a.stage, "seeds": seeds, "specs": specs, "summary": summ,
                            "per_episode_usd_h": {k: [round(e["reward"] / INTERVALS, 3) for e in v] for k, v in eps.items()},
-                           "model_well": [e["model_well"] for e in eps["estimated_mpc"]]}
+                           "model_well": [e["model_well"] for e in eps["estimated_mpc"]],
+                           "guarded_intervals": {n: [e.get("guarded_intervals") for e in v] for n, v in eps.items()
+                                                 if n.startswith("estimated_mpc")}}
     if a.stage == "gate":
-        res["gate"] = gate(summ["estimated_mpc"], summ["alarm_pump_off"])
+        res["gate"] = {n: gate(summ[n], summ["alarm_pump_off"]) for n in designs}
     (a.out / "pilot.json").write_text(json.dumps(res, indent=1))
     print("| policy | USD/h | cost | vs alarm_pump_off [95 % CI] wins | vs pump_off | CPU s/episode |")
     print("|---|---|---|---|---|---|")
@@ -166,7 +170,7 @@ def main() -> None:
                  for b in ("alarm_pump_off", "pump_off")]
         print(f"| {k} | {r['usd_h']:.2f} | {r['cost']:.2f} | {cells[0]} | {cells[1]} | {r['cpu_s_per_episode']:.0f} |")
     if a.stage == "gate":
-        print("GATE:", "passed" if res["gate"] else "failed")
+        print("GATE:", {n: "passed" if ok else "failed" for n, ok in res["gate"].items()})
 
 
 if __name__ == "__main__":

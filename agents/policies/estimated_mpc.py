@@ -34,6 +34,7 @@ import numpy as np
 
 from srenv.task.events import NORMAL
 
+from .alarms import make_field_controller
 from .causal_oracle import CausalOraclePolicy, freeze_future
 from .field import make_field_baseline, obs_names_of
 
@@ -142,7 +143,7 @@ class EstimatedMPCPolicy(CausalOraclePolicy):
                 pol.reset(view)
             self._live[name] = [pol, None, True]
         if self.guard is not None:
-            pol = make_field_baseline(*self.guard["fallback"], self._names)
+            pol = make_field_controller(*self.guard["fallback"], self._names)  # alarm_pump_off or a field one
             if hasattr(pol, "reset"):
                 pol.reset(view)
             self._fallback = [pol, None, True]

@@ -29,9 +29,9 @@ def make_baseline(name: str, params: dict[str, Any], obs_names: Sequence[str]) -
     if name == "oracle":
         return OraclePolicy(**dict(params))
     if name == "alarm_pump_off":  # v2's baselines (agents/policies/alarms.py, causal_oracle.py)
-        from .alarms import AlarmPumpOffPolicy
+        from .alarms import make_field_controller
 
-        return AlarmPumpOffPolicy(obs_names, **dict(params))
+        return make_field_controller(name, params, obs_names)
     if name == "causal_oracle":
         from .causal_oracle import CausalOraclePolicy
 
