@@ -97,3 +97,33 @@ def test_built_by_name_as_a_baseline():
     env = make_env(ENV, scenario="train", **KW)
     pol = make_baseline("estimated_mpc", PARAMS, env.unwrapped.obs_names)
     assert isinstance(pol, EstimatedMPCPolicy) and pol.params()["horizon"] == 2
+
+
+ALARM = {"threshold": 0.99, "idle_time_s": 3600, "a_spm": 0.4, "a_stroke": 0.0, "load_drop": 0.5, "alarm_prob": 0.6,
+         "gas_slowdown": 0.6}
+GUARD = {"fallback": ["alarm_pump_off", ALARM], "pound_below": 0.9, "load_above": 0.95, "condition_prob": 0.6}
+
+
+@pytest.mark.parametrize("bad", [{"pound_below": 0.9}, {**GUARD, "extra": 1}, {**GUARD, "fallback": "pump_off"},
+                                 {**GUARD, "load_above": -0.1}, {**GUARD, "condition_prob": True},
+                                 {**GUARD, "pound_below": "0.9"}])
+def test_bad_guard_refused(bad):
+    with pytest.raises(ValueError, match="estimated_mpc guard") as exc:
+        EstimatedMPCPolicy(**PARAMS, guard=bad)
+    assert "\n" not in str(exc.value)
+
+
+def test_an_always_firing_guard_plays_the_fallback():
+    """With every threshold past its reach the guard fires each interval: the actions are alarm_pump_off's own."""
+    env = make_env(ENV, scenario="train", **KW)
+    always = {**GUARD, "pound_below": 1.5}  # fillage_est < 1.5 on every card
+    pol = EstimatedMPCPolicy(**PARAMS, guard=always)
+    acts, seen = _play(env, pol, SEED)
+    fb = make_baseline("alarm_pump_off", ALARM, env.unwrapped.obs_names)
+    env.reset(seed=SEED)
+    ref, state = [], None
+    for k, o in enumerate(seen):
+        a, state = fb.predict(o, state=state, episode_start=np.array([k == 0]))
+        ref.append(np.asarray(a))
+    np.testing.assert_allclose(np.array(acts), np.array(ref), atol=1e-6)
+    assert pol.guarded_intervals == len(seen)
