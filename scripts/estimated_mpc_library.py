@@ -3,7 +3,7 @@ training wells 16..199 (wells 0..15 are the benchmark's tuning and validation we
 measures the estimator on wells it has not seen), each at ``--draws`` initial levels (episode seeds i + 200 k: the
 same well, the level and schedule drawn anew). Training split only; no episode is played.
 
-    PYTHONPATH=. python scripts/estimated_mpc_library.py --out models/estimated_mpc_library.npz
+    PYTHONPATH=. python scripts/estimated_mpc_library.py --out agents/policies/estimated_mpc_library.npz
 """
 
 from __future__ import annotations

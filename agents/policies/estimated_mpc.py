@@ -4,7 +4,7 @@
 its annulus level, the reservoir's deliverability and the active condition. This policy plays the same planner
 (candidates around the last action, idle, anchors, the tuned field baselines closed loop; ``horizon`` intervals,
 replan every ``replan_every``) on a **twin**: a v2 env of the *training* well whose first field card is nearest
-the episode's first card (:class:`WellLibrary`, shipped as data in ``models/estimated_mpc_library.npz``, built from
+the episode's first card (:class:`WellLibrary`, shipped as data in ``agents/policies/estimated_mpc_library.npz``, built from
 training wells 16..199 by ``scripts/estimated_mpc_library.py``; wells 0..15 - the tuning and validation wells -
 are left out so validation measures the estimator on wells it has not seen). The twin runs without conditions
 (``event_rate_scale`` 0) at the reservoir's nominal deliverability (multiplier 1), and is stepped with every action
@@ -38,7 +38,7 @@ from .alarms import make_field_controller
 from .causal_oracle import CausalOraclePolicy, freeze_future
 from .field import make_field_baseline, obs_names_of
 
-LIBRARY = Path(__file__).resolve().parents[2] / "models" / "estimated_mpc_library.npz"
+LIBRARY = Path(__file__).resolve().parent / "estimated_mpc_library.npz"  # data beside the code: not a trained model
 SCALARS = ("spm", "pprl", "mprl", "power_mean", "power_peak", "fillage_est", "level_shot")
 POUNDED, FULL, REFILL = 0.9, 0.98, 0.1
 
@@ -149,8 +149,13 @@ class EstimatedMPCPolicy(CausalOraclePolicy):
             self._fallback = [pol, None, True]
 
     def _set_level(self, level_m: float) -> None:
+        """The twin's annulus to ``level_m`` through its own methods: liquid given back or drawn, no time passing."""
         ann = self._twin.sim.annulus
-        ann.volume_m3 = ann.area_m2 * float(np.clip(level_m, 0.0, ann.pump_md_m))
+        dv = ann.area_m2 * (float(np.clip(level_m, 0.0, ann.pump_md_m)) - ann.level_m)
+        if dv > 0:
+            ann.give_back(dv)
+        elif dv < 0:
+            ann.draw(-dv, ann.last_time_s)
 
     def _correct(self, obs: np.ndarray) -> None:
         """The twin's annulus from what the field shows (module doc)."""
