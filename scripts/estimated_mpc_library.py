@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import argparse
 import io
+import sys
 
 import numpy as np
 
@@ -40,6 +41,16 @@ def main() -> None:
     ap.add_argument("--out", required=True)
     ap.add_argument("--draws", type=int, default=4)
     a = ap.parse_args()
+    from srenv.errors import ConfigError
+    from srenv.outputs import check_output_path
+
+    try:
+        if not 1 <= a.draws <= 50:
+            raise ConfigError("--draws", a.draws, "an integer in [1, 50] initial levels per well")
+        check_output_path("--out", a.out, (".npz",))
+    except ConfigError as exc:
+        print(f"estimated_mpc_library: {exc}", file=sys.stderr)
+        sys.exit(2)
     wells, feats, names = build(a.draws)
     buf = io.BytesIO()
     np.savez(buf, wells=wells, features=feats, names=np.array(names))

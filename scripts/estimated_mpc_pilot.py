@@ -176,6 +176,10 @@ def main() -> None:
     ap.add_argument("--first", type=int, default=8, help="voi: the first N validation episodes")
     ap.add_argument("--workers", type=int, default=2)
     a = ap.parse_args()
+    if not 1 <= a.first <= 16 or a.out.is_symlink() or a.out.is_file():
+        print(f"estimated_mpc_pilot: --first {a.first} / --out {str(a.out)!r}: expected 1 <= N <= 16 and a directory "
+              "that is not a symlink", file=sys.stderr)
+        sys.exit(2)
     cfg = load_benchmark_config(str(V2))  # the env, its kwargs and the validation seeds (= the design file's)
     seeds = list(cfg["validation"]["seeds"])[: a.first if a.stage == "voi" else None]
     tuned = {k: v["params"] for k, v in load_report(REPORT)["tuned"].items()}

@@ -127,3 +127,18 @@ def test_an_always_firing_guard_plays_the_fallback():
         ref.append(np.asarray(a))
     np.testing.assert_allclose(np.array(acts), np.array(ref), atol=1e-6)
     assert pol.guarded_intervals == len(seen)
+
+
+def test_the_shipped_library_is_what_its_script_builds():
+    """The data shipped is reproducible from the training wells by scripts/estimated_mpc_library.py's build."""
+    import sys
+    from pathlib import Path
+
+    sys.path.insert(0, str(Path(__file__).resolve().parents[2] / "scripts"))
+    from estimated_mpc_library import build
+
+    lib = WellLibrary.load(LIBRARY)
+    wells, feats, names = build(4, range(16, 20))
+    np.testing.assert_array_equal(wells, lib.wells[:16])
+    assert names == lib.names
+    np.testing.assert_allclose(feats, (lib._z[:16] / lib.weight) * lib.scale + lib.mean, rtol=1e-9, atol=1e-9)
