@@ -18,5 +18,6 @@ setup(
     package_dir={"srenv.configs": "configs", "srenv_agents": "agents"},
     package_data={"srenv.configs": ["wells/*.yaml", "units/*.yaml", "train/*.yaml", "train/*.yml",
                                     "benchmark/*.yaml"],
-                  "srenv": ["models/*.npz"]},  # the condition classifier's weights (docs/conditions.md)
+                  "srenv": ["models/*.npz"],  # the condition classifier's weights (docs/conditions.md)
+                  "srenv_agents.policies": ["*.npz"]},  # estimated_mpc's well library (agents/policies/estimated_mpc.py)
 )

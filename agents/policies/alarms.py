@@ -28,7 +28,7 @@ from typing import Any
 
 import numpy as np
 
-from .field import IDLE, PumpOffPolicy, _batch, _out, _starts, name_index
+from .field import IDLE, PumpOffPolicy, _batch, _out, _starts, make_field_baseline, name_index
 
 
 class AlarmPumpOffPolicy(PumpOffPolicy):
@@ -79,3 +79,12 @@ class AlarmPumpOffPolicy(PumpOffPolicy):
     def params(self) -> dict[str, Any]:
         return {**super().params(), "load_drop": self.load_drop, "alarm_prob": self.alarm_prob,
                 "gas_slowdown": self.gas_slowdown}
+
+
+def make_field_controller(name: str, params: dict[str, Any], obs_names: Sequence[str]) -> Any:
+    """A field controller by benchmark name - the field baselines and ``alarm_pump_off`` - from its (tuned)
+    parameters: the one builder of :func:`agents.policies.factory.make_baseline` and of the estimated MPC's
+    fallback."""
+    if name == "alarm_pump_off":
+        return AlarmPumpOffPolicy(obs_names, **dict(params))
+    return make_field_baseline(name, params, obs_names)

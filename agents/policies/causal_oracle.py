@@ -68,7 +68,7 @@ class CausalOraclePolicy(OraclePolicy):
 
     def _rollout(self, action: np.ndarray | None, live: list[Any] | None, obs: np.ndarray) -> float:
         """Return over the horizon on a frozen copy: a constant action, or a live baseline from its state now."""
-        model = freeze_future(copy.deepcopy(self._env))
+        model = self._model()
         pol, state, start = copy.deepcopy(live) if live is not None else (None, None, False)
         total = 0.0
         for _ in range(self.horizon):
@@ -82,6 +82,10 @@ class CausalOraclePolicy(OraclePolicy):
             if terminated or truncated:
                 break
         return total
+
+    def _model(self) -> Any:
+        """The model one rollout plays on: a frozen copy of the true env (estimated_mpc plans on its own)."""
+        return freeze_future(copy.deepcopy(self._env))
 
     def score(self, action: np.ndarray) -> float:
         return self._rollout(action, None, np.zeros(0))

@@ -29,13 +29,17 @@ def make_baseline(name: str, params: dict[str, Any], obs_names: Sequence[str]) -
     if name == "oracle":
         return OraclePolicy(**dict(params))
     if name == "alarm_pump_off":  # v2's baselines (agents/policies/alarms.py, causal_oracle.py)
-        from .alarms import AlarmPumpOffPolicy
+        from .alarms import make_field_controller
 
-        return AlarmPumpOffPolicy(obs_names, **dict(params))
+        return make_field_controller(name, params, obs_names)
     if name == "causal_oracle":
         from .causal_oracle import CausalOraclePolicy
 
         return CausalOraclePolicy(**dict(params))
+    if name == "estimated_mpc":  # the causal oracle's planner on an estimated model (agents/policies/estimated_mpc.py)
+        from .estimated_mpc import EstimatedMPCPolicy
+
+        return EstimatedMPCPolicy(**dict(params))
     if name not in FIELD_BASELINES and name != "constant":
         raise ValueError(f"baseline {name!r}: expected one of {', '.join(BASELINE_NAMES)}")
     return make_field_baseline(name, params, obs_names)

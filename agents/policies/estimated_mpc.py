@@ -1,0 +1,230 @@
+"""``estimated_mpc``: the causal oracle's planner on a model a field controller could have (issue 24).
+
+:class:`agents.policies.causal_oracle.CausalOraclePolicy` plans on a deep copy of the TRUE env: the hidden well,
+its annulus level, the reservoir's deliverability and the active condition. This policy plays the same planner
+(candidates around the last action, idle, anchors, the tuned field baselines closed loop; ``horizon`` intervals,
+replan every ``replan_every``) on a **twin**: a v2 env of the *training* well whose first field card is nearest
+the episode's first card (:class:`WellLibrary`, shipped as data in ``agents/policies/estimated_mpc_library.npz``, built from
+training wells 16..199 by ``scripts/estimated_mpc_library.py``; wells 0..15 - the tuning and validation wells -
+are left out so validation measures the estimator on wells it has not seen). The twin runs without conditions
+(``event_rate_scale`` 0) at the reservoir's nominal deliverability (multiplier 1), and is stepped with every action
+played. Its annulus level is the only state it is corrected on, from the field observation alone:
+
+* at the first card and at every new acoustic shot, the level is the shot's (``level_shot``: level / pump depth,
+  times the twin's pump depth);
+* a pumped-off card on the real well (``fillage_est`` < ``POUNDED``) while the twin is full empties the twin's
+  annulus; a full card while the twin pounds lifts it to ``REFILL`` of its depth (the pump is submerged again).
+
+What it reads of the env: the observation names and the task's clock (``horizon_s``, ``cfg.task.interval_s``) at
+``reset``; nothing of the well, its annulus, the reservoir or the condition (tests/agents/test_estimated_mpc.py
+swaps them out after ``reset`` and shows the same actions). The field baselines it weighs are reset on a view that
+holds the twin's control range and the installed point read off the first observation.
+"""
+
+from __future__ import annotations
+
+import copy
+import math
+from collections.abc import Sequence
+from pathlib import Path
+from types import SimpleNamespace
+from typing import Any
+
+import numpy as np
+
+from srenv.task.events import NORMAL
+
+from .alarms import make_field_controller
+from .causal_oracle import CausalOraclePolicy, freeze_future
+from .field import make_field_baseline, obs_names_of
+
+LIBRARY = Path(__file__).resolve().parent / "estimated_mpc_library.npz"  # data beside the code: not a trained model
+SCALARS = ("spm", "pprl", "mprl", "power_mean", "power_peak", "fillage_est", "level_shot")
+POUNDED, FULL, REFILL = 0.9, 0.98, 0.1
+
+
+def feature_names(obs_names: Sequence[str]) -> list[str]:
+    """The matched features: the 64 card loads and :data:`SCALARS` (all in the field observation)."""
+    return [n for n in obs_names if n.startswith("card_")] + list(SCALARS)
+
+
+class WellLibrary:
+    """Training wells by the features of their first card: ``nearest(obs)`` -> a training-well index. The card's
+    64 points and the 7 scalars weigh the same in total (each card point by sqrt(7/64)), on standardised
+    features."""
+
+    def __init__(self, wells: np.ndarray, features: np.ndarray, names: Sequence[str]) -> None:
+        self.wells = np.asarray(wells, np.int64)
+        self.names = [str(n) for n in names]
+        x = np.asarray(features, np.float64)
+        if x.ndim != 2 or x.shape != (len(self.wells), len(self.names)) or not np.all(np.isfinite(x)):
+            raise ValueError(f"well library: features {x.shape}: expected ({len(self.wells)}, {len(self.names)}) "
+                             "finite numbers")
+        self.mean, self.scale = x.mean(0), np.maximum(x.std(0), 1e-6)
+        n_card = sum(n.startswith("card_") for n in self.names)
+        self.weight = np.array([math.sqrt(len(SCALARS) / max(n_card, 1)) if n.startswith("card_") else 1.0
+                                for n in self.names])
+        self._z = self._standard(x)
+
+    def _standard(self, x: np.ndarray) -> np.ndarray:
+        return (x - self.mean) / self.scale * self.weight
+
+    @classmethod
+    def load(cls, path: str | Path = LIBRARY) -> WellLibrary:
+        try:
+            with np.load(Path(path), allow_pickle=False) as d:  # data, never pickle
+                return cls(d["wells"], d["features"], d["names"])
+        except (OSError, KeyError, ValueError) as exc:
+            raise ValueError(f"estimated_mpc library = {str(path)!r}: expected an .npz of wells, features and names "
+                             f"(scripts/estimated_mpc_library.py): {str(exc).splitlines()[0]}") from None
+
+    def nearest(self, obs: np.ndarray, obs_names: Sequence[str]) -> int:
+        idx = [list(obs_names).index(n) for n in self.names]
+        z = self._standard(np.asarray(obs, np.float64)[idx])
+        return int(self.wells[int(np.argmin(np.sum((self._z - z) ** 2, axis=1)))])
+
+
+def _installed_view(cfg: Any, a0: np.ndarray, names: Sequence[str]) -> Any:
+    """What a field baseline's ``reset(env)`` reads (the installed point, the control range, the interval),
+    from the twin's config and the installed point of the first observation, not from the real env."""
+    from srenv.envs.sucker_rod_v1 import setpoints_from_action
+
+    spm, stroke = setpoints_from_action(a0, cfg.control)
+    view = SimpleNamespace(surface=SimpleNamespace(spm=float(spm), stroke_length_m=float(stroke)),
+                           control=cfg.control, task=cfg.task)
+    return SimpleNamespace(unwrapped=SimpleNamespace(cfg=view, obs_names=tuple(names)))
+
+
+class EstimatedMPCPolicy(CausalOraclePolicy):
+    name = "estimated_mpc"
+
+    def __init__(self, horizon: int = 6, replan_every: int = 3, steps: Sequence[float] = (0.3, 0.1),
+                 anchors: Sequence[Sequence[float]] = (), policies: Sequence[Sequence[Any]] = (),
+                 library: str | None = None, guard: dict[str, Any] | None = None) -> None:
+        if not (isinstance(horizon, int) and not isinstance(horizon, bool) and 1 <= horizon <= 144):
+            raise ValueError(f"estimated_mpc horizon = {horizon!r}: expected an integer in [1, 144] intervals")
+        super().__init__(horizon=horizon, replan_every=replan_every, steps=steps, anchors=anchors, policies=policies)
+        self.library_path = library
+        self.library = WellLibrary.load(library or LIBRARY)
+        self.guard = check_guard(guard)
+        self._twin: Any = None
+        self._fallback: list[Any] | None = None
+
+    def reset(self, env: Any, index: int | None = None) -> None:
+        if index not in (None, 0):
+            raise ValueError("EstimatedMPCPolicy drives one env (index 0), not a batch")
+        u = env.unwrapped
+        self._names = obs_names_of(env)
+        self._clock = (float(u.horizon_s) / 3600.0, float(u.cfg.task.interval_s))  # the task's, not the well's
+        self._env = self._twin = None
+        self._plan, self._k, self._since, self._follow, self._live = None, 0, 0, None, {}
+        self.planned_reward, self.plan_source, self.sim_steps = math.nan, "", 0
+        self.model_well = -1
+        self.guarded_intervals = 0
+        self._fallback = None
+        self._shot_age = math.inf
+
+    def _start(self, obs: np.ndarray) -> None:
+        """At the first observation: the nearest training well becomes the twin, at the observed level."""
+        from srenv.envs.sucker_rod_v2 import SuckerRodV2Env
+
+        self.model_well = self.library.nearest(obs, self._names)
+        hours, interval = self._clock
+        twin = SuckerRodV2Env(scenario="train", event_rate_scale=0.0, episode_hours=hours, interval_s=interval)
+        twin.reset(seed=self.model_well)
+        twin.inflow_multiplier = lambda t_s: 1.0  # the reservoir as designed: its draw is unknown
+        self._twin = self._env = twin
+        i = self._names.index
+        self._last = np.clip(np.array([2.0 * obs[i("avg_spm")] - 1.0, obs[i("stroke")]], np.float32), -1, 1)
+        view = _installed_view(twin.cfg, self._last, self._names)
+        for name, params in self.policies:
+            pol = make_field_baseline(name, params, self._names)
+            if hasattr(pol, "reset"):
+                pol.reset(view)
+            self._live[name] = [pol, None, True]
+        if self.guard is not None:
+            pol = make_field_controller(*self.guard["fallback"], self._names)  # alarm_pump_off or a field one
+            if hasattr(pol, "reset"):
+                pol.reset(view)
+            self._fallback = [pol, None, True]
+
+    def _set_level(self, level_m: float) -> None:
+        """The twin's annulus to ``level_m`` through its own methods: liquid given back or drawn, no time passing."""
+        ann = self._twin.sim.annulus
+        dv = ann.area_m2 * (float(np.clip(level_m, 0.0, ann.pump_md_m)) - ann.level_m)
+        if dv > 0:
+            ann.give_back(dv)
+        elif dv < 0:
+            ann.draw(-dv, ann.last_time_s)
+
+    def _correct(self, obs: np.ndarray) -> None:
+        """The twin's annulus from what the field shows (module doc)."""
+        i = self._names.index
+        depth = float(self._twin.sim.mesh.x_m[-1])
+        age = float(obs[i("level_shot_age")])
+        if age < self._shot_age:  # a new shot (or the first card)
+            self._set_level(float(obs[i("level_shot")]) * depth)
+        self._shot_age = age
+        real, model = float(obs[i("fillage_est")]), float(self._twin._last.fillage_est)
+        if real < POUNDED <= model:
+            self._set_level(0.0)
+        elif real >= FULL > model:
+            self._set_level(max(self._twin.sim.annulus.level_m, REFILL * depth))
+
+    def _alarmed(self, obs: np.ndarray) -> bool:
+        """The guard (:func:`check_guard`) on the real card: pounding, near overload, or an abnormal condition."""
+        g, i = self.guard, self._names.index
+        probs = [obs[i(n)] for n in self._names if n.startswith("prob_") and n[5:] not in NORMAL]
+        return bool(obs[i("fillage_est")] < g["pound_below"] or obs[i("pprl")] > g["load_above"]
+                    or (probs and max(probs) > g["condition_prob"]))
+
+    def _model(self) -> Any:
+        return freeze_future(copy.deepcopy(self._twin))
+
+    def predict(self, observation: Any, state: Any = None, episode_start: Any = None,
+                deterministic: bool = True) -> tuple[np.ndarray, Any]:
+        obs = np.asarray(observation, np.float64)
+        if obs.ndim != 1 and obs.shape[0] != 1:
+            raise RuntimeError("EstimatedMPCPolicy: one env only")
+        row = obs.reshape(-1)
+        if self._twin is None:
+            self._start(row)
+        self._correct(row)
+        action, state = super().predict(observation, state, episode_start, deterministic)
+        if self._fallback is not None:  # the fallback runs all episode on the real observations (its state)
+            fb = self._fallback
+            a_fb, fb[1] = fb[0].predict(row, state=fb[1], episode_start=np.array([fb[2]]))
+            fb[2] = False
+            if self._alarmed(row):
+                action = np.asarray(a_fb, np.float32).reshape(np.shape(action))
+                self.guarded_intervals += 1
+        self._twin.step(np.asarray(action, np.float32).reshape(2))
+        self.sim_steps += 1
+        return action, state
+
+    def params(self) -> dict[str, Any]:
+        return {**super().params(), **({"library": self.library_path} if self.library_path else {}),
+                **({"guard": self.guard} if self.guard is not None else {})}
+
+
+GUARD_KEYS = ("fallback", "pound_below", "load_above", "condition_prob")
+
+
+def check_guard(guard: Any) -> dict[str, Any] | None:
+    """``guard``: None, or ``{fallback: [field baseline, params], pound_below, load_above, condition_prob}``: on an
+    interval whose real card pounds (``fillage_est`` < pound_below), nears overload (``pprl`` > load_above) or
+    shows a condition (a classifier probability of a label other than full / fluid_pound > condition_prob), the
+    fallback's action is played - where the twin, which has no conditions and an estimated level and well, is
+    least to be trusted."""
+    if guard is None:
+        return None
+    if not isinstance(guard, dict) or set(guard) != set(GUARD_KEYS):
+        raise ValueError(f"estimated_mpc guard = {guard!r}: expected None or a mapping of exactly {list(GUARD_KEYS)}")
+    fb = guard["fallback"]
+    if not (isinstance(fb, (list, tuple)) and len(fb) == 2 and isinstance(fb[0], str) and isinstance(fb[1], dict)):
+        raise ValueError(f"estimated_mpc guard.fallback = {fb!r}: expected [field baseline name, params]")
+    for k in GUARD_KEYS[1:]:
+        v = guard[k]
+        if isinstance(v, bool) or not isinstance(v, (int, float)) or not 0.0 <= v <= 1.5:
+            raise ValueError(f"estimated_mpc guard.{k} = {v!r}: expected a number in [0, 1.5]")
+    return {"fallback": [fb[0], dict(fb[1])], **{k: float(guard[k]) for k in GUARD_KEYS[1:]}}
