@@ -95,8 +95,11 @@ def _stroke(fillage: float = 1.0, pprl: float = 5.0e4, gearbox: float = 90.0) ->
 
 def test_predicted_boundaries() -> None:
     f = _stroke()
-    # the fill: 10 mL in the annulus at the next draw, 0.5 mL lost a stroke, 2 mL lifted: partial after 16 strokes
-    assert boundary.strokes_to_boundary(f, None, None, 1e6, 0.0, 0.010, -5e-4, 40, 6e4) == 16
+    # the fill: 10 mL in the annulus at the next draw, 0.5 mL lost a stroke, 2 mL lifted: partial after 16 strokes,
+    # aimed a stroke early
+    assert boundary.FILL_LEAD == 1.0
+    assert boundary.strokes_to_boundary(f, None, None, 1e6, 0.0, 0.010, -5e-4, 40, 6e4) == 15
+    assert boundary.strokes_to_boundary(f, None, None, 1e6, 0.0, 0.0025, -5e-4, 40, 6e4) == 0  # due now
     assert boundary.strokes_to_boundary(f, None, None, 1e6, 0.0, 0.010, +5e-4, 40, 6e4) is None  # filling up
     assert boundary.strokes_to_boundary(f, None, None, 1e6, 0.0, 0.030, -5e-4, 40, 6e4) is None  # after the end
     # the gearbox loading rises 1 % a stroke of pressure drift (slopes per Pa x Pa per stroke): 90 -> 100 % in 10
