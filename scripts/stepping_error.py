@@ -10,7 +10,9 @@ per well three ways (every stroke exact and the two options) and the relative er
 """
 import argparse
 import json
+from pathlib import Path
 
+from srenv.outputs import atomic_write
 from srenv.task.boundary import BOUNDARY_STROKES_MAX
 from srenv.tools.stepping_error import POLICIES, compare, summary
 
@@ -30,6 +32,8 @@ ap.add_argument("--json")
 args = ap.parse_args()
 if any(k < 0 for k in args.exact_min):
     ap.error(f"--exact-min = {args.exact_min}: expected integers >= 0")
+if args.json and Path(args.json).is_symlink():  # checked before the run, not after it
+    ap.error(f"--json = {args.json!r}: expected a path that is not a symbolic link")
 if any(not 0 <= n <= BOUNDARY_STROKES_MAX for n in args.boundary_strokes):
     ap.error(f"--boundary-strokes = {args.boundary_strokes}: expected integers in 0..{BOUNDARY_STROKES_MAX}")
 options = ({"v1": {}, "fast_stepping": {"fast_stepping": True}} if args.version == "v1" else
@@ -68,6 +72,5 @@ for (policy, label), s in summary(rows, list(options)).items():
     print(f"{policy:16s} {label:20s}: within 0.5 % {s['within']}/{s['episodes']}, worst term median "
           f"{100 * s['median']:.2f} % largest {100 * s['largest']:.2f} %, exact strokes/step {s['exact_per_step']:.2f}"
           f"; {vs}")
-if args.json:
-    with open(args.json, "w") as fh:
-        json.dump(rows, fh, indent=1)
+if args.json:  # atomically, never through a symlink (srenv.outputs)
+    atomic_write(args.json, lambda tmp: Path(tmp).write_text(json.dumps(rows, indent=1)))
