@@ -20,7 +20,7 @@ Options (off in v1; v2's default, docs/speed.md): ``reuse_periodic`` starts an i
 earlier interval at the same setpoint converged to, while the intake pressure has barely moved and the physics
 is the same; ``carry`` also carries a kept stroke to a farther intake pressure along the slopes of two kept
 strokes (:mod:`srenv.task.reuse`). Opt-in, off everywhere: ``exact_min`` and ``follow_drift``
-(:mod:`srenv.task.stepping`).
+(:mod:`srenv.task.stepping`), ``boundary_strokes`` (:mod:`srenv.task.boundary`).
 """
 
 from __future__ import annotations
@@ -34,7 +34,7 @@ from ..analysis import card_features as cf
 from ..analysis.stroke_summary import summarize
 from ..physics.pump import plunger_area_m2
 from ..simulation.simulator import RunResult, Simulator
-from . import reuse, stepping
+from . import boundary, reuse, stepping
 from .fillage_reading import controller_fillage
 
 # the fast option (IntervalRunner(reuse_periodic=True)): how far the intake pressure may move the plunger's
@@ -139,8 +139,10 @@ class IntervalRunner:
     """Runs control intervals on one simulator (see the module docstring)."""
 
     def __init__(self, sim: Simulator, reuse_periodic: bool = False, carry: bool = False,
-                 draw_at_top: bool = False, exact_min: int = 0, follow_drift: bool = False) -> None:
+                 draw_at_top: bool = False, exact_min: int = 0, follow_drift: bool = False,
+                 boundary_strokes: int = 0) -> None:
         self.sim = sim
+        self.boundary_strokes = boundary.check(boundary_strokes)  # opt-in: exact strokes at regime boundaries
         # opt-in (srenv/task/stepping.py): K exact strokes an interval, their mean repeated; figures along the drift
         self.exact_min, self.follow_drift = stepping.check(exact_min, follow_drift, carry)
         # draw_at_top (v2): a fast-forwarded stroke draws its liquid at the upstroke's end as an exact stroke does
@@ -329,7 +331,7 @@ class IntervalRunner:
         t_end = sim.time_s + res.pumping_s
         done = 0.0
         exact: list[StrokeFigures] = []
-        need_exact = True
+        need_exact, self._exact_cap = True, 0  # the cap: exact strokes boundary.py grants beyond exact_max
         # The simulator switches the setpoint at a stroke boundary, a VSD ramps it over seconds: the first stroke
         # after a change rings with the step change. Its liquid and work count as simulated; its costs (peaks,
         # stick-slip, pound, fatigue) are those of the next, settled stroke when there is one.
@@ -346,7 +348,8 @@ class IntervalRunner:
         p_exact = None  # the intake pressure of the last stroke simulated here
         while done < n_total - 1e-9:
             remaining = n_total - done
-            if need_exact and len(exact) < max(exact_max, 1) and (remaining >= 1.0 - 1e-9 or not exact):
+            room = len(exact) < max(exact_max, 1, self._exact_cap)
+            if need_exact and room and (remaining >= 1.0 - 1e-9 or not exact):
                 r = sim.run_stroke(spm, stroke_m, record=True)
                 f = self._figures(r, defer=True)  # the last one kept is completed below
                 p_exact = self._intake_pa() if self.reuse_periodic else None

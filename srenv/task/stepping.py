@@ -13,7 +13,7 @@ Both are off by default, so v1's and v2's results are unchanged.
 
 from __future__ import annotations
 
-from . import reuse
+from . import boundary, reuse
 
 
 def check(exact_min, follow_drift, carry: bool) -> tuple[int, bool]:
@@ -39,10 +39,16 @@ def fast_forward(runner, res, exact: list, pressures: list, settled: int, key: t
         held = pressures[settled:]
         p_f = sum(held) / len(held) if None not in held else None
     kept = runner._periodic.get(key)
-    s = runner._slopes.get(key) if runner.follow_drift and kept and kept[2] is runner.sim.cfg else None
+    s = runner._slopes.get(key) if (runner.follow_drift or runner.boundary_strokes) and kept and \
+        kept[2] is runner.sim.cfg else None
     p_start, w_start = runner._intake_pa(), res.fast_forward_strokes
-    done, need_exact = runner._repeat_stroke(res, f, period, n_total, done, t_end, len(exact), exact_max,
-                                             need_exact)
+    if runner.boundary_strokes:  # opt-in: stop at a predicted regime boundary for an exact stroke (boundary.py)
+        done, need_exact = boundary.fast_forward(runner, res, f, p_f, s, period, n_total, done, t_end, len(exact),
+                                                 exact_max, need_exact)
+    else:
+        done, need_exact = runner._repeat_stroke(res, f, period, n_total, done, t_end, len(exact), exact_max,
+                                                 need_exact)
+    s = s if runner.follow_drift else None
     w = res.fast_forward_strokes - w_start
     if s is not None and p_f is not None and w > 0:
         econ = runner.econ

@@ -83,7 +83,7 @@ def compare(policy: str, seed: int, hours: float, scenario: str = "test", interv
     """One episode of `hours` on well `seed` of `scenario` of task ``version`` ("v1" or "v2"; v2 draws the same
     conditions for every run of a seed): each of ``options`` (a label -> env kwargs; default v1 as it is and v1
     with fast_stepping=True) against every stroke simulated exactly. An option's ``"runner"`` entry (a dict of
-    ``exact_min`` / ``follow_drift``, srenv/task/stepping.py) is set on the env's interval runner at its reset."""
+    ``exact_min`` / ``follow_drift``, srenv/task/stepping.py; ``boundary_strokes``, srenv/task/boundary.py) is set on the env's interval runner at its reset."""
     from ..task.interval import IntervalRunner
 
     cls = env_class(version)
@@ -121,7 +121,7 @@ def _episode_every_stroke(env, seed: int, acts: np.ndarray, run) -> dict:
 def _episode_with_runner_options(env, seed: int, acts: np.ndarray, runner_kw: dict) -> dict:
     """episode() with the opt-in stepping options set on the env's fresh interval runner (it keeps no state before
     its first interval, so this is the runner built with them)."""
-    from ..task import stepping
+    from ..task import boundary, stepping
 
     reset = env.reset
 
@@ -130,6 +130,7 @@ def _episode_with_runner_options(env, seed: int, acts: np.ndarray, runner_kw: di
         r = env.runner
         r.exact_min, r.follow_drift = stepping.check(runner_kw.get("exact_min", 0), runner_kw.get("follow_drift",
                                                      False), r.carry)
+        r.boundary_strokes = boundary.check(runner_kw.get("boundary_strokes", 0))
         return obs, info
 
     env.reset = reset_with_options
@@ -137,3 +138,34 @@ def _episode_with_runner_options(env, seed: int, acts: np.ndarray, runner_kw: di
         return episode(env, seed, acts)
     finally:
         env.reset = reset
+
+
+def worst_term(err: dict) -> tuple[str, float]:
+    """The largest relative error of an episode over production, the PPRL and the reward terms (the issue's list;
+    the return is left out)."""
+    k = max((k for k in err if k != "return"), key=err.get)
+    return k, err[k]
+
+
+def summary(rows: list[dict], labels: list[str], against: tuple[str, ...] = ("v2", "v2_drift"),
+            bound: float = 0.005) -> dict:
+    """Per policy and option over ``compare``'s rows: episodes within ``bound`` on every term, the median and largest
+    worst term, the geometric-mean ratio of the worst term against each of ``against`` (with the episodes smaller /
+    larger), and exact strokes per env step."""
+    out: dict = {}
+    for policy in dict.fromkeys(r["policy"] for r in rows):
+        got = [r for r in rows if r["policy"] == policy]
+        for label in labels:
+            worst = np.array([worst_term(r[label]["relative_error"])[1] for r in got])
+            line = {"episodes": len(got), "within": int(np.sum(worst <= bound)), "median": float(np.median(worst)),
+                    "largest": float(worst.max()), "exact_per_step": float(
+                        sum(r[label]["figures"]["exact_strokes"] for r in got)
+                        / sum(r[label]["figures"]["steps"] for r in got))}
+            for base in against:
+                if base in got[0] and base != label:
+                    b = np.array([worst_term(r[base]["relative_error"])[1] for r in got])
+                    ratio = np.maximum(worst, 1e-9) / np.maximum(b, 1e-9)
+                    line[f"vs_{base}"] = {"geomean": float(np.exp(np.mean(np.log(ratio)))),
+                                          "smaller": int(np.sum(worst < b)), "larger": int(np.sum(worst > b))}
+            out[(policy, label)] = line
+    return out
