@@ -102,42 +102,41 @@ def compare(policy: str, seed: int, hours: float, scenario: str = "test", interv
     return out
 
 
-def _episode_every_stroke(env, seed: int, acts: np.ndarray, run) -> dict:
-    """episode() with the env's interval runner simulating every stroke."""
+def _episode_after_reset(env, seed: int, acts: np.ndarray, prepare) -> dict:
+    """episode() with `prepare(runner)` applied to the env's fresh interval runner after every reset (the runner keeps
+    no state before its first interval, so this is the runner built that way); the env's reset is restored after."""
     reset = env.reset
 
-    def reset_every_stroke(**kw):
+    def reset_then_prepare(**kw):
         obs, info = reset(**kw)
-        env.runner.run = functools.partial(run, env.runner)
+        prepare(env.runner)
         return obs, info
 
-    env.reset = reset_every_stroke
+    env.reset = reset_then_prepare
     try:
         return episode(env, seed, acts)
     finally:
         env.reset = reset
+
+
+def _episode_every_stroke(env, seed: int, acts: np.ndarray, run) -> dict:
+    """episode() with the env's interval runner simulating every stroke."""
+    def every_stroke(r):
+        r.run = functools.partial(run, r)
+
+    return _episode_after_reset(env, seed, acts, every_stroke)
 
 
 def _episode_with_runner_options(env, seed: int, acts: np.ndarray, runner_kw: dict) -> dict:
-    """episode() with the opt-in stepping options set on the env's fresh interval runner (it keeps no state before
-    its first interval, so this is the runner built with them)."""
+    """episode() with the opt-in stepping options set on the env's fresh interval runner."""
     from ..task import boundary, stepping
 
-    reset = env.reset
-
-    def reset_with_options(**kw):
-        obs, info = reset(**kw)
-        r = env.runner
+    def with_options(r):
         r.exact_min, r.follow_drift = stepping.check(runner_kw.get("exact_min", 0), runner_kw.get("follow_drift",
                                                      False), r.carry)
         r.boundary_strokes = boundary.check(runner_kw.get("boundary_strokes", 0))
-        return obs, info
 
-    env.reset = reset_with_options
-    try:
-        return episode(env, seed, acts)
-    finally:
-        env.reset = reset
+    return _episode_after_reset(env, seed, acts, with_options)
 
 
 def worst_term(err: dict) -> tuple[str, float]:
