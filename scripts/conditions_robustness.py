@@ -28,6 +28,10 @@ wells, used to choose between models (docs/conditions.md, runs 3 and 4). Two che
         [--wells NAME ...] [--severities 0.4 0.8] [--taus 0 0.02] [--v2-wells 12] [--v2-severity 0.6]
         [--out REPORT.json]
 
+A model that reads the card against a described well (run 9's ``shape+midline``, ``srenv classify --config``)
+is given each card's description: its well in the full condition (the same well, equipment, unit, operating point
+and damping; not its condition), as a user's config describes the well; the other models read the card alone.
+
 Prints one JSON line per model: per check the cards right, of how many, what each full card was called; the
 score (the mean of the checks' accuracies, runs 4-6's rules). A combination a well's config refuses (e.g. free gas
 on a well with the nonmonotone plunger law) is skipped, for every model alike.
@@ -60,6 +64,18 @@ EQUIPMENT_STREAM = 0xE0E7  # check (e2)'s equipment draws: a stream no card set 
 FIXED_EQUIPMENT = {"sinker": ce.Equipment(2000.0, 38.1, 0.10), "fiberglass": ce.Equipment(1000.0, 0.0, 0.0, 25.4, 0.5)}
 E1_TAU_S = 0.02
 FIELD_RECORD = "/work/shared/field/7699227.json"
+# where -> (F_desc, D_desc) of the well the cards at ``where`` come from (its full condition), for models that need a
+# config (run 9); filled by the card generators, read by score
+DESCRIBED: dict[str, tuple[float, float]] = {}
+
+
+def _describe(where: str, well, extra: dict | None = None) -> None:
+    """Register the description of ``where``'s well: the same config in the full condition."""
+    from srenv.analysis.surface_level import described_surface
+
+    if where not in DESCRIBED:
+        d = described_surface(condition_config(well, "full", 0.0, extra))
+        DESCRIBED[where] = (d.fluid_load_n, d.downstroke_n)
 
 
 def cards(wells, severities, taus):
@@ -67,6 +83,7 @@ def cards(wells, severities, taus):
     for name in wells:
         well = load_config(name)
         for tau in taus:
+            _describe(f"{name}@{tau}", well, {"damping.stiffness_proportional_s": tau})
             for label in LABELS:
                 for sev in ([0.0] if label == "full" else severities):
                     try:
@@ -94,6 +111,7 @@ def v2_cards(n_wells: int, severity: float):
             spm = c.spm_min if spm_end == "spm_min" else c.spm_max
             stroke = c.stroke_min_m if stroke_end == "stroke_min" else c.stroke_max_m
             well = dataclasses.replace(cfg, surface=dataclasses.replace(cfg.surface, spm=spm, stroke_length_m=stroke))
+            _describe(f"clscheck-{k}/{spm_end}/{stroke_end}", well)
             for label in LABELS:
                 try:
                     card = simulate_card(condition_config(well, label, 0.0 if label == "full" else severity))
@@ -104,6 +122,7 @@ def v2_cards(n_wells: int, severity: float):
 
 def _conditions(where: str, well, severity: float, extra: dict | None = None):
     """(where, label, card) of the full pump and every other condition at ``severity`` the config accepts."""
+    _describe(where, well, extra)
     for label in LABELS:
         try:
             card = simulate_card(condition_config(well, label, 0.0 if label == "full" else severity, extra))
@@ -181,7 +200,8 @@ def score(clfs: dict, stream) -> dict:
                "of_by_label": dict.fromkeys(LABELS, 0)} for m in clfs}
     for where, label, card in stream:
         for m, clf in clfs.items():
-            got = clf.classify(card.polished_rod_position_m, card.polished_rod_load_n)[0]
+            desc = DESCRIBED[where] if clf.needs_config else ()
+            got = clf.classify(card.polished_rod_position_m, card.polished_rod_load_n, *desc)[0]
             r = out[m]
             r["of"] += 1
             r["right"] += got == label

@@ -4,7 +4,7 @@ binned by the well's numbers and the card's, and the fluid load over the buoyant
     python scripts/full_flowing_overlap.py --model M.npz --out REPORT.json [--set DIR:SEED:SURFACE:EQUIPMENT:SPLITS ...]
 
 A set is given as ``DIR:SEED:SURFACE:EQUIPMENT:SPLITS[:PLUNGERS]`` (splits joined by ``+``); each card's config is
-rebuilt from its draw (``card_set.draw``: the attempt read off its well seed), so the well's numbers are the card's
+rebuilt from its draw (``card_set.rebuilt_draw``: the attempt read off its well seed), so the well's numbers are the card's
 own (its equipment included). F_o is the full pump's fluid load P- - P+ of the card's config (the valve law at the
 simulator's start state, ``simulation.described``; a flowing card's divided by 1 - f back to the full pump's); W_rf
 is the string's buoyant weight, sum of (rho_rod - rho_fluid) g A L over the tapers, along measured depth. Parted
@@ -23,7 +23,7 @@ from srenv.analysis.card_classifier import CardClassifier
 from srenv.analysis.card_shape import features
 from srenv.physics.conditions import GRAVITY_M_S2, LABELS
 from srenv.simulation.described import described_pump
-from srenv.task.card_set import WELL_SEED0, card_config, draw, load_cards
+from srenv.task.card_set import card_config, load_cards, rebuilt_draw
 
 DEFAULT_SETS = ("/tmp/f23/CARDS2:2:family:none:validation", "/tmp/f23/CARDS4:4:v2:none:validation",
                 "/tmp/f23/CARDS7:7:v2:field:validation", "/tmp/f23/CARDS8:8:v2:none:train+validation")
@@ -50,11 +50,10 @@ def rows_of(path: str, seed: int, surface: str, equipment: str, splits: tuple, c
         label = LABELS[int(c["label"][i])]
         if label not in KINDS or str(c["split"][i]) not in splits:
             continue
-        ws = int(c["well_seed"][i])
-        attempt = (ws - WELL_SEED0 - seed * 1_000_003 - i // 4) // 100_000_007
-        d = draw(seed, i, attempt, LABELS, surface, equipment, plungers)
-        if d.well_seed != ws or d.label != label:
-            raise SystemExit(f"card {i} of {path}: its draw does not rebuild (set {seed}, {surface}, {equipment})")
+        try:
+            d = rebuilt_draw(seed, i, int(c["well_seed"][i]), label, surface, equipment, plungers)
+        except ValueError as exc:
+            raise SystemExit(f"{path}: {exc}") from None
         cfg = card_config(d)
         f = cfg.pump.flow_through_fraction
         fo = described_pump(cfg).fluid_load_n / (1.0 - f)

@@ -6,7 +6,9 @@ softmax at the end), and since run P1 optionally ``card_type`` (``surface`` or `
 without it is a surface model, as every file before), since run P2 optionally ``feature_set`` (``shape+level``: the
 pump card's 65th entry is its load level against a described well's fluid load, so the model needs a config; a file
 without it is ``shape``, read as before), since run P3 ``shape+level+offset`` (a 66th entry: the lower plateau
-against the described P+). Trained on simulated cards only (docs/conditions.md).
+against the described P+), since run 9 for a surface model ``shape+midline`` (a 66th entry: the surface card's load
+midline against the described well, srenv.analysis.surface_level; ``srenv classify --config`` only). Trained on
+simulated cards only (docs/conditions.md).
 """
 
 from __future__ import annotations
@@ -18,6 +20,8 @@ import numpy as np
 from ..physics.conditions import LABELS
 from .card_shape import CARD_TYPES, N_FEATURES, features
 from .pump_level import FEATURE_SETS, with_level, with_offset
+from .surface_level import FEATURE_SET as MIDLINE
+from .surface_level import with_midline
 
 DEFAULT_MODEL = Path(__file__).resolve().parents[1] / "models" / "classifier.npz"
 # run 2's weights, pinned: srenv/SuckerRod-v2's observation carries its probabilities, so v2 keeps its numbers
@@ -29,6 +33,10 @@ PUMP_MODEL = DEFAULT_MODEL.with_name("classifier_pump.npz")
 PUMP_LEVEL_MODEL = DEFAULT_MODEL.with_name("classifier_pump_level.npz")
 # run P3's pump model with the level and the offset, trained on diagnosed cards (the default with a config), if shipped
 PUMP_P3_MODEL = DEFAULT_MODEL.with_name("classifier_pump_p3.npz")
+# run 9's surface model with the load midline (`srenv classify --config WELL`, surface cards only), if shipped
+CONFIG_MODEL = DEFAULT_MODEL.with_name("classifier_config.npz")
+# the feature sets a model file of each card type may hold (absent = shape)
+ALLOWED_FEATURE_SETS = {"surface": (FEATURE_SETS[0], MIDLINE), "pump": FEATURE_SETS}
 MAX_LAYERS = 8
 MAX_WIDTH = 4096
 
@@ -62,9 +70,14 @@ class CardClassifier:
         self.card_type, self.feature_set = card_type, feature_set
 
     @property
-    def needs_level(self) -> bool:
-        """True: the model reads the load level, so a well config (its described fluid load) is needed."""
+    def needs_config(self) -> bool:
+        """True: the model reads the card against a described well (level, offset or midline): a config is needed."""
         return self.feature_set != FEATURE_SETS[0]
+
+    @property
+    def needs_level(self) -> bool:
+        """True: the model reads the pump card's load level, so a well config (its described fluid load) is needed."""
+        return self.feature_set in FEATURE_SETS[1:]
 
     @property
     def needs_offset(self) -> bool:
@@ -91,10 +104,10 @@ class CardClassifier:
             raise BadModel(f"model file {path}: missing array {exc}") from None
         if card_type not in CARD_TYPES:
             raise BadModel(f"model file {path}: card_type {card_type!r}, expected one of {CARD_TYPES}")
-        if feature_set not in FEATURE_SETS or (feature_set != FEATURE_SETS[0] and card_type != "pump"):
+        if feature_set not in ALLOWED_FEATURE_SETS[card_type]:
             raise BadModel(f"model file {path}: feature_set {feature_set!r} with card_type {card_type!r}, expected "
-                           f"{FEATURE_SETS[0]!r} (or one of {FEATURE_SETS[1:]} for a pump model)")
-        cls._check(path, labels, mean, std, layers, N_FEATURES + (feature_set == FEATURE_SETS[2]))
+                           f"one of {ALLOWED_FEATURE_SETS[card_type]}")
+        cls._check(path, labels, mean, std, layers, N_FEATURES + (feature_set in (FEATURE_SETS[2], MIDLINE)))
         return cls(labels, mean, std, layers, card_type, feature_set)
 
     @staticmethod
@@ -127,13 +140,17 @@ class CardClassifier:
     def card_features(self, position, load, fluid_load_n: float | None = None,
                       downstroke_load_n: float | None = None) -> np.ndarray:
         """The model's features of one card (``fluid_load_n``: the described fluid load, N, for a level model;
-        ``downstroke_load_n``: the described P+ as a true load, N, for an offset model; ignored by the others);
+        ``downstroke_load_n``: the described P+ as a true load, N, for an offset model, the described static
+        polished-rod downstroke load for a midline model (surface_level.described_surface); ignored by the others);
         raises card_shape.BadCard, pump_level.BadLevel."""
         f = features(position, load, self.card_type)
-        if not self.needs_level:
+        if not self.needs_config:
             return f
-        if fluid_load_n is None or (self.needs_offset and downstroke_load_n is None):
-            raise ValueError(f"this model's features are {self.feature_set}: it needs the described pump's loads")
+        if fluid_load_n is None or ((self.needs_offset or self.feature_set == MIDLINE) and downstroke_load_n is None):
+            what = "pump's" if self.card_type == "pump" else "well's"
+            raise ValueError(f"this model's features are {self.feature_set}: it needs the described {what} loads")
+        if self.feature_set == MIDLINE:
+            return with_midline(f, load, downstroke_load_n, fluid_load_n)
         f = with_level(f, load, fluid_load_n)
         return with_offset(f, load, downstroke_load_n, fluid_load_n) if self.needs_offset else f
 

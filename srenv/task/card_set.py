@@ -294,3 +294,34 @@ def described_pumps(well_seeds: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
 def described_fluid_loads_n(well_seeds: np.ndarray) -> np.ndarray:
     """F_desc (N) of each card's described well (described_pumps)."""
     return described_pumps(well_seeds)[0]
+
+
+def rebuilt_draw(seed: int, index: int, well_seed: int, label: str, surface: str = "family", equipment: str = "none",
+                 plungers: str = "family") -> Draw:
+    """Card ``index``'s draw of a set (seed, surface, equipment, plungers as its dataset_card.json says), its attempt
+    read off the stored well seed; raises ValueError if the draw does not give the stored well and label."""
+    attempt = (int(well_seed) - WELL_SEED0 - seed * 1_000_003 - index // CARDS_PER_WELL) // 100_000_007
+    d = draw(seed, index, attempt, LABELS, surface, equipment, plungers)
+    if d.well_seed != int(well_seed) or d.label != label:
+        raise ValueError(f"card {index} of set {seed} ({surface}, {equipment}, {plungers}): its draw does not rebuild")
+    return d
+
+
+def described_surfaces(cards_dir: str, cards: dict[str, np.ndarray] | None = None) -> tuple[np.ndarray, np.ndarray]:
+    """(F_desc, D_desc) in N of each card of a set (analysis.surface_level, run 9): the card's *own* well (its
+    equipment, survey, unit and operating point; not its condition) in the full condition - what the config a
+    ``srenv classify --config`` user gives describes. The set's seed and recipe are read from its dataset_card.json."""
+    import json
+    from pathlib import Path
+
+    from ..analysis.surface_level import described_surface
+
+    meta = json.loads((Path(cards_dir) / "dataset_card.json").read_text())
+    c = cards if cards is not None else load_cards(str(Path(cards_dir) / "cards.npz"))
+    out = np.empty((2, len(c["label"])))
+    for i, (ws, lab) in enumerate(zip(c["well_seed"], c["label"])):
+        d = rebuilt_draw(int(meta["seed"]), i, int(ws), LABELS[int(lab)], meta.get("surface", "family"),
+                         meta.get("equipment", "none"), meta.get("plungers", "family"))
+        s = described_surface(card_config(dataclasses.replace(d, label="full", severity=0.0)))
+        out[:, i] = s.fluid_load_n, s.downstroke_n
+    return out[0], out[1]

@@ -20,7 +20,10 @@ the pump card's load level against the described well's fluid load (run P2, sren
 only the level tells full, parted rods, flowing and heavy oil apart), its 66th the lower plateau against the described
 plunger's downstroke load P+ as a true load (srenv.simulation.described): a parted string diagnosed through the
 described intact string sits about the missing rods' weight below it. Without a config ``--card pump`` keeps run P1's
-model; a level model is refused without a config.
+model; a level model is refused without a config. Surface cards with ``--config WELL`` (SI units) are read by run 9's
+model (``classifier_config.npz``, if shipped; else the surface model alone): its 66th feature is the card's load
+midline against the described well (srenv.analysis.surface_level: a flowing well's card is a full pump's with a
+smaller fluid load, which only the description can tell). Without a config the surface model is run 7's.
 """
 
 from __future__ import annotations
@@ -45,10 +48,12 @@ def add_parser(sub) -> None:
     c.add_argument("path", help="a card CSV or a directory of *.csv")
     c.add_argument("--config", help="the well's config (checked; with --card pump the cards are surface cards in SI "
                    "units, diagnosed to pump cards first and read with their load level against the well's fluid "
-                   "load and P+ (run P3's model); the surface model reads the card alone)")
+                   "load and P+ (run P3's model); surface cards in SI units are read with their load midline "
+                   "against the described well (run 9's model, if shipped))")
     c.add_argument("--json", action="store_true", help="one JSON line per card")
     c.add_argument("--model", help="model file (default: the shipped srenv/models/classifier.npz, "
-                   "with --card pump srenv/models/classifier_pump.npz, with --config too classifier_pump_p3.npz)")
+                   "with --config classifier_config.npz if shipped, with --card pump srenv/models/classifier_pump.npz, "
+                   "with --config too classifier_pump_p3.npz)")
     c.add_argument("--card", choices=CARD_TYPES, default="surface",
                    help="the card type of the CSVs: the polished rod's (surface, default) or the pump's (downhole); "
                    "without --config full, parted rods, flowing and heavy oil share one normalised pump card shape "
@@ -135,12 +140,18 @@ def card_files(path: str) -> list[Path]:
 
 
 def default_model(card: str, with_config: bool) -> str:
-    """The shipped model: surface; pump (P1) without a config; with one, P3's model if shipped, else P2's level model
-    if shipped, else P1."""
-    from ..analysis.card_classifier import DEFAULT_MODEL, PUMP_LEVEL_MODEL, PUMP_MODEL, PUMP_P3_MODEL
+    """The shipped model: surface (run 7), with a config run 9's if shipped; pump (P1) without a config; with one,
+    P3's model if shipped, else P2's level model if shipped, else P1."""
+    from ..analysis.card_classifier import (
+        CONFIG_MODEL,
+        DEFAULT_MODEL,
+        PUMP_LEVEL_MODEL,
+        PUMP_MODEL,
+        PUMP_P3_MODEL,
+    )
 
     if card != "pump":
-        return str(DEFAULT_MODEL)
+        return str(CONFIG_MODEL if with_config and CONFIG_MODEL.is_file() else DEFAULT_MODEL)
     shipped = [m for m in (PUMP_P3_MODEL, PUMP_LEVEL_MODEL) if with_config and m.is_file()]
     return str(shipped[0] if shipped else PUMP_MODEL)
 
@@ -158,39 +169,47 @@ def load_model(model: str | None, card: str, with_config: bool = False):
         raise ConfigError("--model", path, f"a classifier's data ({exc})") from None
     if clf.card_type != card:
         raise ConfigError("--card", card, f"{clf.card_type}, the card type model {path} was trained on")
-    if clf.needs_level and not with_config:
-        raise ConfigError("--config", None, f"a well config: model {path} reads the pump card's load level against "
-                          "the described fluid load")
+    if clf.needs_config and not with_config:
+        what = "the pump card's load level against the described fluid load" if clf.needs_level else \
+            "the surface card's load midline against the described well"
+        raise ConfigError("--config", None, f"a well config: model {path} reads {what}")
     return clf
 
 
-def described(cfg):
-    """The config's described pump (srenv.simulation.described: the fluid load and P+, N) for the level and the
-    offset; a description that lifts no load (0, or not finite) in one line."""
+def described(cfg, card: str) -> tuple[float, float]:
+    """(F_desc, the description's downstroke load) in N: for pump cards the described pump's P+ as a true load
+    (srenv.simulation.described; the level and the offset), for surface cards the static polished-rod downstroke load
+    (analysis.surface_level; the midline); a description that lifts no load (0, or not finite) in one line."""
     from ..analysis.pump_level import BadLevel, check_fluid_load
+    from ..analysis.surface_level import described_surface
     from ..errors import ConfigError
     from ..simulation import described as desc
 
     # the config loader refuses P- <= P+ given as loads, the simulator an intake pressure at or above the discharge
     # pressure (one line each); what passes both and still lifts no finite load is refused here
-    pump = desc.described_pump(cfg)
+    if card == "pump":
+        pump = desc.described_pump(cfg)
+        out = (pump.fluid_load_n, pump.downstroke_true_n)
+    else:
+        surf = described_surface(cfg)
+        out = (surf.fluid_load_n, surf.downstroke_n)
     try:
-        check_fluid_load(pump.fluid_load_n, f"well {cfg.name}")
+        check_fluid_load(out[0], f"well {cfg.name}")
     except BadLevel as exc:
         raise ConfigError("--config", cfg.name, f"a well whose pump lifts a fluid load ({exc})") from None
-    return pump
+    return out
 
 
 def _features_or_rule(clf, x: np.ndarray, y: np.ndarray, f: Path, pump) -> np.ndarray | None:
-    """The card's features (``pump``: the described pump, or None); None for a pump card with a stroke and no load
-    (run P1's rule: parted rods)."""
+    """The card's features (``pump``: the description's (F_desc, downstroke load), or None); None for a pump card
+    with a stroke and no load (run P1's rule: parted rods)."""
     from ..analysis.card_shape import BadCard, FlatLoad
     from ..analysis.pump_level import BadLevel
 
     try:
         if pump is None:
             return clf.card_features(x, y)
-        return clf.card_features(x, y, pump.fluid_load_n, pump.downstroke_true_n)
+        return clf.card_features(x, y, *pump)
     except FlatLoad as exc:
         if clf.card_type == "pump":
             return None
@@ -223,7 +242,7 @@ def main(args: argparse.Namespace) -> int:
         cfg = load_config(args.config)
     files = card_files(args.path)
     clf = load_model(args.model, args.card, cfg is not None)
-    pump = described(cfg) if clf.needs_level else None
+    pump = described(cfg, args.card) if clf.needs_config else None
     cards = [read_card(f) for f in files]
     if cfg is not None and args.card == "pump":  # surface cards of a described well: diagnose them first
         cards = [diagnosed(cfg, x, y, f) for f, (x, y) in zip(files, cards)]

@@ -18,6 +18,10 @@ read here. Needs torch (a training-time dependency; inference is numpy only).
 65th entry, with a description error on augmented cards, and records ``feature_set: shape+level``.
 ``--offset`` with it (run P3) adds the lower plateau against each card's described P+ (true load) as a 66th entry
 (``feature_set: shape+level+offset``); run P3 trains it on diagnosed pump cards (srenv.tools.diagnose_cards).
+``--described`` (run 9, surface cards) adds the surface card's load midline against each card's *own* well in the
+full condition (surface_level; card_set.described_surfaces) as a 66th entry, the description's fluid load times
+U[1 - e, 1 + e] and its downstroke load moved by the fluid load times U[-e, e] on augmented cards (P3's draws), and
+records ``feature_set: shape+midline``: a model ``srenv classify`` reads only with ``--config``.
 """
 
 from __future__ import annotations
@@ -32,9 +36,11 @@ import numpy as np
 from ..analysis.card_augment import InstrumentAugment, SpectralAugment, augment
 from ..analysis.card_shape import CARD_TYPES, BadCard, features
 from ..analysis.pump_level import DESCRIPTION_ERROR, FEATURE_SETS, OFFSET_ERROR, with_level, with_offset
+from ..analysis.surface_level import FEATURE_SET as MIDLINE
+from ..analysis.surface_level import with_midline
 from ..cli_types import OneLineParser
 from ..physics.conditions import LABELS
-from ..task.card_set import described_pumps, load_cards
+from ..task.card_set import described_pumps, described_surfaces, load_cards
 
 # name -> (hidden widths, augmented training); chosen on augmented validation accuracy
 CANDIDATES = {"mlp_aug": ((128, 128), True), "mlp_clean": ((128, 128), False), "linear_aug": ((), True),
@@ -48,17 +54,21 @@ FEATURE_SET_LEVEL = FEATURE_SETS[1]  # run P2's model file entry
 DEGENERATE_RULE = "parted_rods"  # a degenerate pump card's label by rule (run P1, fixed a priori)
 
 
-def load_sets(dirs: list[str], card: str = "surface", level: bool = False, offset: bool = False
-              ) -> dict[str, np.ndarray]:
+def load_sets(dirs: list[str], card: str = "surface", level: bool = False, offset: bool = False,
+              described: bool = False) -> dict[str, np.ndarray]:
     """The sets' columns; ``position`` and ``load`` are the card type's arrays; ``fluid_load``: with ``level`` each
     card's described fluid load from its well seed (run P2), else None; ``down_load``: with ``offset`` its described
-    P+ as a true load (run P3), else None."""
+    P+ as a true load (run P3), else None; with ``described`` (run 9, surface) the two are each card's own well's
+    F_desc and D_desc (card_set.described_surfaces)."""
     sets = [load_cards(str(Path(d) / "cards.npz")) for d in dirs]
     keys = (*CARD_ARRAYS[card], "label", "split", "well_seed")
     data = {k: np.concatenate([s[k] for s in sets]) for k in keys}
     data["position"], data["load"] = (data[k] for k in CARD_ARRAYS[card])
     fluid, down = described_pumps(data["well_seed"]) if level else (None, None)
     data["fluid_load"], data["down_load"] = fluid, down if offset else None
+    if described:
+        pairs = [described_surfaces(d, s) for d, s in zip(dirs, sets)]
+        data["fluid_load"], data["down_load"] = (np.concatenate([p[k] for p in pairs]) for k in (0, 1))
     return data
 
 
@@ -71,11 +81,11 @@ def _row(p: np.ndarray, q: np.ndarray, card: str, fluid_load: float | None, rng,
     if fluid_load is None:
         return f
     err = rng.uniform(1.0 - DESCRIPTION_ERROR, 1.0 + DESCRIPTION_ERROR) if aug else 1.0
+    shift = (rng.uniform(-OFFSET_ERROR, OFFSET_ERROR) * fluid_load if aug else 0.0) if down_load is not None else 0.0
+    if card == "surface":  # run 9: the midline against the card's described well
+        return with_midline(f, q, down_load + shift, fluid_load * err)
     f = with_level(f, q, fluid_load * err)
-    if down_load is None:
-        return f
-    shift = rng.uniform(-OFFSET_ERROR, OFFSET_ERROR) * fluid_load if aug else 0.0
-    return with_offset(f, q, down_load + shift, fluid_load * err)
+    return f if down_load is None else with_offset(f, q, down_load + shift, fluid_load * err)
 
 
 def featurise(x: np.ndarray, y: np.ndarray, labels: np.ndarray, rng, aug: bool, draws: int = 1,
@@ -214,7 +224,9 @@ def _check_args(ap, a) -> None:
         ap.error(f"--level: the load level is a pump card's feature, expected --card pump (got --card {a.card})")
     if a.offset and not a.level:
         ap.error("--offset: the offset is read with the level, expected --level with it")
-    want = FEATURE_SETS[2] if a.offset else FEATURE_SET_LEVEL if a.level else FEATURE_SETS[0]
+    if a.described and a.card != "surface":
+        ap.error(f"--described: the midline is a surface card's feature, expected --card surface (got --card {a.card})")
+    want = MIDLINE if a.described else FEATURE_SETS[2] if a.offset else FEATURE_SET_LEVEL if a.level else FEATURE_SETS[0]
     for path in a.compare:  # a model of the other card type (or features) would be scored on cards it cannot read
         kind, fset = _card_type_of(path)
         if kind != a.card:
@@ -260,17 +272,21 @@ def main(argv: list[str] | None = None) -> int:
                     "described fluid load in the 65th entry (run P2; the model then needs a well config)")
     ap.add_argument("--offset", action="store_true", help="with --level: the lower plateau against each card's "
                     "described P+ (true load) in a 66th entry (run P3)")
+    ap.add_argument("--described", action="store_true", help="surface cards: the load midline against each card's "
+                    "own described well in a 66th entry (run 9; the model then needs a well config)")
     a = ap.parse_args(argv)
     _check_args(ap, a)
     inst = (InstrumentAugment(a.synth_position_p, a.position_lag_p)
             if a.synth_position_p > 0.0 or a.position_lag_p > 0.0 else None)
     spec = SpectralAugment(a.spectral_p) if a.spectral_p > 0.0 else None
-    data = load_sets(a.cards, a.card, a.level, a.offset)
+    data = load_sets(a.cards, a.card, a.level, a.offset, a.described)
     bad = degenerate(data, a.card)
     split_idx = {s: np.flatnonzero(data["split"] == s) for s in ("train", "validation", "test")}
     report: dict = {"n_cards": {s: len(i) for s, i in split_idx.items()}, "candidates": {}}
     if a.card == "pump":
         report.update(_pump_report(data, bad, split_idx, a.level, a.offset))
+    if a.described:
+        report.update({"feature_set": MIDLINE, "description_error": DESCRIPTION_ERROR, "offset_error": OFFSET_ERROR})
     ruled = data["label"][split_idx["test"][bad[split_idx["test"]]]]
     split_idx = {s: i[~bad[i]] for s, i in split_idx.items()}  # the model reads only readable cards
     if inst is not None:
@@ -307,6 +323,8 @@ def main(argv: list[str] | None = None) -> int:
         best = {**best, "card_type": np.array(a.card)}
     if a.level:  # P1's file has no entry (= shape)
         best = {**best, "feature_set": np.array(FEATURE_SETS[2] if a.offset else FEATURE_SET_LEVEL)}
+    if a.described:  # a surface model that needs a config (run 9)
+        best = {**best, "feature_set": np.array(MIDLINE)}
     write_model(a.out, best)
     if a.report:
         Path(a.report).write_text(json.dumps(report, indent=1) + "\n")
