@@ -86,8 +86,9 @@ def _column(names: list[str], exact: str, stem: str) -> int | None:
     return hits[0] if len(hits) == 1 else None
 
 
-def read_card(path: Path) -> tuple[np.ndarray, np.ndarray]:
-    """(position, load) of one card file (data only)."""
+def read_card(path: Path, si: bool = False) -> tuple[np.ndarray, np.ndarray]:
+    """(position, load) of one card file (data only). `si`: the loads are read in newtons against a described well
+    (``--config``), so the file must say so by its header; a header in other units or none is refused."""
     if path.is_symlink() or not path.is_file():
         raise _bad(path, "a regular CSV file")
     if path.stat().st_size > MAX_CARD_BYTES:
@@ -111,6 +112,10 @@ def read_card(path: Path) -> tuple[np.ndarray, np.ndarray]:
         raise _bad(path, "numbers in every row below the header") from None
     if data.ndim != 2 or len(data) == 0:
         raise _bad(path, "rows of equal length with numbers")
+    if si and (names is None or POS not in names or LOAD not in names):
+        got = ",".join(names) if names is not None else "no header"
+        raise _bad(path, f"with --config a header naming {POS} and {LOAD} (SI: the loads are read in N against the "
+                         f"described well; got {got[:80]!r}): convert the card to m and N, or classify without --config")
     if names is None:
         if data.shape[1] != 2:
             raise _bad(path, f"a header {POS},{LOAD} (or exactly two columns)")
@@ -243,7 +248,7 @@ def main(args: argparse.Namespace) -> int:
     files = card_files(args.path)
     clf = load_model(args.model, args.card, cfg is not None)
     pump = described(cfg, args.card) if clf.needs_config else None
-    cards = [read_card(f) for f in files]
+    cards = [read_card(f, si=clf.needs_config) for f in files]
     if cfg is not None and args.card == "pump":  # surface cards of a described well: diagnose them first
         cards = [diagnosed(cfg, x, y, f) for f, (x, y) in zip(files, cards)]
     rows = [_features_or_rule(clf, x, y, f, pump) for f, (x, y) in zip(files, cards)]

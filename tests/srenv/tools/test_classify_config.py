@@ -192,3 +192,21 @@ def test_classify_with_a_config_answers_what_run_9_answered_when_it_shipped() ->
     got = json.loads(run_on_avx2_numpy(code))
     assert got["labels"] == SHIPPED_LABELS
     assert got["sha256"] == SHIPPED_SHA256
+
+
+@pytest.mark.parametrize("header", ["Position (in),Load (lbf)", None])
+def test_with_a_config_a_card_not_headed_in_si_is_refused_in_one_line(tmp_path, capsys, header) -> None:
+    """The config models read loads in newtons against the described well: a card whose header names other units
+    (a field export) or has no header would be read silently at a wrong scale (a lbf card looks like a parted
+    string), so it is refused before any work, naming the file and what is expected; without --config the same
+    file is read scale-free."""
+    card = _card("full")
+    rows = "\n".join(f"{float(x)!r},{float(y)!r}" for x, y in zip(card.polished_rod_position_m / 0.0254,
+                                                                   card.polished_rod_load_n / 4.4482216152605))
+    f = tmp_path / "field.csv"
+    f.write_text((header + "\n" if header else "") + rows)
+    assert main(["classify", str(f), "--config", WELL]) == 2
+    out, err = capsys.readouterr()
+    assert out == "" and err.count("\n") == 1 and "Traceback" not in err
+    assert "field.csv" in err and "polished_rod_load_n" in err and ("lbf" in err if header else "no header" in err)
+    assert main(["classify", str(f)]) == 0
