@@ -327,8 +327,6 @@ class IntervalRunner:
         res.fast_forward_strokes = ff
         if ran:  # the peaks of a repeated stroke: taking them once is taking them at every stroke
             self._add_peaks(res, m)
-        if ran and unit_of is not None:  # the next exact stroke pounds on the annulus left here (pump_draw.py)
-            sim.replan_upstroke(period)
         return done, need_exact
 
     def _pump(self, res: IntervalResult, spm: float, stroke_m: float, period: float, n_total: float,

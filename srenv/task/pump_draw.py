@@ -13,9 +13,9 @@ On, each fast-forwarded stroke's displacement is the repeated stroke's moved to 
 pressure by the string's static stretch: d(displacement)/d(p_intake) = A_plunger^2 / k_string (the fluid load
 A (p_discharge - p_intake) over the string's stiffness; within 0.4 % of the exact strokes' on train wells 77 and
 12). The fill is then the exact stroke's rule: the pump takes what the annulus holds at the upstroke's end, up to
-that displacement (times the free gas's share, as before). And the upstroke after a fast-forward is re-planned on
-the annulus the fast-forward left (``Simulator.replan_upstroke``, the plan an exact stroke makes at the bottom),
-so an exact stroke placed after it pounds on that liquid, not on the plan of the stroke before the fast-forward.
+that displacement (times the free gas's share, as before). Designed on train wells 11, 12, 40, 77 (§2i): the
+carry's measured slope of the displacement instead of the static one was worse there (two kept strokes far apart
+carry their scatter), and re-planning the upstroke after a fast-forward changed nothing (not kept).
 """
 
 from __future__ import annotations
