@@ -11,8 +11,8 @@ by a pump-off onset, where the first partial stroke's fill, and its pound, is se
 
 On, each fast-forwarded stroke's displacement is the repeated stroke's moved to the annulus' current intake
 pressure by the string's static stretch: d(displacement)/d(p_intake) = A_plunger^2 / k_string (the fluid load
-A (p_discharge - p_intake) over the string's stiffness; within 0.4 % of the exact strokes' on train wells 77 and
-12). The fill is then the exact stroke's rule: the pump takes what the annulus holds at the upstroke's end, up to
+A (p_discharge - p_intake) over the string's stiffness; within 1 % of the exact strokes' on train wells 77 and
+12, 15 % shallower on 40, 1.8x steeper on 11). The fill is then the exact stroke's rule: the pump takes what the annulus holds at the upstroke's end, up to
 that displacement (times the free gas's share, as before). Designed on train wells 11, 12, 40, 77 (§2i): the
 carry's measured slope of the displacement instead of the static one was worse there (two kept strokes far apart
 carry their scatter), and re-planning the upstroke after a fast-forward changed nothing (not kept).
