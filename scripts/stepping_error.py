@@ -4,6 +4,7 @@
     python scripts/stepping_error.py --wells 0 1 2 3 --hours 1 [--version v2] [--json out.json]
     python scripts/stepping_error.py --version v2 --follow-drift --exact-min 2 4 [--skip-v2-off]   # the options
     python scripts/stepping_error.py --version v2 --follow-drift --boundary-strokes 4 --skip-v2-off
+    python scripts/stepping_error.py --version v2 --follow-drift --boundary-strokes 4 --skip-v2-off --draw-follows-pump
 
 Wells are seeds of the benchmark's test scenario; each policy of srenv.tools.stepping_error runs one episode
 per well three ways (every stroke exact and the two options) and the relative errors are printed.
@@ -27,6 +28,8 @@ ap.add_argument("--exact-min", type=int, nargs="*", default=[],
 ap.add_argument("--follow-drift", action="store_true", help="v2 with IntervalRunner(follow_drift=True)")
 ap.add_argument("--boundary-strokes", type=int, nargs="*", default=[],
                 help="v2 with IntervalRunner(boundary_strokes=N) for each N (srenv/task/boundary.py)")
+ap.add_argument("--draw-follows-pump", action="store_true",
+                help="each option above also with IntervalRunner(draw_follows_pump=True) (srenv/task/pump_draw.py)")
 ap.add_argument("--skip-v2-off", action="store_true", help="leave out v2 with fast_stepping=False")
 ap.add_argument("--json")
 args = ap.parse_args()
@@ -50,6 +53,10 @@ for n in args.boundary_strokes:
     options[f"v2_boundary{n}"] = {"runner": {"boundary_strokes": n}}
     if args.follow_drift:
         options[f"v2_boundary{n}_drift"] = {"runner": {"boundary_strokes": n, "follow_drift": True}}
+if args.draw_follows_pump:  # every option above (v2's default too) also with the fast-forward drawing as the pump
+    for label, kw in list(options.items()):
+        if label != "v2_fast_off":
+            options[f"{label}_pump"] = {**kw, "runner": {**kw.get("runner", {}), "draw_follows_pump": True}}
 rows = []
 for policy in args.policies:
     for seed in args.wells:

@@ -20,7 +20,8 @@ Options (off in v1; v2's default, docs/speed.md): ``reuse_periodic`` starts an i
 earlier interval at the same setpoint converged to, while the intake pressure has barely moved and the physics
 is the same; ``carry`` also carries a kept stroke to a farther intake pressure along the slopes of two kept
 strokes (:mod:`srenv.task.reuse`). Opt-in, off everywhere: ``exact_min`` and ``follow_drift``
-(:mod:`srenv.task.stepping`), ``boundary_strokes`` (:mod:`srenv.task.boundary`).
+(:mod:`srenv.task.stepping`), ``boundary_strokes`` (:mod:`srenv.task.boundary`), ``draw_follows_pump``
+(:mod:`srenv.task.pump_draw`).
 """
 
 from __future__ import annotations
@@ -34,7 +35,7 @@ from ..analysis import card_features as cf
 from ..analysis.stroke_summary import summarize
 from ..physics.pump import plunger_area_m2
 from ..simulation.simulator import RunResult, Simulator
-from . import boundary, reuse, stepping
+from . import boundary, pump_draw, reuse, stepping
 from .fillage_reading import controller_fillage
 
 # the fast option (IntervalRunner(reuse_periodic=True)): how far the intake pressure may move the plunger's
@@ -140,8 +141,9 @@ class IntervalRunner:
 
     def __init__(self, sim: Simulator, reuse_periodic: bool = False, carry: bool = False,
                  draw_at_top: bool = False, exact_min: int = 0, follow_drift: bool = False,
-                 boundary_strokes: int = 0) -> None:
+                 boundary_strokes: int = 0, draw_follows_pump: bool = False) -> None:
         self.sim = sim
+        self.draw_follows_pump = pump_draw.check(draw_follows_pump)  # opt-in: the fast-forward draws as the pump
         self.boundary_strokes = boundary.check(boundary_strokes)  # opt-in: exact strokes at regime boundaries
         # opt-in (srenv/task/stepping.py): K exact strokes an interval, their mean repeated; figures along the drift
         self.exact_min, self.follow_drift = stepping.check(exact_min, follow_drift, carry)
@@ -293,6 +295,7 @@ class IntervalRunner:
         damage, stick, imp_sq, imp = res.damage, res.stick_slip_j, res.impact_sq_sum, res.impact_sum
         ff = res.fast_forward_strokes
         imp2 = f.impact_m_s ** 2
+        unit_of = pump_draw.displacement_rule(self, disp) if self.draw_follows_pump else None
         ran = False
         while done < n_total - 1e-9:
             remaining = n_total - done
@@ -302,12 +305,13 @@ class IntervalRunner:
             w = min(1.0, remaining)
             t_next = min(sim.time_s + w * period, t_end) if w < 1.0 else sim.time_s + period
             # what the pump can draw: its displacement less the free gas's share (1 without gas)
-            cap = w * disp * (sim.gas_liquid_fraction(in_barrel) if gas else 1.0)
+            unit = disp if unit_of is None else unit_of(self._intake_pa())
+            cap = w * unit * (sim.gas_liquid_fraction(in_barrel) if gas else 1.0)
             take = sim.fast_forward(t_next, cap, sim.time_s + up_s if up_s is not None else None)
-            fill = take / (w * disp) if disp > 0 else 1.0
+            fill = take / (w * unit) if unit > 0 else 1.0
             strokes += w
             lifted += take
-            displaced += w * disp
+            displaced += w * unit
             work += w * f.work_j
             damage += w * f.damage
             stick += w * f.stick_slip_j

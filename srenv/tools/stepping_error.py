@@ -83,7 +83,8 @@ def compare(policy: str, seed: int, hours: float, scenario: str = "test", interv
     """One episode of `hours` on well `seed` of `scenario` of task ``version`` ("v1" or "v2"; v2 draws the same
     conditions for every run of a seed): each of ``options`` (a label -> env kwargs; default v1 as it is and v1
     with fast_stepping=True) against every stroke simulated exactly. An option's ``"runner"`` entry (a dict of
-    ``exact_min`` / ``follow_drift``, srenv/task/stepping.py; ``boundary_strokes``, srenv/task/boundary.py) is set on the env's interval runner at its reset."""
+    ``exact_min`` / ``follow_drift``, srenv/task/stepping.py; ``boundary_strokes``, srenv/task/boundary.py;
+    ``draw_follows_pump``, srenv/task/pump_draw.py) is set on the env's interval runner at its reset."""
     from ..task.interval import IntervalRunner
 
     cls = env_class(version)
@@ -129,12 +130,13 @@ def _episode_every_stroke(env, seed: int, acts: np.ndarray, run) -> dict:
 
 def _episode_with_runner_options(env, seed: int, acts: np.ndarray, runner_kw: dict) -> dict:
     """episode() with the opt-in stepping options set on the env's fresh interval runner."""
-    from ..task import boundary, stepping
+    from ..task import boundary, pump_draw, stepping
 
     def with_options(r):
         r.exact_min, r.follow_drift = stepping.check(runner_kw.get("exact_min", 0), runner_kw.get("follow_drift",
                                                      False), r.carry)
         r.boundary_strokes = boundary.check(runner_kw.get("boundary_strokes", 0))
+        r.draw_follows_pump = pump_draw.check(runner_kw.get("draw_follows_pump", False))
 
     return _episode_after_reset(env, seed, acts, with_options)
 
