@@ -128,6 +128,9 @@ def voi_specs(tuned: dict[str, dict[str, Any]]) -> dict[str, Any]:
             out[f"{twin}_observer{g}"] = {**designs[d], "params": {**p, "observer": True}}
             out[f"{twin}_observer_condition{g}"] = {**designs[d], "params": {**p, "observer": True,
                                                                                "condition_prob": THRESHOLD}}
+    for twin in ("twin_true_well", "estimated_mpc"):  # the condition alone (m24's level estimate)
+        for g, d in (("", "estimated_mpc"), ("_guarded", "estimated_mpc_guarded")):
+            out[f"{twin}_condition{g}"] = {**designs[d], "params": {**designs[d]["params"], "condition_prob": THRESHOLD}}
     return out
 
 

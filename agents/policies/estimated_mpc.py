@@ -15,6 +15,12 @@ played. Its annulus level is the only state it is corrected on, from the field o
 * a pumped-off card on the real well (``fillage_est`` < ``POUNDED``) while the twin is full empties the twin's
   annulus; a full card while the twin pounds lifts it to ``REFILL`` of its depth (the pump is submerged again).
 
+Options (issue 24, helper s24; off by default, which is m24's policy): ``observer`` - the twin's level is instead
+:class:`agents.policies.level_observer.LevelObserver`'s (an inflow balance on the twin's IPR and pump
+displacement times the real card's fillage, its deliverability estimated from successive shots, corrected at
+shots and pounding cards), the twin's deliverability the observer's; ``condition_prob`` - the twin carries the
+classifier's most probable non-normal label above that probability at a mid severity (``condition_estimate``).
+
 What it reads of the env: the observation names and the task's clock (``horizon_s``, ``cfg.task.interval_s``) at
 ``reset``; nothing of the well, its annulus, the reservoir or the condition (tests/agents/test_estimated_mpc.py
 swaps them out after ``reset`` and shows the same actions). The field baselines it weighs are reset on a view that
@@ -42,7 +48,8 @@ from .level_observer import LevelObserver, condition_estimate
 LIBRARY = Path(__file__).resolve().parent / "estimated_mpc_library.npz"  # data beside the code: not a trained model
 SCALARS = ("spm", "pprl", "mprl", "power_mean", "power_peak", "fillage_est", "level_shot")
 POUNDED, FULL, REFILL = 0.9, 0.98, 0.1
-FLOOR = 0.02  # observer: a full card means liquid above the intake, at least this share of the pump depth
+FLOOR_M = 1.0  # observer: a full card means liquid above the intake - no more (0.02 x depth, ~18 m, sent a twin
+#               whose real level was 0.2 m pumping into a pound: validation 20006, 30.6 against 89.2 USD/h)
 
 
 def feature_names(obs_names: Sequence[str]) -> list[str]:
@@ -149,7 +156,7 @@ class EstimatedMPCPolicy(CausalOraclePolicy):
             ann, depth = twin.sim.annulus, float(twin.sim.mesh.x_m[-1])
             self._obs_level = LevelObserver(ann.area_m2, ann.pump_md_m, ann.nominal_inflow_m3_s,
                                             float(obs[self._names.index("level_shot")]) * depth,
-                                            floor_m=FLOOR * depth)
+                                            floor_m=FLOOR_M)
             twin.inflow_multiplier = lambda t_s: self._obs_level.prod
         i = self._names.index
         self._last = np.clip(np.array([2.0 * obs[i("avg_spm")] - 1.0, obs[i("stroke")]], np.float32), -1, 1)
