@@ -156,3 +156,20 @@ def test_bad_options_refused(bad):
     with pytest.raises(ValueError) as exc:
         EstimatedMPCPolicy(**{**PARAMS, **bad})
     assert next(iter(bad)) in str(exc.value) and "\n" not in str(exc.value)
+
+
+@pytest.mark.parametrize("args", [["--wells", "5", "10"], ["--wells", "30", "20"], ["--wells", "16", "200"]])
+def test_pilot_refuses_validation_wells_with_one_line(tmp_path, args):
+    """The observer stage plays training wells 16..199 only (0..15 are the tuning and validation wells)."""
+    import subprocess
+    import sys
+    from pathlib import Path
+
+    repo = Path(__file__).resolve().parents[2]
+    r = subprocess.run([sys.executable, "scripts/level_observer_pilot.py", "--stage", "observer", "--out",
+                        str(tmp_path / "o"), *args], check=False, capture_output=True, text=True, cwd=repo,
+                       timeout=120, env={"PYTHONPATH": str(repo), "PATH": "/usr/bin:/bin"})
+    assert r.returncode == 2 and "Traceback" not in r.stderr
+    lines = r.stderr.strip().splitlines()
+    assert len(lines) == 1 and "--wells" in lines[0] and "16..199" in lines[0]
+    assert not (tmp_path / "o").exists()
