@@ -15,6 +15,12 @@ played. Its annulus level is the only state it is corrected on, from the field o
 * a pumped-off card on the real well (``fillage_est`` < ``POUNDED``) while the twin is full empties the twin's
   annulus; a full card while the twin pounds lifts it to ``REFILL`` of its depth (the pump is submerged again).
 
+Options (issue 24, helper s24; off by default, which is m24's policy): ``observer`` - the twin's level is instead
+:class:`agents.policies.level_observer.LevelObserver`'s (an inflow balance on the twin's IPR and pump
+displacement times the real card's fillage, its deliverability estimated from successive shots, corrected at
+shots and pounding cards), the twin's deliverability the observer's; ``condition_prob`` - the twin carries the
+classifier's most probable non-normal label above that probability at a mid severity (``condition_estimate``).
+
 What it reads of the env: the observation names and the task's clock (``horizon_s``, ``cfg.task.interval_s``) at
 ``reset``; nothing of the well, its annulus, the reservoir or the condition (tests/agents/test_estimated_mpc.py
 swaps them out after ``reset`` and shows the same actions). The field baselines it weighs are reset on a view that
@@ -37,10 +43,13 @@ from srenv.task.events import NORMAL
 from .alarms import make_field_controller
 from .causal_oracle import CausalOraclePolicy, freeze_future
 from .field import make_field_baseline, obs_names_of
+from .level_observer import LevelObserver, condition_estimate
 
 LIBRARY = Path(__file__).resolve().parent / "estimated_mpc_library.npz"  # data beside the code: not a trained model
 SCALARS = ("spm", "pprl", "mprl", "power_mean", "power_peak", "fillage_est", "level_shot")
 POUNDED, FULL, REFILL = 0.9, 0.98, 0.1
+FLOOR_M = 1.0  # observer: a full card means liquid above the intake - no more (0.02 x depth, ~18 m, sent a twin
+#               whose real level was 0.2 m pumping into a pound: validation 20006, 30.6 against 89.2 USD/h)
 
 
 def feature_names(obs_names: Sequence[str]) -> list[str]:
@@ -100,13 +109,21 @@ class EstimatedMPCPolicy(CausalOraclePolicy):
 
     def __init__(self, horizon: int = 6, replan_every: int = 3, steps: Sequence[float] = (0.3, 0.1),
                  anchors: Sequence[Sequence[float]] = (), policies: Sequence[Sequence[Any]] = (),
-                 library: str | None = None, guard: dict[str, Any] | None = None) -> None:
+                 library: str | None = None, guard: dict[str, Any] | None = None, observer: bool = False,
+                 condition_prob: float | None = None) -> None:
         if not (isinstance(horizon, int) and not isinstance(horizon, bool) and 1 <= horizon <= 144):
             raise ValueError(f"estimated_mpc horizon = {horizon!r}: expected an integer in [1, 144] intervals")
         super().__init__(horizon=horizon, replan_every=replan_every, steps=steps, anchors=anchors, policies=policies)
         self.library_path = library
         self.library = WellLibrary.load(library or LIBRARY)
         self.guard = check_guard(guard)
+        if observer is not True and observer is not False:
+            raise ValueError(f"estimated_mpc observer = {observer!r}: expected true or false")
+        if condition_prob is not None and (isinstance(condition_prob, bool) or not isinstance(condition_prob, (int, float))
+                                           or not 0.0 < condition_prob < 1.0):
+            raise ValueError(f"estimated_mpc condition_prob = {condition_prob!r}: expected None or a number in (0, 1)")
+        self.observer, self.condition_prob = observer, condition_prob
+        self._obs_level: LevelObserver | None = None
         self._twin: Any = None
         self._fallback: list[Any] | None = None
 
@@ -123,6 +140,7 @@ class EstimatedMPCPolicy(CausalOraclePolicy):
         self.guarded_intervals = 0
         self._fallback = None
         self._shot_age = math.inf
+        self._obs_level, self._pumped = None, None
 
     def _start(self, obs: np.ndarray) -> None:
         """At the first observation: the nearest training well becomes the twin, at the observed level."""
@@ -134,6 +152,12 @@ class EstimatedMPCPolicy(CausalOraclePolicy):
         twin.reset(seed=self.model_well)
         twin.inflow_multiplier = lambda t_s: 1.0  # the reservoir as designed: its draw is unknown
         self._twin = self._env = twin
+        if self.observer:  # the twin's annulus and IPR are the observer's model; its level and draw the estimate's
+            ann, depth = twin.sim.annulus, float(twin.sim.mesh.x_m[-1])
+            self._obs_level = LevelObserver(ann.area_m2, ann.pump_md_m, ann.nominal_inflow_m3_s,
+                                            float(obs[self._names.index("level_shot")]) * depth,
+                                            floor_m=FLOOR_M)
+            twin.inflow_multiplier = lambda t_s: self._obs_level.prod
         i = self._names.index
         self._last = np.clip(np.array([2.0 * obs[i("avg_spm")] - 1.0, obs[i("stroke")]], np.float32), -1, 1)
         view = _installed_view(twin.cfg, self._last, self._names)
@@ -159,6 +183,10 @@ class EstimatedMPCPolicy(CausalOraclePolicy):
 
     def _correct(self, obs: np.ndarray) -> None:
         """The twin's annulus from what the field shows (module doc)."""
+        if self.condition_prob is not None:
+            self._set_condition(*condition_estimate(obs, self._names, self.condition_prob))
+        if self._obs_level is not None:
+            return self._observe(obs)
         i = self._names.index
         depth = float(self._twin.sim.mesh.x_m[-1])
         age = float(obs[i("level_shot_age")])
@@ -170,6 +198,28 @@ class EstimatedMPCPolicy(CausalOraclePolicy):
             self._set_level(0.0)
         elif real >= FULL > model:
             self._set_level(max(self._twin.sim.annulus.level_m, REFILL * depth))
+
+    def _observe(self, obs: np.ndarray) -> None:
+        """The level observer (agents/policies/level_observer.py) over the last interval, then the twin set to it."""
+        i, ob = self._names.index, self._obs_level
+        if self._pumped is not None:  # the twin's pump displacement for the action played x the real card's fillage
+            dt, displaced = self._pumped
+            ob.advance(dt, displaced * float(np.clip(obs[i("fillage_est")], 0.0, 1.0)))
+        age = float(obs[i("level_shot_age")])
+        if age < self._shot_age:
+            ob.shot(float(obs[i("level_shot")]) * float(self._twin.sim.mesh.x_m[-1]))
+        elif self._pumped is not None and obs[i("duty")] > 0:  # a card of this interval (pumping came first)
+            ob.card(float(obs[i("fillage_est")]), (1.0 - float(obs[i("duty")])) * self._pumped[0], POUNDED, FULL)
+        self._shot_age = age
+        self._set_level(ob.level_m)
+
+    def _set_condition(self, label: str | None, severity: float) -> None:
+        """The twin on the estimated condition's physics (persisting in its plans: freeze_future)."""
+        from srenv.task.events import Event, Schedule
+
+        if (label, severity) != self._twin._condition:
+            self._twin._schedule = Schedule([Event(label, 0.0, math.inf, severity)] if label is not None else [])
+            self._twin._before_interval()
 
     def _alarmed(self, obs: np.ndarray) -> bool:
         """The guard (:func:`check_guard`) on the real card: pounding, near overload, or an abnormal condition."""
@@ -187,9 +237,7 @@ class EstimatedMPCPolicy(CausalOraclePolicy):
         if obs.ndim != 1 and obs.shape[0] != 1:
             raise RuntimeError("EstimatedMPCPolicy: one env only")
         row = obs.reshape(-1)
-        if self._twin is None:
-            self._start(row)
-        self._correct(row)
+        self.track(row)
         action, state = super().predict(observation, state, episode_start, deterministic)
         if self._fallback is not None:  # the fallback runs all episode on the real observations (its state)
             fb = self._fallback
@@ -198,13 +246,28 @@ class EstimatedMPCPolicy(CausalOraclePolicy):
             if self._alarmed(row):
                 action = np.asarray(a_fb, np.float32).reshape(np.shape(action))
                 self.guarded_intervals += 1
-        self._twin.step(np.asarray(action, np.float32).reshape(2))
-        self.sim_steps += 1
+        self.played(action)
         return action, state
+
+    def track(self, row: np.ndarray) -> None:
+        """The state estimate at a new observation (the twin started at the first): what ``predict`` plans on;
+        scripts/level_observer_pilot.py calls it (and :meth:`played`) to measure the estimate without planning."""
+        if self._twin is None:
+            self._start(row)
+        self._correct(row)
+
+    def played(self, action: Any) -> None:
+        """The twin stepped with the action played; its pump displacement kept for the observer."""
+        self._twin.step(np.asarray(action, np.float32).reshape(2))
+        r = self._twin._result
+        self._pumped = (float(r.duration_s), float(r.displaced_m3))
+        self.sim_steps += 1
 
     def params(self) -> dict[str, Any]:
         return {**super().params(), **({"library": self.library_path} if self.library_path else {}),
-                **({"guard": self.guard} if self.guard is not None else {})}
+                **({"guard": self.guard} if self.guard is not None else {}),
+                **({"observer": True} if self.observer else {}),
+                **({"condition_prob": self.condition_prob} if self.condition_prob is not None else {})}
 
 
 GUARD_KEYS = ("fallback", "pound_below", "load_above", "condition_prob")

@@ -48,20 +48,25 @@ class Annulus:
         """Liquid column above the pump, along measured depth."""
         return self.volume_m3 / self.area_m2
 
-    def intake_pressure_pa(self) -> float:
-        h = min(self.level_m, self.pump_md_m)
+    def intake_pressure_pa(self, level_m: float | None = None) -> float:
+        h = min(self.level_m if level_m is None else max(level_m, 0.0), self.pump_md_m)
         return level_intake_pressure_pa(self.cfg.casing_pressure_pa, self.fluid.density_kg_m3, self._pump_tvd,
                                         self._tvd(self.pump_md_m - h))
 
-    def inflow_m3_s(self) -> float:
-        p_wf = self.intake_pressure_pa()
+    def _rate_m3_day(self, p_wf: float) -> float:
+        """The IPR at the reservoir's nominal deliverability (multiplier 1)."""
         p_r = self.cfg.reservoir_pressure_pa
         if self.cfg.model == "linear":
-            q_day = self.cfg.productivity_index_m3_day_pa * max(p_r - p_wf, 0.0)
-        else:
-            r = min(max(p_wf / p_r, 0.0), 1.0)
-            q_day = self.cfg.max_rate_m3_day * (1 - 0.2 * r - 0.8 * r * r)
-        return self.rate_multiplier * q_day / SECONDS_PER_DAY
+            return self.cfg.productivity_index_m3_day_pa * max(p_r - p_wf, 0.0)
+        r = min(max(p_wf / p_r, 0.0), 1.0)
+        return self.cfg.max_rate_m3_day * (1 - 0.2 * r - 0.8 * r * r)
+
+    def inflow_m3_s(self) -> float:
+        return self.rate_multiplier * self._rate_m3_day(self.intake_pressure_pa()) / SECONDS_PER_DAY
+
+    def nominal_inflow_m3_s(self, level_m: float) -> float:
+        """The inflow at a given level and deliverability 1, the state untouched (a level observer's model)."""
+        return self._rate_m3_day(self.intake_pressure_pa(level_m)) / SECONDS_PER_DAY
 
     def accumulate(self, time_s: float) -> None:
         dt = max(time_s - self.last_time_s, 0.0)

@@ -1,0 +1,175 @@
+"""The annulus-level observer and the classifier's condition (agents/policies/level_observer.py) and their use in
+estimated_mpc's twin: a known-answer annulus, the corrections, the condition rule, and that the policy with both
+on still never reads the played well's hidden state."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from agents.envs import make_env
+from agents.policies.estimated_mpc import EstimatedMPCPolicy
+from agents.policies.level_observer import LevelObserver, condition_estimate
+from srenv.envs.sucker_rod_v2 import SuckerRodV2Env
+from srenv.task.events import EVENTS
+
+AREA, DEPTH, DT = 0.008, 1500.0, 300.0  # m2, m, s: a 5-min interval
+
+
+def _truth(level: float, q: float, pumped: float) -> float:
+    """The annulus as srenv books it at constant inflow ``q`` (m3/s): clipped at the pump and at its depth."""
+    return min(max(level + (q * DT - pumped) / AREA, 0.0), DEPTH)
+
+
+def test_constant_inflow_known_answer_and_deliverability_learnt():
+    """A constant-inflow annulus whose reservoir gives 1.6 x the model's IPR. Known answer: between shots the
+    level error grows by |1.6 - prod| * q * dt / area per interval (7.5 m at prod 0: the balance is exact but
+    for the deliverability); each shot-to-shot balance halves the deliverability's error (gain 0.5), so the error
+    over each 4-h window halves: <= 216 m, 108 m, 54 m (+ the shot's residual)."""
+    q_model, m_true, pumped = 2.0e-4, 1.6, 0.08  # m3/s; 0.08 m3 per interval drawn
+    ob = LevelObserver(AREA, DEPTH, lambda h: q_model, level_m=300.0)
+    true, errs, prods = 300.0, [], []
+    for k in range(1, 145):
+        true = _truth(true, m_true * q_model, pumped)
+        ob.advance(DT, pumped)
+        errs.append(abs(ob.level_m - true))
+        if k % 48 == 0:
+            ob.shot(true)
+            assert ob.level_m == pytest.approx(true, abs=2.0)  # the shot corrects the level (its small variance)
+            prods.append(ob.prod)
+    np.testing.assert_allclose(prods, [1.3, 1.45, 1.525], rtol=1e-9)
+    step = q_model * DT / AREA
+    for w, (prod, bound) in enumerate(zip([1.0, 1.3, 1.45], [216.0, 108.0, 54.0])):
+        window = errs[48 * w:48 * (w + 1)]
+        assert max(window) == pytest.approx(bound, abs=2.0)
+        assert max(window) <= abs(m_true - prod) * step * 48 + 2.0
+
+
+def test_balance_exact_when_the_model_is_right():
+    """The model's IPR is the reservoir's: the observer follows the level exactly and its deliverability stays 1."""
+    ipr = lambda h: 1.0e-4 * (1.0 - h / DEPTH)  # a level-dependent IPR
+    ob = LevelObserver(AREA, DEPTH, ipr, level_m=200.0)
+    true = 200.0
+    for k in range(1, 97):
+        true = min(max(true + (ipr(true) * DT - 0.02) / AREA, 0.0), DEPTH)
+        ob.advance(DT, 0.02)
+        if k % 48 == 0:
+            ob.shot(true)
+        assert abs(ob.level_m - true) < 1e-6
+    assert ob.prod == pytest.approx(1.0, abs=1e-6)
+
+
+def test_pound_and_full_cards_correct_the_level():
+    ob = LevelObserver(AREA, DEPTH, lambda h: 1.0e-4, level_m=400.0, floor_m=30.0)
+    ob.var_m2 = 1.0e4  # long since the last shot
+    ob.card(fillage_est=0.6, idle_s=0.0, pounded=0.9, full=0.98)
+    assert ob.level_m < 10.0  # a pounding card: the pump is at the liquid, whatever the balance said
+    ob.card(fillage_est=1.0, idle_s=0.0, pounded=0.9, full=0.98)
+    assert ob.level_m == 30.0  # a full card: the intake is submerged, at least to the floor
+    before = ob.level_m
+    ob.card(fillage_est=0.95, idle_s=0.0, pounded=0.9, full=0.98)
+    assert ob.level_m == before  # neither pounding nor full: no correction
+
+
+def test_observer_refuses_nonsense():
+    with pytest.raises(ValueError, match="area"):
+        LevelObserver(0.0, DEPTH, lambda h: 0.0, level_m=10.0)
+    with pytest.raises(ValueError, match="level"):
+        LevelObserver(AREA, DEPTH, lambda h: 0.0, level_m=math.nan)
+
+
+def test_condition_estimate():
+    names = ["avg_spm", "prob_full", "prob_fluid_pound", "prob_gas_interference", "prob_parted_rods",
+             "prob_tagging_up"]
+    assert condition_estimate(np.array([0.5, 0.1, 0.9, 0.0, 0.0, 0.0]), names, 0.6) == (None, 0.0)  # normal
+    label, sev = condition_estimate(np.array([0.5, 0.0, 0.1, 0.7, 0.2, 0.0]), names, 0.6)
+    assert label == "gas_interference" and sev == pytest.approx(0.5 * sum(EVENTS["gas_interference"].severity))
+    assert condition_estimate(np.array([0.5, 0.0, 0.1, 0.55, 0.0, 0.0]), names, 0.6) == (None, 0.0)  # below
+    assert condition_estimate(np.array([0.5, 0.0, 0.0, 0.0, 0.99, 0.0]), names, 0.6) == (None, 0.0)  # parted: not put
+    assert condition_estimate(np.array([0.5, 0.0, 0.0, 0.0, 0.0, 0.8]), names, 0.6) == ("tagging_up", 0.5)
+
+
+def test_nominal_inflow_is_the_ipr_and_reads_no_state():
+    env = SuckerRodV2Env(scenario="train", observation="field")
+    env.reset(seed=30017)
+    ann = env.sim.annulus
+    v, m = ann.volume_m3, ann.rate_multiplier
+    ann.rate_multiplier = 1.0
+    assert ann.nominal_inflow_m3_s(ann.level_m) == ann.inflow_m3_s()
+    assert ann.nominal_inflow_m3_s(0.0) > ann.nominal_inflow_m3_s(ann.pump_md_m) >= 0.0  # drawdown drives inflow
+    assert ann.volume_m3 == v
+    ann.rate_multiplier = m
+
+
+ENV = "srenv/SuckerRod-v2"
+KW = {"observation": "field", "episode_hours": 0.5, "interval_s": 300.0}
+PARAMS = {"horizon": 2, "replan_every": 2, "observer": True, "condition_prob": 0.6,
+          "policies": [["pump_off", {"threshold": 0.99, "idle_time_s": 3600, "a_spm": 0.4, "a_stroke": 0.0}]]}
+
+
+def test_observer_policy_never_reads_the_hidden_state():
+    """As tests/agents/test_estimated_mpc.py: with the observer and the condition on, the same observations give
+    the same actions when the env's well, simulator, config, schedule, condition, parting clock and inflow are
+    None after reset."""
+    env = make_env(ENV, scenario="train", **KW)
+    obs, _ = env.reset(seed=20003)
+    pol = EstimatedMPCPolicy(**PARAMS)
+    pol.reset(env)
+    acts, seen = [], []
+    for k in range(6):
+        a, _ = pol.predict(obs, episode_start=np.array([k == 0]))
+        acts.append(np.asarray(a).copy())
+        seen.append(np.asarray(obs).copy())
+        obs, _, term, trunc, _ = env.step(a)
+        if term or trunc:
+            break
+    blind = make_env(ENV, scenario="train", **KW)
+    blind.reset(seed=20003)
+    pol2 = EstimatedMPCPolicy(**PARAMS)
+    pol2.reset(blind)
+    for name in ("well", "sim", "cfg", "_schedule", "_condition", "_parting", "runner", "inflow_multiplier"):
+        setattr(blind.unwrapped, name, None)
+    again = [np.asarray(pol2.predict(o, episode_start=np.array([k == 0]))[0]) for k, o in enumerate(seen)]
+    np.testing.assert_array_equal(np.array(acts), np.array(again))
+    assert pol2._obs_level is not None and pol2.sim_steps > len(seen)
+
+
+def test_twin_takes_the_level_and_the_condition():
+    env = make_env(ENV, scenario="train", **KW)
+    obs, _ = env.reset(seed=20003)
+    pol = EstimatedMPCPolicy(**PARAMS)
+    pol.reset(env)
+    pol.track(np.asarray(obs, np.float64))
+    assert pol._twin.sim.annulus.level_m == pytest.approx(pol._obs_level.level_m, abs=1e-9)  # the twin is set to it
+    pol._set_condition("gas_interference", 0.6)
+    assert pol._twin._condition == ("gas_interference", 0.6)
+    assert pol._twin.sim.cfg.pump.intake_gas_fraction > env.unwrapped.cfg.pump.intake_gas_fraction
+    pol._set_condition(None, 0.0)
+    assert pol._twin._condition == (None, 0.0)
+
+
+@pytest.mark.parametrize("bad", [{"observer": 1}, {"observer": "yes"}, {"condition_prob": 0.0},
+                                 {"condition_prob": 1.0}, {"condition_prob": True}, {"condition_prob": "0.6"}])
+def test_bad_options_refused(bad):
+    with pytest.raises(ValueError) as exc:
+        EstimatedMPCPolicy(**{**PARAMS, **bad})
+    assert next(iter(bad)) in str(exc.value) and "\n" not in str(exc.value)
+
+
+@pytest.mark.parametrize("args", [["--wells", "5", "10"], ["--wells", "30", "20"], ["--wells", "16", "200"]])
+def test_pilot_refuses_validation_wells_with_one_line(tmp_path, args):
+    """The observer stage plays training wells 16..199 only (0..15 are the tuning and validation wells)."""
+    import subprocess
+    import sys
+    from pathlib import Path
+
+    repo = Path(__file__).resolve().parents[2]
+    r = subprocess.run([sys.executable, "scripts/level_observer_pilot.py", "--stage", "observer", "--out",
+                        str(tmp_path / "o"), *args], check=False, capture_output=True, text=True, cwd=repo,
+                       timeout=120, env={"PYTHONPATH": str(repo), "PATH": "/usr/bin:/bin"})
+    assert r.returncode == 2 and "Traceback" not in r.stderr
+    lines = r.stderr.strip().splitlines()
+    assert len(lines) == 1 and "--wells" in lines[0] and "16..199" in lines[0]
+    assert not (tmp_path / "o").exists()
