@@ -14,7 +14,7 @@ true condition of each interval.
 policy the well), then twin = the nearest training well (``estimated_mpc*``).
 
     PYTHONPATH=. nice -n 5 python scripts/level_observer_pilot.py --stage observer --out runs/s24_observer
-    PYTHONPATH=. nice -n 5 python scripts/level_observer_pilot.py --stage voi --out runs/s24_voi
+    PYTHONPATH=. nice -n 5 python scripts/level_observer_pilot.py --stage voi --out runs/s24_voi_floor1
 """
 
 from __future__ import annotations
