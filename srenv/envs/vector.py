@@ -118,10 +118,17 @@ class KernelVectorEnv(VectorEnv):
         return np.stack([o for o, _ in res]), infos
 
     def step(self, actions: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, dict]:
-        res = self.step_envs(np.asarray(actions))
+        actions = np.asarray(actions)
+        if self._procs is not None:  # block by block: the driver's infos merge while the workers still step
+            parts = self._procs.run_parts("next", list(zip(self._done.tolist(), actions)))
+        else:
+            parts = [self.step_envs(actions)]
+        res: list = []
         infos: dict = {}
-        for i, r in enumerate(res):
-            infos = self._add_info(infos, r[4], i)
+        for part in parts:
+            for r in part:
+                infos = self._add_info(infos, r[4], len(res))
+                res.append(r)
         term = np.array([r[2] for r in res], dtype=bool)
         trunc = np.array([r[3] for r in res], dtype=bool)
         self._done = term | trunc

@@ -122,9 +122,22 @@ class ProcessShards:
 
     def run(self, cmd: str, per_env: list) -> list:
         """Send each worker its block's arguments, then collect: the blocks run at the same time."""
+        return [r for part in self.run_parts(cmd, per_env) for r in part]
+
+    def run_parts(self, cmd: str, per_env: list):
+        """:meth:`run` block by block, in env order: the caller can merge the driver's block (first) while the
+        workers still run theirs. Every block is collected before an error is raised (the pipes stay in step)."""
         for c, block in zip(self.conns, self.blocks):
             c.send((cmd, [per_env[i] for i in block]))
-        return [r for part in self._gather() for r in part]
+        error = None
+        for c in self.conns:
+            status, payload = c.recv()
+            if status != "ok":
+                error = error or payload
+            elif error is None:
+                yield payload
+        if error is not None:
+            raise RuntimeError(error)
 
     def call(self, what: str, name: str, indices: list, args: tuple, kwargs: dict) -> list:
         want = {int(i) for i in indices}

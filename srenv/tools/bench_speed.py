@@ -120,6 +120,44 @@ def vector_rates(env_id: str, sizes: tuple = (1, 8, 32), steps: int = 2, speedup
     return out
 
 
+def split_bound(env_id: str, n: int, steps: int, blocks: int = 2, seed: int = 0) -> dict:
+    """The most a static split of N wells into `blocks` can give, with free communication: N single envs (seeded
+    as the vector env seeds them) stepped one by one at full speed, each step's wall time kept, and
+    serial time / sum over steps of the slowest block's time, for the process backend's contiguous blocks and for
+    the best split in hindsight by each env's total (greedy, largest first). A vector step waits for its slowest
+    block, so v2's bimodal steps cap the process speedup below `blocks` however cheap the pipes are."""
+    import gymnasium as gym
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        envs = [gym.make(env_id, scenario="train").unwrapped for _ in range(n)]
+        a = np.float32(MODES["full_speed"])
+        for i, env in enumerate(envs):
+            env.reset(seed=seed + i)
+            env.step(a)
+        t = np.zeros((steps, n))
+        for s in range(steps):
+            for i, env in enumerate(envs):
+                t0 = time.perf_counter()
+                env.step(a)
+                t[s, i] = time.perf_counter() - t0
+        for env in envs:
+            env.close()
+    load = np.zeros(blocks)
+    best: list = [[] for _ in range(blocks)]
+    for i in np.argsort(-t.sum(0)):  # largest first onto the least loaded block
+        k = int(np.argmin(load))
+        best[k].append(i)
+        load[k] += t[:, i].sum()
+
+    def bound(split: list) -> float:
+        return float(t.sum() / np.max([t[:, b].sum(1) for b in split], axis=0).sum())
+
+    contiguous = [b.tolist() for b in np.array_split(np.arange(n), blocks)]
+    return {"serial_ms_per_step": float(1e3 * t.sum() / steps), "contiguous_bound": bound(contiguous),
+            "hindsight_bound": bound(best)}
+
+
 def speed_figures(quick: bool) -> dict:
     steps = 6 if quick else 12
     out: dict = {"env_per_core": {}}

@@ -191,3 +191,18 @@ def test_the_driver_steps_the_first_block_and_the_workers_the_rest() -> None:
             assert all(np.array_equal(r[0], o) for r, o in zip(res, single))
         finally:
             shards.close()
+
+
+def test_a_failing_block_is_raised_after_every_block_answered() -> None:
+    """run_parts (the step's block-by-block collection) raises a block's error only after collecting every block,
+    so the pipes stay in step and the next command works."""
+    from srenv.envs.vector_procs import ProcessShards
+
+    shards = ProcessShards(SuckerRodV1Env, 4, 2, dict(SHORT))
+    try:
+        with pytest.raises(RuntimeError, match="bogus in the worker of envs 0..1"):
+            list(shards.run_parts("bogus", [None] * 4))
+        res = shards.run("reset", [(7 + i, None) for i in range(4)])
+        assert np.array_equal(res[3][0], SuckerRodV1Env(**SHORT).reset(seed=10)[0])
+    finally:
+        shards.close()

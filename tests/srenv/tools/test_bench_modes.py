@@ -4,8 +4,9 @@ with the same fields as the constant-action modes."""
 from __future__ import annotations
 
 import numpy as np
+import pytest
 
-from srenv.tools.bench_speed import MODES, RANDOM_MODE, env_rates, mode_actions
+from srenv.tools.bench_speed import MODES, RANDOM_MODE, env_rates, mode_actions, split_bound
 
 
 def test_random_actions_mode_changes_the_action_every_step_from_a_fixed_seed() -> None:
@@ -25,3 +26,14 @@ def test_bench_reports_random_actions_with_positive_rates() -> None:
     assert set(row) == set(out["full_speed"])
     assert row["env_steps_per_cpu_s"] > 0 and row["with_resets_env_steps_per_cpu_s"] > 0
     assert row["exact_strokes_per_step"] >= 1  # a new setpoint: at least one exact stroke
+
+
+def test_split_bound_lies_between_one_and_the_block_count() -> None:
+    """The static-split bound (docs/speed.md §3): the slowest block's time summed over steps is at least the serial
+    time / blocks and at most the serial time, so the bound is in [1, blocks]; one block is exactly serial."""
+    out = split_bound("srenv/SuckerRod-v2", 3, steps=2)
+    assert out["serial_ms_per_step"] > 0
+    for key in ("contiguous_bound", "hindsight_bound"):
+        assert 1.0 <= out[key] <= 2.0 + 1e-9
+    one = split_bound("srenv/SuckerRod-v2", 2, steps=1, blocks=1)
+    assert one["contiguous_bound"] == pytest.approx(1.0) and one["hindsight_bound"] == pytest.approx(1.0)
