@@ -25,8 +25,8 @@ from __future__ import annotations
 import copy
 import math
 
-# the largest N accepted (beyond ~16 a 5-min interval at 12 SPM is mostly simulated: use exact_min instead)
-BOUNDARY_STROKES_MAX = 16
+from .runner_options import BOUNDARY_STROKES_MAX, check_option  # noqa: F401 (re-exported)
+
 FULL = 0.99  # a stroke at or above this fillage fills the pump
 PEAK_TOLERANCE = 0.005  # the issue's error goal: a predicted change below it is not worth an exact stroke
 # the fill's boundary is aimed this many strokes early: the fast-forward's annulus is its own balance, a stroke or
@@ -37,12 +37,8 @@ LOADINGS = (("pprl_n", None), ("goodman_max_pct", 100.0), ("gearbox_loading_pct"
 
 
 def check(boundary_strokes) -> int:
-    """The option, validated: ValueError naming it, its value and what was expected."""
-    if (isinstance(boundary_strokes, bool) or not isinstance(boundary_strokes, int)
-            or not 0 <= boundary_strokes <= BOUNDARY_STROKES_MAX):
-        raise ValueError(f"boundary_strokes = {boundary_strokes!r}: expected an integer in 0..{BOUNDARY_STROKES_MAX}"
-                         " (exact strokes an interval may add at regime boundaries; 0 is off)")
-    return boundary_strokes
+    """The option, validated (runner_options.check_option: ValueError naming it, its value and what was expected)."""
+    return check_option("boundary_strokes", boundary_strokes)
 
 
 def strokes_to_boundary(f, s, p_f, p_now: float, dp: float, avail_m3: float, dv_m3: float, to_end: int,

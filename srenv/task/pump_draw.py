@@ -24,11 +24,10 @@ from ..physics.pump import plunger_area_m2
 
 
 def check(draw_follows_pump) -> bool:
-    """The option, validated: TypeError naming it, its value and what was expected."""
-    if not isinstance(draw_follows_pump, bool):
-        raise TypeError(f"draw_follows_pump = {draw_follows_pump!r}: expected True or False (the fast-forward's "
-                         "draw follows the pump's displacement at the current intake pressure)")
-    return draw_follows_pump
+    """The option, validated (runner_options.check_option: TypeError naming it, its value and what was expected)."""
+    from .runner_options import check_option
+
+    return check_option("draw_follows_pump", draw_follows_pump)
 
 
 def displacement_rule(runner, displacement_m3: float):

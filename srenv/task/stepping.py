@@ -19,10 +19,9 @@ from . import boundary, reuse
 def check(exact_min, follow_drift, carry: bool) -> tuple[int, bool]:
     """The options, validated: ValueError (TypeError for a follow_drift not a bool) naming the option, its value
     and what was expected."""
-    if isinstance(exact_min, bool) or not isinstance(exact_min, int) or exact_min < 0:
-        raise ValueError(f"exact_min = {exact_min!r}: expected an integer >= 0 (exact strokes per interval)")
-    if not isinstance(follow_drift, bool):
-        raise TypeError(f"follow_drift = {follow_drift!r}: expected True or False")
+    from .runner_options import check_option
+
+    exact_min, follow_drift = check_option("exact_min", exact_min), check_option("follow_drift", follow_drift)
     if follow_drift and not carry:
         raise ValueError("follow_drift = True: expected carry = True (it follows the carry's slopes)")
     return exact_min, follow_drift
