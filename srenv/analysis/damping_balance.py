@@ -169,3 +169,13 @@ def energy_balance(cfg: WellConfig, diagnose):
                      terms.valve_interval_n,
                      float(fill), stroke)
     return with_factor(cfg, nu), card, result
+
+
+def diagnose_with_rule(cfg: WellConfig, rule: str, diagnose, flag: str = "--damping"):
+    """The one entry of ``srenv diagnose`` and ``srenv validate``: the diagnosis with the configured damping
+    (``fixed``) or the energy balance's; returns (config used, PumpCard, the JSON entry ``damping``)."""
+    check_rule(rule, cfg, flag)
+    if rule == "fixed":
+        return cfg, diagnose(cfg), {"rule": "fixed", "damping_factor": float(cfg.damping.damping_factor)}
+    used, card, balance = energy_balance(cfg, diagnose)
+    return used, card, balance.as_json()
