@@ -34,7 +34,7 @@ from ..errors import ConfigError, NumericFailure
 from ..outputs import atomic_write, check_output_path
 
 DEFAULT_STROKES = 4
-DEFAULT_DAMPING = "fixed"  # the decision of docs/realism.md, "The damping a diagnosis should use"
+DEFAULT_DAMPING = "energy-balance"  # the pre-registered decision of docs/realism.md, "The damping a diagnosis should use"
 
 
 def _write_motion_csv(rec, path: str) -> None:
