@@ -74,14 +74,23 @@ def _diagnose(cfg_dict: dict, rec, damping: str = "fixed") -> tuple[object, dict
     return card, {**summary(cfg, card), "damping": entry}
 
 
-def _damping_rule(cfg: dict, rec, state: dict, damping: str) -> tuple[dict, dict | None]:
+def _damping_rule(cfg: dict, rec, state: dict, damping: str | None) -> tuple[dict, dict | None]:
     """The config with the damping the energy balance reads off the record's card (the prediction then uses
     the string the diagnosis found, as it uses the pump state read off the record), and why not when it does
-    not apply: a pump state read off the same card makes the balance degenerate (analysis/damping_balance)."""
-    from ..config import apply_overrides
+    not apply: a pump state read off the same card makes the balance degenerate (analysis/damping_balance);
+    the default (None) also falls back where the model cannot take the rule, a rule asked for is refused."""
+    from ..analysis.damping_balance import check_rule
+    from ..config import apply_overrides, config_from_dict
 
     if damping == "fixed":
         return cfg, None
+    if damping is None:
+        damping = DEFAULT_DAMPING
+        try:
+            check_rule(damping, config_from_dict(cfg))
+        except ConfigError as e:
+            return cfg, {"rule": damping, "applied": False, "damping_factor": cfg["damping"]["damping_factor"],
+                         "reason": f"the model cannot take it: {e}"}
     if state["source"] == "srenv diagnose":
         return cfg, {"rule": damping, "applied": False, "damping_factor": cfg["damping"]["damping_factor"],
                      "reason": "the pump's state is read off the same card (load lines): the balance is degenerate"}
@@ -256,12 +265,13 @@ def compare(rec, sim, result, pump_card, convention: str) -> dict:
 
 def validate(rec, params: list[str], strokes: int, convention: str, overrides: dict | None = None,
              motor: dict | None = None, survey_weight: str = "inclination",
-             damping: str = DEFAULT_DAMPING) -> tuple[dict, object]:
+             damping: str | None = None) -> tuple[dict, object]:
     """Predict, diagnose and compare one record (`overrides`: config fields set on the realistic model,
     e.g. for the baseline of docs/realism.md; `motor`: fields set over the record's motor, e.g.
     ``{"inertia_kg_m2": 1e4}``, or ``{"enabled": False}`` for constant crank speed; `survey_weight`: the
     survey column the string follows, ``field_model.survey_stations``; `damping`: ``fixed`` (the model's
-    Gibbs factor) or ``energy-balance`` (read off the record's card, analysis/damping_balance))."""
+    Gibbs factor) or ``energy-balance`` (read off the record's card, analysis/damping_balance); None = the
+    default, DEFAULT_DAMPING where it applies)."""
     from dataclasses import replace
 
     from ..analysis.field_model import well_config
@@ -302,7 +312,7 @@ def validate(rec, params: list[str], strokes: int, convention: str, overrides: d
                 f"{motor_entry['crank_speed_pct_of_mean']['min_pct_of_mean']:.1f}-"
                 f"{motor_entry['crank_speed_pct_of_mean']['max_pct_of_mean']:.1f} % of its mean")])
         # the stored card, as the vendor diagnosed it (with the rule, on the model's final state)
-        pump_card, diag = _diagnose(cfg, rec, damping if rule_entry and rule_entry["applied"] else "fixed")
+        pump_card, diag = _diagnose(cfg, rec, rule_entry["rule"] if rule_entry and rule_entry["applied"] else "fixed")
         out = compare(card, sim, result, pump_card, convention)
     from ..analysis.field_model import position_is_synthesised, unit_kinematics_check
 
@@ -363,9 +373,9 @@ def add_parser(sub) -> None:
     v.add_argument("--survey-weight", choices=SURVEY_WEIGHTS, default="inclination",
                    help="the string follows the record's inclinations (the physics) or its TVD column (a vendor "
                         "JSON's convention: 7699227's TVD column is vertical; docs/realism.md)")
-    v.add_argument("--damping", choices=RULES, default=DEFAULT_DAMPING,
-                   help=f"the diagnosis's and the model's Gibbs factor: fixed (the model's) or energy-balance (read "
-                        f"off the card where the pump's state is not; default {DEFAULT_DAMPING}; docs/realism.md)")
+    v.add_argument("--damping", choices=RULES, default=None,
+                   help=f"the diagnosis's and the model's Gibbs factor: fixed (the model's) or energy-balance "
+                        f"(read off the card; default {DEFAULT_DAMPING} where it applies, else fixed; docs/realism.md)")
     add_number(v, "validate", "--strokes", default=DEFAULT_STROKES,
                help=f"strokes simulated from the static state; the last is compared (default {DEFAULT_STROKES})")
     v.set_defaults(func=cmd_validate)
