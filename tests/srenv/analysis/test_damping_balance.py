@@ -147,3 +147,20 @@ def test_diagnose_refuses_a_rule_it_cannot_apply_exit_2_one_line_nothing_written
     assert r.returncode == 2 and match in r.stderr
     assert len(r.stderr.strip().splitlines()) == 1 and "Traceback" not in r.stderr
     assert not out.exists()
+
+
+def test_validate_reads_the_damping_off_a_card_whose_pump_state_is_given(tmp_path):
+    """`srenv validate CARD.csv --config WELL` (the pump state is the config's: the balance applies by default):
+    srenv's own Fig. 3 card (nu = 0.05) gives its factor back within 2 % and the prediction with it reproduces
+    the card within 0.5 % of PPRL; `--damping fixed` keeps the config's factor and says the rule was not used."""
+    card = tmp_path / "f3.csv"
+    assert _cli("simulate", "paper_fig3_vertical", "--strokes", "3", "--out", str(card), cwd=tmp_path).returncode == 0
+    r = _cli("validate", str(card), "--config", "paper_fig3_vertical", cwd=tmp_path)
+    assert r.returncode == 0, r.stderr
+    d = json.loads(r.stdout)
+    rule = d["damping_rule"]
+    assert rule["rule"] == "energy-balance" and rule["applied"] and rule["damping_factor"] == pytest.approx(0.05, rel=0.02)
+    assert d["model"]["damping_factor"] == rule["damping_factor"]
+    assert abs(d["pprl_error_pct"]) < 0.5 and d["card_rms_pct_of_pprl"] < 0.5
+    r = _cli("validate", str(card), "--config", "paper_fig3_vertical", "--damping", "fixed", cwd=tmp_path)
+    assert json.loads(r.stdout)["damping_rule"] == {"rule": "fixed", "applied": True}
