@@ -164,3 +164,17 @@ def test_validate_reads_the_damping_off_a_card_whose_pump_state_is_given(tmp_pat
     assert abs(d["pprl_error_pct"]) < 0.5 and d["card_rms_pct_of_pprl"] < 0.5
     r = _cli("validate", str(card), "--config", "paper_fig3_vertical", "--damping", "fixed", cwd=tmp_path)
     assert json.loads(r.stdout)["damping_rule"] == {"rule": "fixed", "applied": True}
+
+
+def test_validate_default_falls_back_where_the_model_cannot_take_the_rule_and_refuses_it_when_asked(tmp_path):
+    """The default well sets its intake by an inflow model: `validate` without --damping keeps the config's
+    factor and names why; `--damping energy-balance` asked for is refused in one line, exit 2."""
+    card = tmp_path / "d.csv"
+    assert _cli("simulate", "default", "--strokes", "2", "--out", str(card), cwd=tmp_path).returncode == 0
+    r = _cli("validate", str(card), "--config", "default", "--strokes", "2", cwd=tmp_path)
+    assert r.returncode == 0, r.stderr
+    rule = json.loads(r.stdout)["damping_rule"]
+    assert not rule["applied"] and "inflow.model" in rule["reason"]
+    r = _cli("validate", str(card), "--config", "default", "--strokes", "2", "--damping", "energy-balance",
+             cwd=tmp_path)
+    assert r.returncode == 2 and "inflow.model" in r.stderr and len(r.stderr.strip().splitlines()) == 1
