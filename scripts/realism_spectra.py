@@ -1,5 +1,6 @@
 """docs/realism.md's evidence: measured vs predicted surface cards and their load spectra by harmonic of the
-stroke, for the previous model (viscous damping only, nu = 0.05) and the realistic model of `srenv validate`,
+stroke, for the previous model (viscous damping only, nu = 0.05) and the realistic model of `srenv validate`
+(its damping read off the card by the energy balance where it applies, and the fixed factor beside it),
 on the two public field records in tests/data/field/; and how much of the baseline's excess above the 20th
 harmonic a load cell's sampling and low-pass filtering would hide.
 
@@ -89,7 +90,7 @@ def main() -> None:
     report = {}
     for k, w in enumerate(WELLS):
         rec = read_dynacard_json(DATA / f"{w}.json", auto_orient=True)
-        base, (_, rb, _) = validate(rec, [], 4, "effective", BASELINE)
+        base, (_, rb, _) = validate(rec, [], 4, "effective", BASELINE, damping="fixed")  # its own nu
         real, (_, rr, _) = validate(rec, [], 4, "effective")
         n = len(rec.load_n)
         pb = resample_stroke(rb.trace["t_s"], rb.trace["polished_rod_load_n"], rb.duration_s, n)
@@ -112,7 +113,11 @@ def main() -> None:
         meas_above = harmonic_shares(rec.load_n)[1]
         report[w] = {
             "baseline": {key: base[key] for key in FIGURES},
-            "realistic": {key: real[key] for key in (*FIGURES, "pump_state", "model")},
+            "realistic": {key: real[key] for key in (*FIGURES, "pump_state", "model", "damping_rule")},
+            # the fixed Gibbs factor (0.02) in the diagnosis and the model, against the energy balance's
+            # (validate's default since d27; docs/realism.md, "The damping a diagnosis should use")
+            "damping_fixed": {key: validate(rec, [], 4, "effective", damping="fixed")[0][key]
+                              for key in (*FIGURES, "card_offset_n", "model")},
             "rigid_transfer": {key: validate(rec, [], 4, "effective", RIGID_TRANSFER)[0][key] for key in FIGURES},
             "vertical_weight": {key: validate(rec, [], 4, "effective", VERTICAL)[0][key] for key in FIGURES},
             "unanchored_tubing": {key: validate(rec, [], 4, "effective", UNANCHORED)[0][key] for key in FIGURES},

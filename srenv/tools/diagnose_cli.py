@@ -11,6 +11,7 @@ import argparse
 
 import numpy as np
 
+from ..analysis.damping_balance import RULES
 from ..analysis.diagnose import DEFAULT_HARMONICS, LOAD_CONVENTIONS, PUMP_COLUMNS, load_in_convention
 from ..cli_types import card_command
 from ..declarations import OUTPUTS, add_number
@@ -40,11 +41,14 @@ def cmd_diagnose(args: argparse.Namespace) -> int:
     period = 60.0 / args.spm if args.spm else None
     if period is not None and t[-1] - t[0] < period * (1 - 1e-6) - 2 * float(np.median(np.diff(t))):
         raise ConfigError("--spm", args.spm, f"a stroke rate whose period fits in the card ({t[-1] - t[0]:.4g} s)")
-    card = diagnose_card(cfg, t, x, f, harmonics=args.harmonics, period_s=period, friction=not args.no_friction)
+    from ..analysis.damping_balance import diagnose_with_rule
+
+    cfg, card, damping = diagnose_with_rule(cfg, args.damping, lambda c: diagnose_card(
+        c, t, x, f, harmonics=args.harmonics, period_s=period, friction=not args.no_friction))
     for name in ("pump_position_m", "pump_load_n"):
         if not np.all(np.isfinite(getattr(card, name))):
             raise NumericFailure(name, "the diagnosed pump card is not finite; check the card's magnitudes")
-    line = json_line(summary(cfg, card, args.load_convention))  # before any file: a failed summary leaves no output
+    line = json_line({**summary(cfg, card, args.load_convention), "damping": damping})  # before any file: a failed summary leaves no output
     writers = [(args.out, _pump_csv_writer(card, args.load_convention))]
     if args.plot:
         writers.append((args.plot, lambda tmp: save_plot(card, tmp, cfg.name)))
@@ -67,4 +71,8 @@ def add_parser(sub) -> None:
     d.add_argument("--load-convention", choices=LOAD_CONVENTIONS, default="true",
                    help="pump loads written as true loads (default) or effective (buoyant) loads: true + p A at "
                         "the rod end (the JSON carries rod_end_pressure_pa and rod_end_area_m2)")
+    d.add_argument("--damping", choices=RULES, default="fixed",
+                   help="the string's Gibbs factor: as configured (default) or energy-balance, the one whose "
+                        "pump card does the pump's work (valve interval x displaced liquid + gas compression; "
+                        "Gibbs 1963, Everitt & Jennings 1992; docs/realism.md)")
     d.set_defaults(func=cmd_diagnose)

@@ -28,11 +28,13 @@ import tempfile
 import numpy as np
 import yaml
 
+from ..analysis.damping_balance import RULES
 from ..analysis.diagnose import LOAD_CONVENTIONS, load_in_convention
 from ..errors import ConfigError, NumericFailure
 from ..outputs import atomic_write, check_output_path
 
 DEFAULT_STROKES = 4
+DEFAULT_DAMPING = "energy-balance"  # the pre-registered decision of docs/realism.md, "The damping a diagnosis should use"
 
 
 def _write_motion_csv(rec, path: str) -> None:
@@ -61,13 +63,43 @@ def _card_motion(rec):
         "the card's stroke, with the measured loads placed on it by time; the diagnosis reads the stored card")])
 
 
-def _diagnose(cfg_dict: dict, rec) -> tuple[object, dict]:
+def _diagnose(cfg_dict: dict, rec, damping: str = "fixed") -> tuple[object, dict]:
+    """The stored card diagnosed with the config's damping or the energy balance's (``summary`` + ``damping``)."""
+    from ..analysis.damping_balance import diagnose_with_rule
     from ..analysis.diagnose import diagnose_card, summary
     from ..config import config_from_dict
 
-    cfg = config_from_dict(cfg_dict)
-    card = diagnose_card(cfg, rec.t_s, rec.position_m, rec.load_n, period_s=rec.period_s)
-    return card, summary(cfg, card)
+    cfg, card, entry = diagnose_with_rule(config_from_dict(cfg_dict), damping, lambda c: diagnose_card(
+        c, rec.t_s, rec.position_m, rec.load_n, period_s=rec.period_s))
+    return card, {**summary(cfg, card), "damping": entry}
+
+
+def _damping_rule(cfg: dict, rec, state: dict, damping: str | None) -> tuple[dict, dict | None]:
+    """The config with the damping the energy balance reads off the record's card (the prediction then uses
+    the string the diagnosis found, as it uses the pump state read off the record), and why not when it does
+    not apply: a pump state read off the same card makes the balance degenerate (analysis/damping_balance);
+    the default (None) also falls back where the model cannot take the rule, a rule asked for is refused."""
+    from ..analysis.damping_balance import check_rule
+    from ..config import apply_overrides, config_from_dict
+
+    if damping == "fixed":
+        return cfg, None
+    if damping is None:
+        damping = DEFAULT_DAMPING
+        try:
+            check_rule(damping, config_from_dict(cfg))
+        except ConfigError as e:
+            return cfg, {"rule": damping, "applied": False, "damping_factor": cfg["damping"]["damping_factor"],
+                         "reason": f"the model cannot take it: {e}"}
+    if state["source"] == "srenv diagnose":
+        return cfg, {"rule": damping, "applied": False, "damping_factor": cfg["damping"]["damping_factor"],
+                     "reason": "the pump's state is read off the same card (load lines): the balance is degenerate"}
+    _, diag = _diagnose(cfg, rec, damping)
+    entry = {**diag["damping"], "applied": diag["damping"]["bracketed"]}
+    if not entry["applied"]:
+        entry["reason"] = "no root of the balance in the searched range of the Gibbs factor"
+        return cfg, entry
+    return apply_overrides(cfg, {"damping.damping_factor": entry["damping_factor"]}), entry
 
 
 def pump_state(rec, work_dir: str, survey_weight: str = "inclination") -> dict:
@@ -232,11 +264,14 @@ def compare(rec, sim, result, pump_card, convention: str) -> dict:
 
 
 def validate(rec, params: list[str], strokes: int, convention: str, overrides: dict | None = None,
-             motor: dict | None = None, survey_weight: str = "inclination") -> tuple[dict, object]:
+             motor: dict | None = None, survey_weight: str = "inclination",
+             damping: str | None = None) -> tuple[dict, object]:
     """Predict, diagnose and compare one record (`overrides`: config fields set on the realistic model,
     e.g. for the baseline of docs/realism.md; `motor`: fields set over the record's motor, e.g.
     ``{"inertia_kg_m2": 1e4}``, or ``{"enabled": False}`` for constant crank speed; `survey_weight`: the
-    survey column the string follows, ``field_model.survey_stations``)."""
+    survey column the string follows, ``field_model.survey_stations``; `damping`: ``fixed`` (the model's
+    Gibbs factor) or ``energy-balance`` (read off the record's card, analysis/damping_balance); None = the
+    default, DEFAULT_DAMPING where it applies)."""
     from dataclasses import replace
 
     from ..analysis.field_model import well_config
@@ -259,6 +294,7 @@ def validate(rec, params: list[str], strokes: int, convention: str, overrides: d
             cfg = apply_overrides(well_config(rec, csv, state["intake_pressure_pa"], state["fillage"],
                                               state["plunger_friction_n"], survey_weight=survey_weight),
                                   dict(overrides or {}))
+        cfg, rule_entry = _damping_rule(cfg, rec, state, damping)
         fitted = None
         if params:
             fitted = _fit(cfg, card, params, strokes, work)
@@ -275,7 +311,8 @@ def validate(rec, params: list[str], strokes: int, convention: str, overrides: d
                 f"{motor_entry['counterbalance_source']}): the crank speed follows the net gearbox torque, "
                 f"{motor_entry['crank_speed_pct_of_mean']['min_pct_of_mean']:.1f}-"
                 f"{motor_entry['crank_speed_pct_of_mean']['max_pct_of_mean']:.1f} % of its mean")])
-        pump_card, diag = _diagnose(cfg, rec)  # the stored card, as the vendor diagnosed it
+        # the stored card, as the vendor diagnosed it (with the rule, on the model's final state)
+        pump_card, diag = _diagnose(cfg, rec, rule_entry["rule"] if rule_entry and rule_entry["applied"] else "fixed")
         out = compare(card, sim, result, pump_card, convention)
     from ..analysis.field_model import position_is_synthesised, unit_kinematics_check
 
@@ -288,6 +325,7 @@ def validate(rec, params: list[str], strokes: int, convention: str, overrides: d
                 "record_card_type": getattr(rec, "card_type", None),
                 "pump_state": state, "survey_weight": survey_weight,
                 "diagnosis": {k: diag[k] for k in ("fillage", "card_class", "fluid_load_n", "intake_pressure_pa")},
+                "damping_rule": rule_entry or {"rule": "fixed", "applied": True},
                 "fit": fitted, "model": {"damping_factor": cfg.get("damping", {}).get("damping_factor"),
                                          "fillage": cfg.get("pump", {}).get("fillage")}})
     return out, (card, result, pump_card)
@@ -307,7 +345,7 @@ def cmd_validate(args) -> int:
     check_output_path("--plot", args.plot, (".png",))
     rec = read_record(args.record, args.config, args.reverse)
     out, parts = validate(rec, list(args.fit or []), args.strokes, args.load_convention,
-                          survey_weight=args.survey_weight)
+                          survey_weight=args.survey_weight, damping=args.damping)
     try:  # a figure that is not finite is a failure, not a result (and NaN is not JSON)
         line = json.dumps(out, default=float, allow_nan=False)
     except ValueError:
@@ -335,6 +373,9 @@ def add_parser(sub) -> None:
     v.add_argument("--survey-weight", choices=SURVEY_WEIGHTS, default="inclination",
                    help="the string follows the record's inclinations (the physics) or its TVD column (a vendor "
                         "JSON's convention: 7699227's TVD column is vertical; docs/realism.md)")
+    v.add_argument("--damping", choices=RULES, default=None,
+                   help=f"the diagnosis's and the model's Gibbs factor: fixed (the model's) or energy-balance "
+                        f"(read off the card; default {DEFAULT_DAMPING} where it applies, else fixed; docs/realism.md)")
     add_number(v, "validate", "--strokes", default=DEFAULT_STROKES,
                help=f"strokes simulated from the static state; the last is compared (default {DEFAULT_STROKES})")
     v.set_defaults(func=cmd_validate)

@@ -225,20 +225,32 @@ def test_validate_figures_held_today(figures, well):
         assert d["card_rms_pct_of_pprl"] <= 5.7 and d["spectrum"]["ratio_h4_20"] <= 3.3
         assert d["pump_state"]["intake_pressure_pa"] > 3e6 and d["pump_state"]["plunger_friction_n"] < 1.0
         assert d["motor"]["used"] and d["motor"]["nema_design"] == "D" and d["motor"]["converged"]
+        # its pump state is read off the same card: the energy balance would hold for any damping, so the
+        # default keeps the fixed nu = 0.02 and says why (analysis/damping_balance.py)
+        assert not d["damping_rule"]["applied"] and "degenerate" in d["damping_rule"]["reason"]
+        assert d["model"]["damping_factor"] == 0.02
     else:
         assert not d["position_synthesised"] and d["motion_source"] == "card"
         assert not d["motor"]["used"]  # a measured position already carries the motor's slip
         assert d["spectrum"]["ratio_h4_20"] <= 1.3
-        # 7699227's diagnosed pump card against the vendor's: shifted (+1.2 kN, the deviated string's weight
-        # explains a constant 1.3 kN: the vendor's diagnosis follows the record's vertical TVD column) and
-        # short (its downstroke 1.2 kN further above; docs/realism.md)
+        # 7699227's diagnosed pump card against the vendor's: with the fixed nu = 0.02 shifted (+1.2 kN) and
+        # 1.2 kN short (upstroke +1.24, downstroke +2.48 kN); the energy balance (the default since d27: the
+        # record's fluid load and fillage leave the string 1.1 kJ of the 50.8 kJ polished-rod work to dissipate)
+        # finds nu = 0.0008, and the card's height comes within 0.3 kN of the vendor's (+1.73 / +2.02 kN): what
+        # is left is a level, the deviated string's weight (the vendor's diagnosis follows the record's vertical
+        # TVD column; docs/realism.md). PPRL +2.4 -> +1.8 %, MPRL +5.9 -> +7.4 %, card 8.13 -> 8.15 %, pump card
+        # 10.0 -> 9.6 %, harmonics 4-20 0.63 -> 0.70x
+        rule = d["damping_rule"]
+        assert rule["applied"] and rule["bracketed"] and rule["damping_factor"] < 0.005
+        assert d["model"]["damping_factor"] == rule["damping_factor"]
         off = d["pump_card_offset_n"]
-        assert off["downstroke"] - off["upstroke"] > 1000.0 and 0.0 < off["upstroke"] < 1500.0
+        assert abs(off["downstroke"] - off["upstroke"]) < 500.0 and 1500.0 < off["upstroke"] < 2200.0
+        assert d["pump_card_rms_pct_of_range"] <= 9.8
 
 
 @pytest.mark.xfail(strict=True, reason="issue 27's goal, not reached yet: 11708328's PPRL 9.6 % and MPRL 9.1 % "
-                   "low, its harmonics 4-20 3.2x the measured share, its pump card 4.2 %; 7699227's MPRL 5.9 % "
-                   "high, its card 8.1 % of PPRL RMS (a constant 2.9 kN) and its diagnosed pump card 10.0 % of "
+                   "low, its harmonics 4-20 3.2x the measured share, its pump card 4.2 %; 7699227's MPRL 7.4 % "
+                   "high, its card 8.2 % of PPRL RMS (a constant 2.9 kN) and its diagnosed pump card 9.6 % of "
                    "range (docs/realism.md)")
 @pytest.mark.parametrize("well", WELLS)
 def test_validate_meets_the_issue_goal(figures, well):
