@@ -24,6 +24,11 @@ model; a level model is refused without a config. Surface cards with ``--config 
 model (``classifier_config.npz``, if shipped; else the surface model alone): its 66th feature is the card's load
 midline against the described well (srenv.analysis.surface_level: a flowing well's card is a full pump's with a
 smaller fluid load, which only the description can tell). Without a config the surface model is run 7's.
+
+A vendor dynacard record (``RECORD.json``, or ``*.json`` in a directory beside ``*.csv`` cards) is read as ``srenv
+validate`` reads it (``--reverse``, or a reversed card turned forward and said so) and its stored card classified as
+with ``--config``, the well the record describes (``record_well``) as the config; the line names the model and the
+well's source. In a directory a JSON file without ``cardData`` is skipped (a note on stderr after the answers).
 """
 
 from __future__ import annotations

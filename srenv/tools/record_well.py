@@ -29,6 +29,7 @@ class DescribedWell:
     record: object        # the FieldRecord, its card forward in time
     config: dict          # the described well (a config mapping, field_model.well_config)
     pump_state: dict      # validate.pump_state: intake pressure, plunger friction and where they came from
+    notes: tuple = ()     # the reader's notes and how the well's motion was taken (validate.card_motion)
 
     def entry(self) -> dict:
         """The JSON entry saying where the well came from (``well`` in classify's and diagnose's output)."""
@@ -36,7 +37,7 @@ class DescribedWell:
                 "card_time_reversed": bool(self.record.time_reversed),
                 "intake_pressure_pa": float(self.config["pump"]["intake_pressure_pa"]),
                 "plunger_friction_n": float(self.pump_state["plunger_friction_n"]), "fillage": FILLAGE,
-                "pump_state_source": self.pump_state["source"], "record_notes": list(self.record.notes)}
+                "pump_state_source": self.pump_state["source"], "record_notes": list(self.notes)}
 
 
 def _regular(path) -> Path:
@@ -70,8 +71,9 @@ def described_well(rec, survey_weight: str = "inclination") -> Iterator[Describe
     from .validate import card_motion, pump_state, write_motion_csv
 
     with tempfile.TemporaryDirectory(prefix="srenv-record-") as work:
-        csv = os.path.join(work, "motion.csv")
-        write_motion_csv(card_motion(rec), csv)
+        csv, motion = os.path.join(work, "motion.csv"), card_motion(rec)
+        write_motion_csv(motion, csv)
         state = pump_state(rec, work, survey_weight)
         yield DescribedWell(rec, well_config(rec, csv, state["intake_pressure_pa"], FILLAGE,
-                                             state["plunger_friction_n"], survey_weight=survey_weight), state)
+                                             state["plunger_friction_n"], survey_weight=survey_weight), state,
+                            tuple(motion.notes))

@@ -50,6 +50,8 @@ def test_a_record_is_classified_against_the_well_it_describes(well, capsys) -> N
     w = row["well"]
     assert w["source"] == "record" and w["fillage"] == 1.0 and w["card_time_reversed"] is REVERSED[well]
     assert w["pump_state_source"] == ("record" if well == "7699227" else "srenv diagnose")
+    # 11708328's position channel is a written cosine: the described well moves as its unit (validate.card_motion)
+    assert ("synthesised position channel" in " ".join(w["record_notes"])) is (well == "11708328")
     print(well, row["label"], row["probabilities"][row["label"]])  # reported in docs/field.md, never asserted
 
 
