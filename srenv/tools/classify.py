@@ -289,17 +289,18 @@ def split_records(files: list[Path], path: str, config: str | None, reverse: boo
     from .record_well import is_dynacard, read_record_file
 
     jsons, csvs = [f for f in files if is_record(f)], [f for f in files if not is_record(f)]
-    if jsons:
-        check_card_config(jsons[0], config, required=False)
-    if reverse and csvs:
-        raise ConfigError("--reverse", str(csvs[0]), "dynacard records (.json) only: a CSV card is read in its "
-                          "rows' order")
     skipped = [f for f in jsons if Path(path).is_dir() and not is_dynacard(f)]
     if skipped and len(skipped) == len(files):
         raise _bad(path, f"a directory with *.csv cards or dynacard records ({len(skipped)} JSON files without "
                    "cardData skipped, none left)")
+    records = [f for f in jsons if f not in skipped]
+    if records:
+        check_card_config(records[0], config, required=False)
+    if reverse and csvs:
+        raise ConfigError("--reverse", str(csvs[0]), "dynacard records (.json) only: a CSV card is read in its "
+                          "rows' order")
     notes = [f"srenv: note: skipped {f}: a JSON file that is not a dynacard record (no cardData)" for f in skipped]
-    return [(f, read_record_file(f, reverse)) for f in jsons if f not in skipped], csvs, notes
+    return [(f, read_record_file(f, reverse)) for f in records], csvs, notes
 
 
 def classify_records(records: list, args: argparse.Namespace) -> dict:

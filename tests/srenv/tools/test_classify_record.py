@@ -118,6 +118,22 @@ def test_a_directory_mixes_records_and_csv_cards_and_skips_a_json_that_is_no_car
     assert [line.split("\t")[0] for line in capsys.readouterr().out.splitlines()] == [r["file"] for r in rows]
 
 
+def test_a_json_that_is_no_card_does_not_change_a_csv_directory_with_a_config(tmp_path, capsys) -> None:
+    """``classify DIR --config WELL`` on CSV cards beside a vendor's metadata JSON: the CSVs answered as before (the
+    JSON skipped, said on stderr); ``--config`` is refused only beside a record."""
+    _write_csv_card(tmp_path / "a_card.csv")
+    assert main(["classify", str(tmp_path), "--config", "paper_fig3_vertical", "--json"]) == 0
+    before = capsys.readouterr()
+    (tmp_path / "meta.json").write_text("{}")
+    assert main(["classify", str(tmp_path), "--config", "paper_fig3_vertical", "--json"]) == 0
+    after = capsys.readouterr()
+    assert after.out == before.out and before.err == "" and "skipped" in after.err
+    shutil.copy(FIELD_DATA / "7699227.json", tmp_path / "r.json")
+    assert main(["classify", str(tmp_path), "--config", "paper_fig3_vertical"]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "r.json describes its well" in err
+
+
 def test_nothing_is_left_behind_when_the_described_well_fails(tmp_path, monkeypatch, capsys) -> None:
     """The motion CSV's temporary directory is removed on error too (here the pump's state fails)."""
     from srenv.errors import ConfigError
