@@ -198,6 +198,10 @@ def _rods(data: dict) -> None:
     del data["equipmentData"]["Rods"]
 
 
+def _no_stroke(data: dict) -> None:
+    data["cardData"]["Position"] = [50.0] * len(data["cardData"]["Position"])
+
+
 BAD = {
     "does not parse": (_text("cut.json", '{"cardData": {"Position": [1, 2'), [], ("RECORD", "readable JSON")),
     "does not parse, in a directory": (_in_dir(_text("cut.json", '{"cardData"')), [], ("cut.json", "readable JSON")),
@@ -205,6 +209,7 @@ BAD = {
     "a JSON that is no record": (_text("meta.json", '{"wells": 2}'), [], ("record.equipmentData", "JSON object")),
     "missing the pump depth": (_broken("nodepth.json", _pump_depth), [], ("equipmentData.Pump.Depth", "missing")),
     "missing the rods": (_broken("norods.json", _rods), [], ("equipmentData.Rods", "rod tapers")),
+    "a card without a stroke": (_broken("flat.json", _no_stroke), [], ("cardData", "zero stroke")),
     "a forward card with --reverse": (lambda d: FIELD_DATA / "11708328.json", ["--reverse"],
                                       ("--reverse", "already runs forward")),
     "--config with a record": (lambda d: FIELD_DATA / "7699227.json", ["--config", "paper_fig3_vertical"],
