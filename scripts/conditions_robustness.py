@@ -158,23 +158,18 @@ def equipment_cards(wells, n_wells: int, severity: float):
 
 
 def record_well_cards(path: str, severity: float):
-    """Check (f): the described well of a field record, simulated in every condition (its motion file lives in a
-    temporary directory for the simulations)."""
+    """Check (f): the described well of a field record (srenv.tools.record_well, the well ``srenv classify
+    RECORD.json`` reads against), simulated in every condition (its motion file lives in a temporary directory for
+    the simulations)."""
     import os
-    import tempfile
 
-    from srenv.analysis.field_model import well_config
-    from srenv.config import apply_overrides, config_from_dict
-    from srenv.tools.validate import _card_motion, _write_motion_csv, pump_state, read_record
+    from srenv.config import config_from_dict
+    from srenv.tools.record_well import described_well
+    from srenv.tools.validate import read_record
 
     rec = read_record(path, None, False)
-    with tempfile.TemporaryDirectory(prefix="srenv-check-f-") as work:
-        csv = os.path.join(work, "motion.csv")
-        _write_motion_csv(_card_motion(rec), csv)
-        st = pump_state(rec, work)
-        well = config_from_dict(apply_overrides(well_config(rec, csv, st["intake_pressure_pa"], st["fillage"],
-                                                            st["plunger_friction_n"]), {"pump.fillage": 1.0}))
-        yield from _conditions(f"f/{os.path.basename(path)}", well, severity)
+    with described_well(rec) as well:
+        yield from _conditions(f"f/{os.path.basename(path)}", config_from_dict(well.config), severity)
 
 
 def synthesised(stream):

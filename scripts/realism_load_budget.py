@@ -22,7 +22,7 @@ from srenv.analysis.load_budget import card_plateaus, static_budget
 from srenv.config import apply_overrides, config_from_dict
 from srenv.field_units import to_si
 from srenv.simulation.simulator import Simulator
-from srenv.tools.validate import _write_motion_csv, pump_state, validate
+from srenv.tools.validate import pump_state, validate, write_motion_csv
 
 DATA = Path(__file__).resolve().parent.parent / "tests" / "data" / "field"
 WELLS = ("11708328", "7699227")
@@ -48,7 +48,7 @@ def _vendor(path: Path) -> dict:
 
 def _model(rec, survey_weight: str, work: str, overrides: dict | None = None):
     csv = os.path.join(work, "motion.csv")
-    _write_motion_csv(rec, csv)
+    write_motion_csv(rec, csv)
     st = pump_state(rec, work, survey_weight)
     cfg = well_config(rec, csv, st["intake_pressure_pa"], st["fillage"], st["plunger_friction_n"],
                       survey_weight=survey_weight)

@@ -94,7 +94,7 @@ def round_trip(rec, result, pa_n: float) -> dict:
     (11708328) is not what makes the top climb: the measured loads diagnosed on the record's unit's motion."""
     from srenv.analysis.diagnose import diagnose_card
     from srenv.config import config_from_dict
-    from srenv.tools.validate import _card_motion, pump_state
+    from srenv.tools.validate import card_motion, pump_state
 
     tr, n, period = result.trace, len(rec.load_n), result.duration_s
     x = resample_stroke(tr["t_s"], tr["polished_rod_position_m"], period, n)
@@ -107,7 +107,7 @@ def round_trip(rec, result, pa_n: float) -> dict:
         cfg = config_from_dict(well_config(rec, csv, st["intake_pressure_pa"], st["fillage"],
                                            st["plunger_friction_n"]))
         card = diagnose_card(cfg, np.arange(n) * period / n, x - x.min(), f, period_s=period)
-        moved = _card_motion(rec)
+        moved = card_motion(rec)
         on_unit = None if moved is rec else diagnose_card(cfg, moved.t_s, moved.position_m, moved.load_n,
                                                           period_s=rec.period_s)
     out = {"model": transfer_travel_m(tr["pump_position_m"], tr["pump_load_n"] + pa_n),

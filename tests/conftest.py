@@ -8,7 +8,8 @@
    ``k * SPM * stroke`` while there is liquid. Fast enough for unit tests of the harness (thousands of steps per
    second); it says nothing about the real well.
 2. :func:`assert_cli_refuses`: one check for the CLI's bad-input contract, shared by the tests of each command
-   that reads a file.
+   that reads a file; :func:`record_by_hand`: a dynacard record's described well written by hand (the route
+   ``srenv classify / diagnose RECORD.json`` replaces), on the records in :data:`FIELD_DATA`.
 3. The ``wheel`` fixture: srenv's wheel, built once per session (tests/test_wheel.py, test_core_install.py).
 4. :func:`run_on_avx2_numpy`: a snippet in a fresh interpreter on numpy's AVX2 kernels, for the tests that pin
    results to the bit.
@@ -139,14 +140,43 @@ if ENV_ID not in gym.registry:
 FAKE_ENV = f"{__name__}:{ENV_ID}"  # gymnasium's module:id form: a spawned worker imports this module to find it
 
 
-def assert_cli_refuses(args: list[str], out: Path, *needles: str) -> str:
-    """``python -m srenv.tools.cli ARGS`` exits 2 with one stderr line holding every needle, and writes no ``out``."""
-    p = subprocess.run([sys.executable, "-m", "srenv.tools.cli", *args], check=False, capture_output=True, text=True)
+def assert_cli_refuses(args: list[str], out: Path, *needles: str, tmpdir: Path | None = None) -> str:
+    """``python -m srenv.tools.cli ARGS`` exits 2 with one stderr line holding every needle, and writes no ``out``;
+    with ``tmpdir`` the command's temporary files go there (TMPDIR) and none may be left behind."""
+    env = None if tmpdir is None else dict(os.environ, TMPDIR=str(tmpdir))
+    p = subprocess.run([sys.executable, "-m", "srenv.tools.cli", *args], check=False, capture_output=True, text=True,
+                       env=env)
     assert p.returncode == 2
     lines = p.stderr.strip().splitlines()
     assert len(lines) == 1 and all(n in lines[0] for n in needles), p.stderr
     assert not out.exists()
+    assert tmpdir is None or not any(tmpdir.iterdir()), sorted(tmpdir.iterdir())
     return lines[0]
+
+
+FIELD_DATA = Path(__file__).resolve().parent / "data" / "field"  # the two public dynacard records (its README)
+
+
+def record_by_hand(record: Path, work: Path):
+    """The manual route a record's described well replaces: (the record, a well YAML, its stored card as a CSV with
+    t_s for ``diagnose``, the same as two columns for ``classify``), written by hand in ``work`` from the record as
+    ``srenv validate`` reads it (the measured motion, pump full, the intake pressure and plunger friction of
+    ``validate.pump_state``)."""
+    import yaml
+
+    from srenv.analysis.field_model import well_config
+    from srenv.tools.validate import card_motion, pump_state, read_record, write_motion_csv
+
+    rec = read_record(str(record), None, False)
+    write_motion_csv(card_motion(rec), str(work / "motion.csv"))
+    st = pump_state(rec, str(work))
+    cfg = well_config(rec, str(work / "motion.csv"), st["intake_pressure_pa"], 1.0, st["plunger_friction_n"])
+    (work / "well.yaml").write_text(yaml.safe_dump(cfg, sort_keys=False))
+    np.savetxt(work / "card.csv", np.c_[rec.t_s, rec.position_m, rec.load_n], delimiter=",", comments="",
+               header="t_s,polished_rod_position_m,polished_rod_load_n", fmt="%.17g")
+    np.savetxt(work / "surface.csv", np.c_[rec.position_m, rec.load_n], delimiter=",", comments="",
+               header="polished_rod_position_m,polished_rod_load_n", fmt="%.17g")
+    return rec, work / "well.yaml", work / "card.csv", work / "surface.csv"
 
 
 # ------------------------------------------------------------------------------------------------ the wheel

@@ -173,19 +173,24 @@ def _unit(su: dict, where: str) -> dict:
     return out
 
 
-def read_dynacard_json(path: str | Path, reverse: bool = False, auto_orient: bool = False) -> FieldRecord:
-    """A vendor dynacard export (``cardData``, ``equipmentData``, ``InputParameters``, ...). The layout stores
-    cards in either time direction: with `auto_orient` a reversed card is turned forward (and the record says
-    so, ``time_reversed``); otherwise it is refused unless `reverse`."""
+def load_record_json(path: str | Path):
+    """The parsed JSON of a record file (data only: ``json``, at most MAX_RECORD_BYTES), any JSON value."""
     p = Path(path)
     if not p.is_file():
         raise ConfigError("RECORD", str(path), "an existing field record file (.json, or .csv with --config)")
     if p.stat().st_size > MAX_RECORD_BYTES:
         raise ConfigError("RECORD", str(path), f"a record of at most {MAX_RECORD_BYTES} bytes")
     try:
-        d = json.loads(p.read_text())
-    except (OSError, UnicodeDecodeError, ValueError) as exc:
+        return json.loads(p.read_text())
+    except (OSError, UnicodeDecodeError, ValueError, RecursionError) as exc:  # RecursionError: nesting too deep
         raise ConfigError("RECORD", str(path), f"a readable JSON file ({type(exc).__name__})") from None
+
+
+def read_dynacard_json(path: str | Path, reverse: bool = False, auto_orient: bool = False) -> FieldRecord:
+    """A vendor dynacard export (``cardData``, ``equipmentData``, ``InputParameters``, ...). The layout stores
+    cards in either time direction: with `auto_orient` a reversed card is turned forward (and the record says
+    so, ``time_reversed``); otherwise it is refused unless `reverse`."""
+    d = load_record_json(path)
     if not isinstance(d, dict):
         raise ConfigError("RECORD", str(path), "a JSON object (the dynacard layout)")
     eq = _section(d, "equipmentData", "record")

@@ -24,6 +24,11 @@ model; a level model is refused without a config. Surface cards with ``--config 
 model (``classifier_config.npz``, if shipped; else the surface model alone): its 66th feature is the card's load
 midline against the described well (srenv.analysis.surface_level: a flowing well's card is a full pump's with a
 smaller fluid load, which only the description can tell). Without a config the surface model is run 7's.
+
+A vendor dynacard record (``RECORD.json``, or ``*.json`` in a directory beside ``*.csv`` cards) is read as ``srenv
+validate`` reads it (``--reverse``, or a reversed card turned forward and said so) and its stored card classified as
+with ``--config``, the well the record describes (``record_well``) as the config; the line names the model and the
+well's source. In a directory a JSON file without ``cardData`` is skipped (a note on stderr after the answers).
 """
 
 from __future__ import annotations
@@ -31,11 +36,13 @@ from __future__ import annotations
 import argparse
 import csv
 import json
+import sys
 from pathlib import Path
 
 import numpy as np
 
 from ..analysis.card_shape import CARD_TYPES
+from ..errors import ConfigError
 
 MAX_CARD_BYTES = 64 * 1024 * 1024
 MAX_FILES = 100_000
@@ -45,12 +52,16 @@ BOTTOM_BAND = 0.02  # share of the stroke: samples this close to the lowest posi
 
 def add_parser(sub) -> None:
     c = sub.add_parser("classify", help="name the pump condition of surface cards (CSV or a directory)")
-    c.add_argument("path", help="a card CSV or a directory of *.csv")
+    c.add_argument("path", help="a card CSV, a vendor dynacard record (.json: classified against the well it "
+                   "describes) or a directory of *.csv cards and *.json records")
     c.add_argument("--config", help="the well's config (checked; with --card pump the cards are surface cards in SI "
                    "units, diagnosed to pump cards first and read with their load level against the well's fluid "
                    "load and P+ (run P3's model); surface cards in SI units are read with their load midline "
                    "against the described well (run 9's model, if shipped))")
     c.add_argument("--json", action="store_true", help="one JSON line per card")
+    c.add_argument("--reverse", action="store_true", help="dynacard records only: the card is stored in reverse "
+                   "time, reverse it (without it a reversed card is turned forward and said so, as srenv validate "
+                   "reads it)")
     c.add_argument("--model", help="model file (default: the shipped srenv/models/classifier.npz, "
                    "with --config classifier_config.npz if shipped, with --card pump srenv/models/classifier_pump.npz, "
                    "with --config too classifier_pump_p3.npz)")
@@ -131,16 +142,19 @@ def read_card(path: Path, si: bool = False) -> tuple[np.ndarray, np.ndarray]:
 
 
 def card_files(path: str) -> list[Path]:
+    """The card CSV or record named, or a directory's ``*.csv`` cards and ``*.json`` records (sorted by name)."""
+    from ..cli_types import RECORD_SUFFIX
+
     p = Path(path)
     if p.is_dir():
-        files = sorted(q for q in p.glob("*.csv"))
+        files = sorted([*p.glob("*.csv"), *p.glob("*" + RECORD_SUFFIX)])
         if not files:
-            raise _bad(path, "a directory with *.csv cards (none found)")
+            raise _bad(path, f"a directory with *.csv cards or *{RECORD_SUFFIX} dynacard records (none found)")
         if len(files) > MAX_FILES:
             raise _bad(path, f"at most {MAX_FILES} cards in a directory")
         return files
     if not p.exists():
-        raise _bad(path, "an existing CSV file or directory")
+        raise _bad(path, "an existing card CSV, dynacard record (.json) or directory")
     return [p]
 
 
@@ -239,29 +253,90 @@ def diagnosed(cfg, x: np.ndarray, y: np.ndarray, f: Path) -> tuple[np.ndarray, n
     return card.pump_position_m, card.pump_load_n
 
 
+def classify_cards(clf, files: list[Path], cfg, card: str, read) -> list[tuple[np.ndarray, bool]]:
+    """(probabilities, by rule) of each card: ``read(f)`` gives its (position, load); with ``cfg`` (a described
+    well) the config-aware path of ``--config`` (pump cards diagnosed first, the description's loads as features)."""
+    pump = described(cfg, card) if clf.needs_config else None
+    cards = [read(f) for f in files]
+    if cfg is not None and card == "pump":  # surface cards of a described well: diagnose them first
+        cards = [diagnosed(cfg, x, y, f) for f, (x, y) in zip(files, cards)]
+    rows = [_features_or_rule(clf, x, y, f, pump) for f, (x, y) in zip(files, cards)]
+    readable = [r for r in rows if r is not None]
+    proba = iter(clf.proba_features(np.array(readable)) if readable else [])
+    rule = np.array([lab == "parted_rods" for lab in clf.labels], dtype=np.float64)
+    return [(rule, True) if r is None else (next(proba), False) for r in rows]
+
+
+def _line(f: Path, labels, p: np.ndarray, by_rule: bool, extra: dict | None, as_json: bool) -> str:
+    """One card's output line (``extra``: what a record adds, the model and the well it was read against)."""
+    label = labels[int(np.argmax(p))]
+    if as_json:
+        row = {"file": str(f), "label": label, "probabilities": {k: round(float(v), 6) for k, v in zip(labels, p)}}
+        return json.dumps({**row, **({"rule": True} if by_rule else {}), **(extra or {})})
+    text = f"{f}\t{label}\t{float(p.max()):.3f}" + ("\t(rule: no load variation)" if by_rule else "")
+    if extra:
+        turned = "; card stored in reverse time, read forward" if extra["well"]["card_time_reversed"] else ""
+        text += f"\t(model {Path(extra['model']).name}; well described by the record{turned})"
+    return text
+
+
+def split_records(files: list[Path], path: str, config: str | None, reverse: bool):
+    """(the dynacard records read, with their files; the card CSVs; notes of JSON files skipped). In a directory a
+    ``*.json`` that parses and holds no ``cardData`` is not a card and is skipped (said on stderr after the
+    answers); one that does not parse, or a record that does not read, is refused; so is ``--config`` beside a
+    record (it describes its well) and ``--reverse`` beside a CSV card (its rows' order is taken as it is)."""
+    from ..cli_types import check_card_config, is_record
+    from .record_well import is_dynacard, read_record_file
+
+    jsons, csvs = [f for f in files if is_record(f)], [f for f in files if not is_record(f)]
+    skipped = [f for f in jsons if Path(path).is_dir() and not is_dynacard(f)]
+    if skipped and len(skipped) == len(files):
+        raise _bad(path, f"a directory with *.csv cards or dynacard records ({len(skipped)} JSON files without "
+                   "cardData skipped, none left)")
+    records = [f for f in jsons if f not in skipped]
+    if records:
+        check_card_config(records[0], config, required=False)
+    if reverse and csvs:
+        raise ConfigError("--reverse", str(csvs[0]), "dynacard records (.json) only: a CSV card is read in its "
+                          "rows' order")
+    notes = [f"srenv: note: skipped {f}: a JSON file that is not a dynacard record (no cardData)" for f in skipped]
+    return [(f, read_record_file(f, reverse)) for f in records], csvs, notes
+
+
+def classify_records(records: list, args: argparse.Namespace) -> dict:
+    """Each record's card classified as ``classify CARD.csv --config WELL`` does, its described well as WELL
+    (``record_well.described_well``); the line says which model answered and that the well is the record's."""
+    from ..config import config_from_dict
+    from .record_well import described_well
+
+    if not records:
+        return {}
+    model, clf = args.model or default_model(args.card, True), load_model(args.model, args.card, True)
+    out = {}
+    for f, rec in records:
+        with described_well(rec) as well:
+            [(p, by_rule)] = classify_cards(clf, [f], config_from_dict(well.config), args.card,
+                                            lambda _, r=rec: (r.position_m, r.load_n))
+        out[f] = (clf.labels, p, by_rule, {"model": str(model), "well": well.entry()})
+    return out
+
+
 def main(args: argparse.Namespace) -> int:
     cfg = None
     if args.config:
         from ..config import load_config
 
         cfg = load_config(args.config)
-    files = card_files(args.path)
-    clf = load_model(args.model, args.card, cfg is not None)
-    pump = described(cfg, args.card) if clf.needs_config else None
-    cards = [read_card(f, si=clf.needs_config) for f in files]
-    if cfg is not None and args.card == "pump":  # surface cards of a described well: diagnose them first
-        cards = [diagnosed(cfg, x, y, f) for f, (x, y) in zip(files, cards)]
-    rows = [_features_or_rule(clf, x, y, f, pump) for f, (x, y) in zip(files, cards)]
-    readable = [r for r in rows if r is not None]
-    proba = iter(clf.proba_features(np.array(readable)) if readable else [])
-    rule = np.array([lab == "parted_rods" for lab in clf.labels], dtype=np.float64)
-    for f, r in zip(files, rows):
-        p = rule if r is None else next(proba)
-        label = clf.labels[int(np.argmax(p))]
-        if args.json:
-            row = {"file": str(f), "label": label,
-                   "probabilities": {k: round(float(v), 6) for k, v in zip(clf.labels, p)}}
-            print(json.dumps({**row, "rule": True} if r is None else row))
-        else:
-            print(f"{f}\t{label}\t{float(p.max()):.3f}" + ("\t(rule: no load variation)" if r is None else ""))
+    records, files, notes = split_records(card_files(args.path), args.path, args.config, args.reverse)
+    out: dict[Path, tuple] = {}
+    if files:
+        clf = load_model(args.model, args.card, cfg is not None)
+        for f, (p, by_rule) in zip(files, classify_cards(clf, files, cfg, args.card,
+                                                         lambda f: read_card(f, si=clf.needs_config))):
+            out[f] = (clf.labels, p, by_rule, None)
+    out.update(classify_records(records, args))
+    for f in sorted(out):
+        print(_line(f, *out[f], args.json))
+    for note in notes:
+        print(note, file=sys.stderr)
     return 0

@@ -1,5 +1,6 @@
-"""``srenv diagnose CARD.csv --config WELL --out PUMP.csv [--plot P.png]``: the command line of the
-downhole-card diagnosis (the analysis itself is :mod:`srenv.analysis.diagnose`).
+"""``srenv diagnose CARD.csv --config WELL --out PUMP.csv [--plot P.png]`` or ``srenv diagnose RECORD.json --out
+PUMP.csv``: the command line of the downhole-card diagnosis (the analysis itself is :mod:`srenv.analysis.diagnose`;
+a vendor dynacard record is diagnosed on the well it describes, :mod:`srenv.tools.record_well`).
 
 Every flag is declared in :mod:`srenv.declarations`; the outputs are checked before any work and written
 together (both or neither); the JSON summary is strict (a non-finite number is a failure, not a result).
@@ -13,7 +14,7 @@ import numpy as np
 
 from ..analysis.damping_balance import RULES
 from ..analysis.diagnose import DEFAULT_HARMONICS, LOAD_CONVENTIONS, PUMP_COLUMNS, load_in_convention
-from ..cli_types import card_command
+from ..cli_types import card_command, check_card_config
 from ..declarations import OUTPUTS, add_number
 from ..errors import ConfigError, NumericFailure
 from ..outputs import atomic_write_all, check_outputs, json_line
@@ -31,24 +32,51 @@ def _pump_csv_writer(card, convention: str):
 
 
 def cmd_diagnose(args: argparse.Namespace) -> int:
-    from ..analysis.diagnose import diagnose_card, read_surface_card, save_plot, summary
     from ..config import load_config
 
     check_outputs({flag: (getattr(args, flag[2:]), sfx) for flag, sfx in OUTPUTS["diagnose"].items()})
+    if check_card_config(args.card, args.config):
+        return _diagnose_record(args)
+    from ..analysis.diagnose import read_surface_card
+
     cfg = load_config(args.config, list(args.set or []))
     cols = read_surface_card(args.card, args.reverse)
     t, x, f = cols["t_s"], cols["polished_rod_position_m"], cols["polished_rod_load_n"]
-    period = 60.0 / args.spm if args.spm else None
+    return _diagnose_and_write(args, cfg, t, x, f, 60.0 / args.spm if args.spm else None)
+
+
+def _diagnose_record(args: argparse.Namespace) -> int:
+    """A dynacard record's stored card (forward in time, as ``srenv validate`` reads it) diagnosed on the well it
+    describes (``record_well``: pump full, the intake pressure from the record's analysis or its load lines), at the
+    record's stroke rate unless ``--spm``; the JSON line adds ``well`` (what came from the record)."""
+    from ..config import apply_overrides, config_from_dict
+    from .record_well import described_well, read_record_file
+
+    rec = read_record_file(args.card, args.reverse)
+    with described_well(rec) as well:
+        if args.damping != "fixed" and well.pump_state["source"] != "record":
+            raise ConfigError("--damping", args.damping, f"fixed for {args.card}: the record has no analysis of "
+                              "its own, so the described well's intake pressure is read off this same card's load "
+                              "lines and the energy balance is degenerate (docs/realism.md)")
+        cfg = config_from_dict(apply_overrides(well.config, list(args.set or [])))
+        period = 60.0 / args.spm if args.spm else rec.period_s
+        return _diagnose_and_write(args, cfg, rec.t_s, rec.position_m, rec.load_n, period, {"well": well.entry()})
+
+
+def _diagnose_and_write(args: argparse.Namespace, cfg, t, x, f, period: float | None, extra: dict | None = None):
+    """Diagnose (t, x, f) on ``cfg`` with the damping rule asked for, print the JSON line and write the outputs."""
+    from ..analysis.damping_balance import diagnose_with_rule
+    from ..analysis.diagnose import diagnose_card, save_plot, summary
+
     if period is not None and t[-1] - t[0] < period * (1 - 1e-6) - 2 * float(np.median(np.diff(t))):
         raise ConfigError("--spm", args.spm, f"a stroke rate whose period fits in the card ({t[-1] - t[0]:.4g} s)")
-    from ..analysis.damping_balance import diagnose_with_rule
-
     cfg, card, damping = diagnose_with_rule(cfg, args.damping, lambda c: diagnose_card(
         c, t, x, f, harmonics=args.harmonics, period_s=period, friction=not args.no_friction))
     for name in ("pump_position_m", "pump_load_n"):
         if not np.all(np.isfinite(getattr(card, name))):
             raise NumericFailure(name, "the diagnosed pump card is not finite; check the card's magnitudes")
-    line = json_line({**summary(cfg, card, args.load_convention), "damping": damping})  # before any file: a failed summary leaves no output
+    # before any file: a failed summary leaves no output
+    line = json_line({**summary(cfg, card, args.load_convention), "damping": damping, **(extra or {})})
     writers = [(args.out, _pump_csv_writer(card, args.load_convention))]
     if args.plot:
         writers.append((args.plot, lambda tmp: save_plot(card, tmp, cfg.name)))
@@ -58,8 +86,8 @@ def cmd_diagnose(args: argparse.Namespace) -> int:
 
 
 def add_parser(sub) -> None:
-    d = card_command(sub, "diagnose", "downhole (pump) card from a measured surface card",
-                     "well YAML path or shipped name (rod string, fluid, survey)")
+    d = card_command(sub, "diagnose", "downhole (pump) card from a measured surface card or a dynacard record",
+                     "well YAML path or shipped name (rod string, fluid, survey)", record=True)
     d.add_argument("--set", action="append", metavar="KEY.PATH=VALUE", help="override a config field")
     d.add_argument("--out", required=True, help="pump card CSV: t_s, pump_position_m, pump_load_n")
     d.add_argument("--plot", help="PNG with the surface and the pump card")

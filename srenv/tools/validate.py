@@ -37,12 +37,12 @@ DEFAULT_STROKES = 4
 DEFAULT_DAMPING = "energy-balance"  # the pre-registered decision of docs/realism.md, "The damping a diagnosis should use"
 
 
-def _write_motion_csv(rec, path: str) -> None:
+def write_motion_csv(rec, path: str) -> None:
     np.savetxt(path, np.c_[rec.t_s, rec.position_m], delimiter=",", header="t_s,polished_rod_position_m",
                comments="", fmt="%.12g")
 
 
-def _card_motion(rec):
+def card_motion(rec):
     """The record as the prediction sees it. A vendor record whose position channel is a pure harmonic of time
     was not measured (a load-only controller writes a cosine): the polished rod then moves as the record's own
     unit at constant crank speed, scaled to its stroke, and the measured loads are placed on that motion by
@@ -192,7 +192,7 @@ def _simulate_motor(cfg: dict, card, rec, strokes: int, work_dir: str, block: di
         profile = new
         card = replace(card, position_m=unit_position_for_card(rec, profile))
         csv = os.path.join(work_dir, f"motion_motor{it + 1}.csv")  # a new file: the motion cache keys on it
-        _write_motion_csv(card, csv)
+        write_motion_csv(card, csv)
         cfg = apply_overrides(cfg, {"surface.measured_card_csv": csv})
     shown = profile if profile is not None else CrankProfile(np.full(8, 2 * np.pi / rec.period_s), rec.period_s)
     entry.update({"rated_slip_used": law.rated_slip, "counterbalance_nm": float(cb),
@@ -277,10 +277,10 @@ def validate(rec, params: list[str], strokes: int, convention: str, overrides: d
     from ..analysis.field_model import well_config
     from ..config import apply_overrides
 
-    card = _card_motion(rec)  # the record whose positions drive the model and place the measured loads
+    card = card_motion(rec)  # the record whose positions drive the model and place the measured loads
     with tempfile.TemporaryDirectory(prefix="srenv-validate-") as work:
         csv = os.path.join(work, "motion.csv")
-        _write_motion_csv(card, csv)
+        write_motion_csv(card, csv)
         if rec.config is not None:  # srenv's own record: its well YAML is the model, driven by the card
             if survey_weight != "inclination":  # its YAML's survey is the model; it has no TVD column
                 raise ConfigError("--survey-weight", survey_weight, "inclination for a CSV record with --config")
@@ -333,8 +333,9 @@ def validate(rec, params: list[str], strokes: int, convention: str, overrides: d
 
 def read_record(path: str, config: str | None, reverse: bool):
     from ..analysis.field_record import read_dynacard_json, read_record_csv
+    from ..cli_types import is_record
 
-    if str(path).lower().endswith(".json"):
+    if is_record(path):
         return read_dynacard_json(path, reverse=reverse, auto_orient=not reverse)
     if config is None:
         raise ConfigError("--config", "missing", "a well YAML (path or shipped name) for a CSV record")

@@ -510,15 +510,15 @@ def test_validate_plot_shows_both_pump_cards_in_the_compared_convention():
 
 
 def test_a_synthesised_position_without_a_unit_is_kept_and_named(tmp_path):
-    from srenv.tools.validate import _card_motion
+    from srenv.tools.validate import card_motion
 
     d = json.loads((DATA / "11708328.json").read_text())
     d["equipmentData"]["SurfaceUnit"]["PumpingUnitGeometry"] = "Z"   # a geometry srenv does not know
     p = tmp_path / "nounit.json"
     p.write_text(json.dumps(d))
     rec = read_dynacard_json(p, auto_orient=True)
-    card = _card_motion(rec)
+    card = card_motion(rec)
     assert not card.motion_from_unit and np.array_equal(card.position_m, rec.position_m)
     assert any("no unit" in n for n in card.notes)
     real = read_dynacard_json(DATA / "7699227.json", auto_orient=True)
-    assert _card_motion(real) is real
+    assert card_motion(real) is real
