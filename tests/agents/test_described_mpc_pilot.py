@@ -80,3 +80,18 @@ def test_out_through_a_symlink_refused(tmp_path):
     (tmp_path / "link").symlink_to(tmp_path / "real")
     r = _run(["--stage", "train", "--out", str(tmp_path / "link")])
     assert r.returncode == 2 and "symlink" in r.stderr and not any((tmp_path / "real").iterdir())
+
+
+def test_the_preregistered_design_is_the_pilots_choice_on_unplayed_validation_seeds(pilot, tuned):
+    import json
+
+    import yaml
+
+    cfg = yaml.safe_load(pilot.CONFIG.read_text())
+    train = json.loads((REPO / "docs/archive/described_mpc_train.json").read_text())
+    assert train["chosen_pound_prob"] == 0.7 == pilot.choose(train["summary"])
+    assert cfg["designs"] == {"described_mpc": pilot.design(tuned, train["chosen_pound_prob"])}
+    seeds = pilot.seeds_of(cfg)
+    assert [s % 200 for s in seeds] == list(range(16))  # the validation wells, as every gate played them
+    assert not set(seeds) & (set(range(20000, 20016)) | set(range(10)) | set(range(100000, 100100)))
+    assert not set(seeds) & set(pilot.TRAIN_SEEDS)
