@@ -2,6 +2,9 @@
 srenv/task/well_file.py) with the classifier's condition in the twin and the guard, and the guard's pound signal
 ``pound_prob`` (the classifier's ``prob_fluid_pound``).
 
+    PYTHONPATH=. nice -n 5 python scripts/described_mpc_pilot.py --stage train --out runs/t24b_train
+    PYTHONPATH=. nice -n 5 python scripts/described_mpc_pilot.py --stage gate --out runs/t24b_gate
+
 ``--stage train`` (design aid: TRAINING wells 16..31, seeds 30016..30031 - never a validation, test or fresh
 episode): the design with ``pound_prob`` in :data:`CANDIDATES` (None = m24's guard as it is) beside the tuned
 ``alarm_pump_off`` and ``pump_off`` (docs/v2/benchmark.json's tuned parameters). THE CHOICE (written before any of
@@ -13,8 +16,6 @@ Nothing else of the design is chosen here.
 against ``alarm_pump_off``, and THE GATE written there (the rule of configs/benchmark/v2_estimated_mpc.yaml:
 scripts/estimated_mpc_pilot.py::gate).
 
-    PYTHONPATH=. nice -n 5 python scripts/described_mpc_pilot.py --stage train --out runs/t24b_train
-    PYTHONPATH=. nice -n 5 python scripts/described_mpc_pilot.py --stage gate --out runs/t24b_gate
 """
 
 from __future__ import annotations
@@ -25,12 +26,10 @@ import sys
 from pathlib import Path
 from typing import Any
 
-import numpy as np
 import yaml
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from estimated_mpc_pilot import gate, play
-from guard_pilot import INTERVALS, summarise
+import estimated_mpc_pilot as emp
 
 from agents.evaluation.replay import load_report
 
@@ -77,43 +76,24 @@ def seeds_of(cfg: dict[str, Any]) -> list[int]:
 
 
 def main() -> None:
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--stage", choices=("train", "gate"), required=True)
-    ap.add_argument("--out", type=Path, required=True)
-    ap.add_argument("--workers", type=int, default=2)
-    a = ap.parse_args()
-    if not 1 <= a.workers <= 2 or a.out.is_symlink() or a.out.is_file():
-        print(f"described_mpc_pilot: --workers {a.workers} / --out {str(a.out)!r}: expected 1 or 2 workers and a "
-              "directory that is not a symlink", file=sys.stderr)
-        sys.exit(2)
+    a = emp.arguments(argparse.ArgumentParser(description=__doc__.splitlines()[0]), ("train", "gate"))
     tuned = {k: v["params"] for k, v in load_report(REPORT)["tuned"].items()}
     cfg = yaml.safe_load(CONFIG.read_text()) if a.stage == "gate" else None
     seeds = TRAIN_SEEDS if a.stage == "train" else seeds_of(cfg)
     specs = specs_for(a.stage, tuned, cfg)
-    eps = play(ENV, specs, seeds, a.out, a.workers)
-    summ = summarise(eps, BASES)
-    for n, e in eps.items():
-        summ[n]["cpu_s_per_episode"] = float(np.mean([x["cpu_s"] for x in e]))
-    res: dict[str, Any] = {"stage": a.stage, "seeds": seeds, "specs": specs, "summary": summ,
-                           "per_episode_usd_h": {k: [round(e["reward"] / INTERVALS, 3) for e in v] for k, v in eps.items()},
-                           "well_id": [e["well_id"] for e in eps["alarm_pump_off"]],
-                           "guarded_intervals": {n: [e.get("guarded_intervals") for e in v] for n, v in eps.items()
-                                                 if n not in BASES}}
+    eps = emp.play(ENV, specs, seeds, a.out, a.workers)
+    res = emp.outcome(a.stage, seeds, specs, eps, BASES)
+    res["well_id"] = [e["well_id"] for e in eps["alarm_pump_off"]]
+    res["guarded_intervals"] = {n: [e.get("guarded_intervals") for e in v] for n, v in eps.items() if n not in BASES}
+    summ = res["summary"]
     if a.stage == "train":
         res["chosen_pound_prob"] = choose(summ)
     else:
-        res["gate"] = {n: gate(summ[n], summ["alarm_pump_off"]) for n in cfg["designs"]}
+        res["gate"] = {n: emp.gate(summ[n], summ["alarm_pump_off"]) for n in cfg["designs"]}
     tmp = a.out / "pilot.json.tmp"
     tmp.write_text(json.dumps(res, indent=1))
     tmp.replace(a.out / "pilot.json")
-    print("| policy | USD/h | cost | vs alarm_pump_off [95 % CI] wins | vs pump_off | guarded intervals | CPU s/episode |")
-    print("|---|---|---|---|---|---|---|")
-    for k, r in summ.items():
-        cells = [f"{r[f'vs_{b}']['mean']:+.2f} [{r[f'vs_{b}']['ci95'][0]:+.2f}, {r[f'vs_{b}']['ci95'][1]:+.2f}] "
-                 f"{r[f'vs_{b}']['wins']}/{r[f'vs_{b}']['n']}" if f"vs_{b}" in r else "0" for b in BASES]
-        g = res["guarded_intervals"].get(k)
-        print(f"| {k} | {r['usd_h']:.2f} | {r['cost']:.2f} | {cells[0]} | {cells[1]} | {sum(g) if g else '-'} | "
-              f"{r['cpu_s_per_episode']:.0f} |")
+    print("\n".join(emp.table(summ, BASES, res["guarded_intervals"])))
     print("CHOSEN pound_prob:" if a.stage == "train" else "GATE:",
           res.get("chosen_pound_prob") if a.stage == "train" else
           {n: "passed" if ok else "failed" for n, ok in res["gate"].items()})
