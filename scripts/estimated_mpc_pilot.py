@@ -169,16 +169,54 @@ def gate(row: dict[str, Any], base: dict[str, Any]) -> bool:
     return d["mean"] >= 0.10 * base["usd_h"] and d["ci95"][0] > 0 and row["cost"] <= base["cost"]
 
 
+def arguments(ap: argparse.ArgumentParser, stages: tuple[str, ...]) -> argparse.Namespace:
+    """The pilots' common flags (``--stage``, ``--out``, ``--workers``) parsed and checked: a bad one is refused in
+    one line, exit 2, before anything is played or written."""
+    ap.add_argument("--stage", choices=stages, required=True)
+    ap.add_argument("--out", type=Path, required=True)
+    ap.add_argument("--workers", type=int, default=2, help="worker processes, 1 or 2")
+    a = ap.parse_args()
+    if not 1 <= a.workers <= 2 or a.out.is_symlink() or a.out.is_file():
+        print(f"{Path(ap.prog).stem}: --workers {a.workers} / --out {str(a.out)!r}: expected 1 or 2 workers and a "
+              "directory that is not a symlink", file=sys.stderr)
+        sys.exit(2)
+    return a
+
+
+def outcome(stage: str, seeds: list[int], specs: dict[str, Any], eps: dict[str, list[dict[str, Any]]],
+            bases: tuple[str, ...]) -> dict[str, Any]:
+    """A pilot's record: its stage, seeds and specs, the summary against ``bases`` (with CPU s per episode) and
+    every episode's USD/h."""
+    summ = summarise(eps, bases)
+    for n, e in eps.items():
+        summ[n]["cpu_s_per_episode"] = float(np.mean([x["cpu_s"] for x in e]))
+    return {"stage": stage, "seeds": seeds, "specs": specs, "summary": summ,
+            "per_episode_usd_h": {k: [round(e["reward"] / INTERVALS, 3) for e in v] for k, v in eps.items()}}
+
+
+def table(summ: dict[str, Any], bases: tuple[str, ...], guarded: dict[str, list[Any]] | None = None) -> list[str]:
+    """The pilots' markdown table: USD/h, cost, paired differences against ``bases`` [95 % CI] wins, CPU s per
+    episode, and (``guarded``) the intervals each design handed to its guard's fallback."""
+    head = ["policy", "USD/h", "cost", *(f"vs {b} [95 % CI] wins" for b in bases), "CPU s/episode"]
+    head += ["guarded intervals"] if guarded is not None else []
+    rows = ["| " + " | ".join(head) + " |", "|" + "---|" * len(head)]
+    for k, r in summ.items():
+        cells = [f"{r[f'vs_{b}']['mean']:+.2f} [{r[f'vs_{b}']['ci95'][0]:+.2f}, {r[f'vs_{b}']['ci95'][1]:+.2f}] "
+                 f"{r[f'vs_{b}']['wins']}/{r[f'vs_{b}']['n']}" if f"vs_{b}" in r else "0" for b in bases]
+        row = [k, f"{r['usd_h']:.2f}", f"{r['cost']:.2f}", *cells, f"{r['cpu_s_per_episode']:.0f}"]
+        if guarded is not None:
+            g = guarded.get(k)
+            row.append(str(sum(g)) if g else "-")
+        rows.append("| " + " | ".join(row) + " |")
+    return rows
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--stage", choices=("voi", "gate"), required=True)
-    ap.add_argument("--out", type=Path, required=True)
     ap.add_argument("--first", type=int, default=8, help="voi: the first N validation episodes")
-    ap.add_argument("--workers", type=int, default=2)
-    a = ap.parse_args()
-    if not 1 <= a.first <= 16 or a.out.is_symlink() or a.out.is_file():
-        print(f"estimated_mpc_pilot: --first {a.first} / --out {str(a.out)!r}: expected 1 <= N <= 16 and a directory "
-              "that is not a symlink", file=sys.stderr)
+    a = arguments(ap, ("voi", "gate"))
+    if not 1 <= a.first <= 16:
+        print(f"estimated_mpc_pilot: --first {a.first}: expected 1 <= N <= 16", file=sys.stderr)
         sys.exit(2)
     cfg = load_benchmark_config(str(V2))  # the env, its kwargs and the validation seeds (= the design file's)
     seeds = list(cfg["validation"]["seeds"])[: a.first if a.stage == "voi" else None]
@@ -186,24 +224,15 @@ def main() -> None:
     designs = yaml.safe_load(CONFIG.read_text())["designs"] if a.stage == "gate" else None
     specs = specs_for(a.stage, tuned, designs)
     eps = play(cfg, specs, seeds, a.out, min(a.workers, 2))
-    summ = summarise(eps, ("alarm_pump_off", "pump_off"))
-    for n, e in eps.items():
-        summ[n]["cpu_s_per_episode"] = float(np.mean([x["cpu_s"] for x in e]))
-    res: dict[str, Any] = {"stage": a.stage, "seeds": seeds, "specs": specs, "summary": summ,
-                           "per_episode_usd_h": {k: [round(e["reward"] / INTERVALS, 3) for e in v] for k, v in eps.items()},
-                           "model_well": [e["model_well"] for e in eps["estimated_mpc"]],
-                           "guarded_intervals": {n: [e.get("guarded_intervals") for e in v] for n, v in eps.items()
-                                                 if n.startswith("estimated_mpc")}}
+    res = outcome(a.stage, seeds, specs, eps, ("alarm_pump_off", "pump_off"))
+    summ = res["summary"]
+    res["model_well"] = [e["model_well"] for e in eps["estimated_mpc"]]
+    res["guarded_intervals"] = {n: [e.get("guarded_intervals") for e in v] for n, v in eps.items()
+                                if n.startswith("estimated_mpc")}
     if a.stage == "gate":
         res["gate"] = {n: gate(summ[n], summ["alarm_pump_off"]) for n in designs}
     (a.out / "pilot.json").write_text(json.dumps(res, indent=1))
-    print("| policy | USD/h | cost | vs alarm_pump_off [95 % CI] wins | vs pump_off | CPU s/episode |")
-    print("|---|---|---|---|---|---|")
-    for k, r in summ.items():
-        cells = [f"{r[f'vs_{b}']['mean']:+.2f} [{r[f'vs_{b}']['ci95'][0]:+.2f}, {r[f'vs_{b}']['ci95'][1]:+.2f}] "
-                 f"{r[f'vs_{b}']['wins']}/{r[f'vs_{b}']['n']}" if f"vs_{b}" in r else "0"
-                 for b in ("alarm_pump_off", "pump_off")]
-        print(f"| {k} | {r['usd_h']:.2f} | {r['cost']:.2f} | {cells[0]} | {cells[1]} | {r['cpu_s_per_episode']:.0f} |")
+    print("\n".join(table(summ, ("alarm_pump_off", "pump_off"))))
     if a.stage == "gate":
         print("GATE:", {n: "passed" if ok else "failed" for n, ok in res["gate"].items()})
 

@@ -20,9 +20,14 @@ Options (issue 24, helper s24; off by default, which is m24's policy): ``observe
 displacement times the real card's fillage, its deliverability estimated from successive shots, corrected at
 shots and pounding cards), the twin's deliverability the observer's; ``condition_prob`` - the twin carries the
 classifier's most probable non-normal label above that probability at a mid severity (``condition_estimate``).
+Option ``twin`` (issue 24, helper t24b): ``library`` (default: the nearest training well, as above) or
+``described`` - the twin is the played well as its operator's file describes it
+(:mod:`srenv.task.well_file`: its equipment, the family's nominal reservoir, friction and damping;
+:mod:`agents.policies.described_twin`), the file handed over at ``reset`` by ``well_file(env)``. Guard option
+``pound_prob``: the classifier's ``prob_fluid_pound`` at or above it also hands the interval to the fallback.
 
 What it reads of the env: the observation names and the task's clock (``horizon_s``, ``cfg.task.interval_s``) at
-``reset``; nothing of the well, its annulus, the reservoir or the condition (tests/agents/test_estimated_mpc.py
+``reset`` (and, with ``twin: described``, the operator's file); nothing else of the well, its annulus, the reservoir or the condition (tests/agents/test_estimated_mpc.py
 swaps them out after ``reset`` and shows the same actions). The field baselines it weighs are reset on a view that
 holds the twin's control range and the installed point read off the first observation.
 """
@@ -42,6 +47,7 @@ from srenv.task.events import NORMAL
 
 from .alarms import make_field_controller
 from .causal_oracle import CausalOraclePolicy, freeze_future
+from .described_twin import DescribedTwinEnv, check_twin
 from .field import make_field_baseline, obs_names_of
 from .level_observer import LevelObserver, condition_estimate
 
@@ -110,7 +116,7 @@ class EstimatedMPCPolicy(CausalOraclePolicy):
     def __init__(self, horizon: int = 6, replan_every: int = 3, steps: Sequence[float] = (0.3, 0.1),
                  anchors: Sequence[Sequence[float]] = (), policies: Sequence[Sequence[Any]] = (),
                  library: str | None = None, guard: dict[str, Any] | None = None, observer: bool = False,
-                 condition_prob: float | None = None) -> None:
+                 condition_prob: float | None = None, twin: str = "library") -> None:
         if not (isinstance(horizon, int) and not isinstance(horizon, bool) and 1 <= horizon <= 144):
             raise ValueError(f"estimated_mpc horizon = {horizon!r}: expected an integer in [1, 144] intervals")
         super().__init__(horizon=horizon, replan_every=replan_every, steps=steps, anchors=anchors, policies=policies)
@@ -123,6 +129,8 @@ class EstimatedMPCPolicy(CausalOraclePolicy):
                                            or not 0.0 < condition_prob < 1.0):
             raise ValueError(f"estimated_mpc condition_prob = {condition_prob!r}: expected None or a number in (0, 1)")
         self.observer, self.condition_prob = observer, condition_prob
+        self.twin = check_twin(twin)
+        self._file: dict[str, Any] | None = None
         self._obs_level: LevelObserver | None = None
         self._twin: Any = None
         self._fallback: list[Any] | None = None
@@ -141,15 +149,24 @@ class EstimatedMPCPolicy(CausalOraclePolicy):
         self._fallback = None
         self._shot_age = math.inf
         self._obs_level, self._pumped = None, None
+        if self.twin == "described":  # the operator's file of the played well: the one thing read of it
+            from srenv.task.well_file import well_file
+
+            self._file = well_file(env)
 
     def _start(self, obs: np.ndarray) -> None:
-        """At the first observation: the nearest training well becomes the twin, at the observed level."""
+        """At the first observation: the twin (the nearest training well, or the described well), at the observed
+        level."""
         from srenv.envs.sucker_rod_v2 import SuckerRodV2Env
 
-        self.model_well = self.library.nearest(obs, self._names)
         hours, interval = self._clock
-        twin = SuckerRodV2Env(scenario="train", event_rate_scale=0.0, episode_hours=hours, interval_s=interval)
-        twin.reset(seed=self.model_well)
+        if self.twin == "described":
+            twin = DescribedTwinEnv(self._file, hours, interval)
+            twin.reset(seed=0)
+        else:
+            self.model_well = self.library.nearest(obs, self._names)
+            twin = SuckerRodV2Env(scenario="train", event_rate_scale=0.0, episode_hours=hours, interval_s=interval)
+            twin.reset(seed=self.model_well)
         twin.inflow_multiplier = lambda t_s: 1.0  # the reservoir as designed: its draw is unknown
         self._twin = self._env = twin
         if self.observer:  # the twin's annulus and IPR are the observer's model; its level and draw the estimate's
@@ -222,11 +239,13 @@ class EstimatedMPCPolicy(CausalOraclePolicy):
             self._twin._before_interval()
 
     def _alarmed(self, obs: np.ndarray) -> bool:
-        """The guard (:func:`check_guard`) on the real card: pounding, near overload, or an abnormal condition."""
+        """The guard (:func:`check_guard`) on the real card: pounding (the fillage estimate, or the classifier's
+        ``prob_fluid_pound`` with ``pound_prob``), near overload, or an abnormal condition."""
         g, i = self.guard, self._names.index
         probs = [obs[i(n)] for n in self._names if n.startswith("prob_") and n[5:] not in NORMAL]
+        pound = g.get("pound_prob") is not None and obs[i("prob_fluid_pound")] >= g["pound_prob"]
         return bool(obs[i("fillage_est")] < g["pound_below"] or obs[i("pprl")] > g["load_above"]
-                    or (probs and max(probs) > g["condition_prob"]))
+                    or (probs and max(probs) > g["condition_prob"]) or pound)
 
     def _model(self) -> Any:
         return freeze_future(copy.deepcopy(self._twin))
@@ -267,22 +286,25 @@ class EstimatedMPCPolicy(CausalOraclePolicy):
         return {**super().params(), **({"library": self.library_path} if self.library_path else {}),
                 **({"guard": self.guard} if self.guard is not None else {}),
                 **({"observer": True} if self.observer else {}),
-                **({"condition_prob": self.condition_prob} if self.condition_prob is not None else {})}
+                **({"condition_prob": self.condition_prob} if self.condition_prob is not None else {}),
+                **({"twin": self.twin} if self.twin != "library" else {})}
 
 
 GUARD_KEYS = ("fallback", "pound_below", "load_above", "condition_prob")
+POUND_PROB = "pound_prob"  # optional (t24b): absent, the guard is m24's bit for bit
 
 
 def check_guard(guard: Any) -> dict[str, Any] | None:
-    """``guard``: None, or ``{fallback: [field baseline, params], pound_below, load_above, condition_prob}``: on an
-    interval whose real card pounds (``fillage_est`` < pound_below), nears overload (``pprl`` > load_above) or
-    shows a condition (a classifier probability of a label other than full / fluid_pound > condition_prob), the
-    fallback's action is played - where the twin, which has no conditions and an estimated level and well, is
-    least to be trusted."""
+    """``guard``: None, or ``{fallback: [field baseline, params], pound_below, load_above, condition_prob}`` and
+    optionally ``pound_prob``: on an interval whose real card pounds (``fillage_est`` < pound_below, or
+    ``prob_fluid_pound`` >= pound_prob), nears overload (``pprl`` > load_above) or shows a condition (a classifier
+    probability of a label other than full / fluid_pound > condition_prob), the fallback's action is played - where
+    the twin, which has no conditions and an estimated level and well, is least to be trusted."""
     if guard is None:
         return None
-    if not isinstance(guard, dict) or set(guard) != set(GUARD_KEYS):
-        raise ValueError(f"estimated_mpc guard = {guard!r}: expected None or a mapping of exactly {list(GUARD_KEYS)}")
+    if not isinstance(guard, dict) or set(guard) - {POUND_PROB} != set(GUARD_KEYS):
+        raise ValueError(f"estimated_mpc guard = {guard!r}: expected None or a mapping of exactly {list(GUARD_KEYS)} "
+                         f"(and optionally {POUND_PROB})")
     fb = guard["fallback"]
     if not (isinstance(fb, (list, tuple)) and len(fb) == 2 and isinstance(fb[0], str) and isinstance(fb[1], dict)):
         raise ValueError(f"estimated_mpc guard.fallback = {fb!r}: expected [field baseline name, params]")
@@ -290,4 +312,10 @@ def check_guard(guard: Any) -> dict[str, Any] | None:
         v = guard[k]
         if isinstance(v, bool) or not isinstance(v, (int, float)) or not 0.0 <= v <= 1.5:
             raise ValueError(f"estimated_mpc guard.{k} = {v!r}: expected a number in [0, 1.5]")
-    return {"fallback": [fb[0], dict(fb[1])], **{k: float(guard[k]) for k in GUARD_KEYS[1:]}}
+    out = {"fallback": [fb[0], dict(fb[1])], **{k: float(guard[k]) for k in GUARD_KEYS[1:]}}
+    if POUND_PROB in guard:
+        v = guard[POUND_PROB]
+        if isinstance(v, bool) or not isinstance(v, (int, float)) or not 0.0 < v <= 1.0:
+            raise ValueError(f"estimated_mpc guard.{POUND_PROB} = {v!r}: expected a number in (0, 1]")
+        out[POUND_PROB] = float(v)
+    return out

@@ -102,7 +102,12 @@ def unit_block(spec: wf.WellSpec, geometry: str) -> dict[str, Any]:
 
 def kv_tau_s(spec: wf.WellSpec) -> float:
     """Kelvin-Voigt retardation time giving the well's fundamental the damping ratio KV_ZETA_1."""
-    omega_1 = 2 * math.pi * spec.design["n0_spm"] / 60.0
+    return kv_tau_of(spec.design["n0_spm"])
+
+
+def kv_tau_of(n0_spm: float) -> float:
+    """Kelvin-Voigt retardation time giving a string of fundamental ``n0_spm`` (strokes/min) zeta_1 = KV_ZETA_1."""
+    omega_1 = 2 * math.pi * n0_spm / 60.0
     return round(2.0 * KV_ZETA_1 / omega_1, 5)
 
 

@@ -263,7 +263,7 @@ def spec_from_params(p: WellParams, well_id: str) -> WellSpec:
     rho_f = fluid_density(p.water_cut)
     a_pl = math.pi / 4 * (p.plunger_diameter_mm * 1e-3) ** 2
     stations = survey_stations(p)
-    tvd = _tvd(stations, p.depth_m)
+    tvd = tvd_m(stations, p.depth_m)
     fluid_load = rho_f * GRAVITY_M_S2 * tvd * a_pl  # on the gross plunger area (tubing empty above nothing)
     tapers_bu = taper_design(p.depth_m, fluid_load, rho_f)
     # lengths to the millimetre, the top taper taking the round-off, so that the string ends at the pump
@@ -271,8 +271,7 @@ def spec_from_params(p: WellParams, well_id: str) -> WellSpec:
     lengths.append(round(p.depth_m - sum(lengths), 3))
     tapers_bu = [(d, length) for (d, _), length in zip(tapers_bu, lengths)]
     tapers_td = tapers_bu[::-1]
-    wave = math.sqrt(STEEL_E_PA / STEEL_RHO)
-    n0_spm = 60.0 * wave / (4.0 * p.depth_m)
+    n0_spm = fundamental_spm(p.depth_m)
     spm_max = round(min(12.0, 0.3 * n0_spm), 2)
     stroke_max = p.unit_stroke_m
     stroke_min = round(0.5 * stroke_max, 3)
@@ -292,8 +291,7 @@ def spec_from_params(p: WellParams, well_id: str) -> WellSpec:
         spm_max = round(0.95 * spm_max, 2)  # even grade D is overloaded: narrow the control range
     grade = grade or "D"
     spm_max = max(spm_max, SPM_MIN + 2.0)
-    capacity_mid = 1440.0 * 0.5 * (SPM_MIN + spm_max) * a_pl * 0.75 * stroke_max * 0.85
-    nominal = 0.7 * capacity_mid
+    nominal = nominal_rate_m3_day(p.plunger_diameter_mm, spm_max, stroke_max)
     installed_stroke = round(0.8 * stroke_max, 3)
     installed_spm = float(np.clip(1.2 * nominal / (1440.0 * a_pl * installed_stroke * 0.85), SPM_MIN, spm_max))
     installed_spm = round(installed_spm, 2)
@@ -316,7 +314,7 @@ def spec_from_params(p: WellParams, well_id: str) -> WellSpec:
         "pump": {"load_source": "pressures", "plunger_diameter_mm": p.plunger_diameter_mm,
                  "plunger_friction_n": 500.0, "discharge_overpressure_pa": 2.0e5},
         "surface": {"motion": "harmonic", "spm": installed_spm, "stroke_length_m": installed_stroke},
-        "simulation": {"element_length_m": float(np.clip(p.depth_m / 40.0, 12.5, 50.0)), "time_step_s": 0.005},
+        "simulation": {"element_length_m": element_length_m(p.depth_m), "time_step_s": 0.005},
         "inflow": {"model": p.inflow_model, "reservoir_pressure_pa": round(p_r, 1),
                    "max_rate_m3_day": round(q_max, 4), "productivity_index_m3_day_pa": pi,
                    "casing_pressure_pa": CASING_PRESSURE_PA,
@@ -333,7 +331,27 @@ def spec_from_params(p: WellParams, well_id: str) -> WellSpec:
     return WellSpec(well_id, p, cfg, nominal, design)
 
 
-def _tvd(stations: list[dict], depth_m: float) -> float:
+def fundamental_spm(depth_m: float) -> float:
+    """N0 = 60 a / (4 L): the rod string's quarter-wave fundamental in strokes/min (steel, pump at depth L)."""
+    wave = math.sqrt(STEEL_E_PA / STEEL_RHO)
+    return 60.0 * wave / (4.0 * depth_m)
+
+
+def nominal_rate_m3_day(plunger_diameter_mm: float, spm_max: float, stroke_max_m: float) -> float:
+    """The design rate of the family's wells (productivity factor 1): 0.7 x the pump's capacity at mid-range (mid
+    SPM of [SPM_MIN, spm_max], 0.75 x the longest stroke, 85 % volumetric efficiency) - equipment only."""
+    a_pl = math.pi / 4 * (plunger_diameter_mm * 1e-3) ** 2
+    capacity_mid = 1440.0 * 0.5 * (SPM_MIN + spm_max) * a_pl * 0.75 * stroke_max_m * 0.85
+    return 0.7 * capacity_mid
+
+
+def element_length_m(depth_m: float) -> float:
+    """The family's FE element length for a string of that depth (~40 elements, within [12.5, 50] m)."""
+    return float(np.clip(depth_m / 40.0, 12.5, 50.0))
+
+
+def tvd_m(stations: list[dict], depth_m: float) -> float:
+    """True vertical depth at MD ``depth_m`` of a survey's (MD, inclination) stations (vertical when none)."""
     if not stations:
         return depth_m
     md = np.array([s["md_m"] for s in stations])

@@ -142,3 +142,79 @@ def test_the_shipped_library_is_what_its_script_builds():
     np.testing.assert_array_equal(wells, lib.wells[:16])
     assert names == lib.names
     np.testing.assert_allclose(feats, (lib._z[:16] / lib.weight) * lib.scale + lib.mean, rtol=1e-9, atol=1e-9)
+
+
+# ---------------------------------------------------------------- twin: described (t24b), guard pound_prob
+DESCRIBED = {**PARAMS, "twin": "described"}
+
+
+def test_described_twin_reads_only_the_operator_file():
+    """twin: described - the same observations give the same actions when, BEFORE the policy's reset, the env's
+    well is swapped for one with the same equipment and another reservoir, friction, damping and decline (the file
+    is the same), and when after reset everything hidden is taken away."""
+    import dataclasses
+
+    from srenv.config import load_config
+    from srenv.task.well_file import well_file
+
+    env = make_env(ENV, scenario="train", **KW)
+    pol = EstimatedMPCPolicy(**DESCRIBED)
+    acts, seen = _play(env, pol, SEED)
+    assert pol.sim_steps > len(seen) and pol.model_well == -1 and pol.params()["twin"] == "described"
+    blind = make_env(ENV, scenario="train", **KW)
+    blind.reset(seed=SEED)
+    u = blind.unwrapped
+    other = load_config(u.well.cfg, {"inflow.max_rate_m3_day": 3.0 * u.well.cfg.inflow.max_rate_m3_day,
+                                     "friction.coefficient": 0.01, "damping.damping_factor": 0.11,
+                                     "task.inflow_decline_per_day": 0.29})
+    u.well = dataclasses.replace(u.well, cfg=other, params=None)
+    assert well_file(u.well) == well_file(env)
+    pol2 = EstimatedMPCPolicy(**DESCRIBED)
+    pol2.reset(blind)
+    for name in ("well", "sim", "cfg", "_schedule", "_condition", "_parting", "runner", "inflow_multiplier"):
+        setattr(u, name, None)
+    again = [np.asarray(pol2.predict(o, episode_start=np.array([k == 0]))[0]) for k, o in enumerate(seen)]
+    np.testing.assert_array_equal(np.array(acts), np.array(again))
+
+
+def test_described_twin_is_the_played_wells_equipment():
+    from srenv.config import to_dict
+    from srenv.task.well_file import WHITELIST
+
+    env = make_env(ENV, scenario="train", **KW)
+    pol = EstimatedMPCPolicy(**DESCRIBED)
+    _play(env, pol, 20011)
+    twin, well = to_dict(pol._twin.well.cfg), to_dict(env.unwrapped.well.cfg)
+    assert all(twin[s][k] == well[s][k] for s, ks in WHITELIST.items() for k in ks)
+    assert pol._twin.event_rate_scale == 0.0 and pol._twin._schedule.events == []
+
+
+def test_default_twin_is_the_library_and_bad_twin_refused():
+    assert "twin" not in EstimatedMPCPolicy(**PARAMS).params()
+    for bad in ("true", None, 1, "Described"):
+        with pytest.raises(ValueError, match="estimated_mpc twin") as exc:
+            EstimatedMPCPolicy(**PARAMS, twin=bad)
+        assert "\n" not in str(exc.value)
+
+
+@pytest.mark.parametrize("bad", [0.0, -0.1, 1.01, True, "0.5", None])
+def test_bad_pound_prob_refused(bad):
+    with pytest.raises(ValueError, match="pound_prob") as exc:
+        EstimatedMPCPolicy(**PARAMS, guard={**GUARD, "pound_prob": bad})
+    assert "\n" not in str(exc.value)
+
+
+def test_pound_prob_fires_on_the_classifiers_pound_only_when_set():
+    """A card the fillage estimate calls full (0.92 > pound_below 0.9) but the classifier calls pounding: the guard
+    fires with pound_prob at or below the probability, not without it (m24's guard unchanged)."""
+    env = make_env(ENV, scenario="train", **KW)
+    names = list(env.unwrapped.obs_names)
+    obs = np.zeros(len(names))
+    obs[names.index("fillage_est")], obs[names.index("prob_fluid_pound")] = 0.92, 0.7
+    fired = {}
+    for p in (None, 0.5, 0.7, 0.8):
+        pol = EstimatedMPCPolicy(**PARAMS, guard=GUARD if p is None else {**GUARD, "pound_prob": p})
+        pol._names = names
+        fired[p] = pol._alarmed(obs)
+    assert fired == {None: False, 0.5: True, 0.7: True, 0.8: False}
+    assert "pound_prob" not in EstimatedMPCPolicy(**PARAMS, guard=GUARD).params()["guard"]
