@@ -118,3 +118,38 @@ def test_cli_refuses_native_without_a_vector_env(tmp_path: Path) -> None:
         ("agents: error: train config: vec_env = 'native' with env_id 'srenv/SuckerRod-v0': expected an env with a "
          "native vector env (srenv/SuckerRod-v1, srenv/SuckerRod-v2, or the residual / shaped env on one)")]
     assert not (tmp_path / "o").exists()
+
+
+def test_rate_script_measures_the_same_episodes_in_every_mode(tmp_path: Path) -> None:
+    """scripts/rllib_vector_rate.py (the docs' figures): each mode is the vector env it names, every mode samples
+    the same episodes (so the rates compare the same work), the JSON is written; a bad flag is one line, exit 2."""
+    import importlib.util
+    import sys
+
+    spec = importlib.util.spec_from_file_location("rllib_vector_rate", SHIPPED.parents[2] / "scripts" /
+                                                  "rllib_vector_rate.py")
+    mod = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(mod)
+    out = tmp_path / "rate.json"
+    assert mod.main(["--env-id", "srenv/SuckerRod-v1", "--n", "2", "--steps-per-env", "2", "--rounds", "1",
+                     "--json", str(out)]) == 0
+    res = json.loads(out.read_text())["results"]["srenv/SuckerRod-v1 N=2"]
+    assert res["same_episodes"] is True
+    got = {m: (res[m]["vector_env"], res[m]["threads"], res[m]["processes"]) for m in mod.MODES}
+    assert got == {"sync": ("SyncVectorEnv", 1, 1), "native_t1": ("KernelVectorEnv", 1, 1),
+                   "native_t2": ("KernelVectorEnv", 2, 1), "native_p2": ("KernelVectorEnv", 1, 2)}
+    assert all(res[m]["env_steps_per_s_best"] > 0 and res[m]["env_steps"] == [4] for m in mod.MODES)
+    p = subprocess.run([sys.executable, str(SHIPPED.parents[2] / "scripts" / "rllib_vector_rate.py"), "--n", "0"],
+                       capture_output=True, text=True, check=False, timeout=120)
+    assert p.returncode == 2 and p.stderr.strip().splitlines() == [
+        "rllib_vector_rate.py: error: argument --n: --n = '0': expected a positive integer at most 256"]
+
+
+def test_shipped_native_config_reads() -> None:
+    from agents.training.rllib.config import load_rllib_config
+
+    cfg = load_rllib_config(SHIPPED.parent / "ppo_rllib_native_v2.yaml")
+    assert (cfg.env_id, cfg.vec_env, cfg.vec_processes, cfg.num_envs_per_env_runner) == (
+        "srenv/SuckerRod-v2", "native", 1, 8)
+    runners = build_algorithm_config(cfg)
+    assert runners.gym_env_vectorize_mode == "vector_entry_point" and set(runners.env_config) == {"threads"}
