@@ -9,7 +9,8 @@ turn, ``--rounds`` times, the order rotated every round, each time ``N * --steps
 weights and torch's exploration noise seeded alike (so every mode samples the same episodes - the same work -
 ``same_episodes`` checks it on the rewards); a mode's rate is
 its best round and its median (env steps over wall time), with its CPU seconds per wall second (the process and its
-threads; workers not counted). Ratios are native over sync, as measured (gains or losses)::
+threads; workers not counted) and ``env_step_share``, the share of the wall time spent in the vector env's ``step``
+(the rest is RLlib: the module, the connectors, the episodes). Ratios are native over sync, as measured (gains or losses)::
 
     PYTHONPATH=. nice python scripts/rllib_vector_rate.py --json docs/archive/rllib_vector_rate.json
 """
@@ -50,21 +51,38 @@ def runner(env_id: str, n: int, mode: str, seed: int = 0) -> Any:
     return SingleAgentEnvRunner(config=algo_config)
 
 
-def one_sample(r: Any, steps: int, seed: int) -> tuple[int, float, float, float]:
-    """(env steps, wall s, CPU s of this process, sum of the rewards) of one ``sample``, its exploration noise
-    drawn from torch seeded with ``seed``: every mode samples the same actions, so the same episodes (the same work)."""
+def timed_steps(venv: Any) -> list[float]:
+    """Accumulate the wall time of ``venv.step`` (the vector env's share of a sample) in the returned list."""
+    spent, step = [0.0], venv.step
+
+    def timed(actions: Any) -> Any:
+        t0 = time.perf_counter()
+        try:
+            return step(actions)
+        finally:
+            spent[0] += time.perf_counter() - t0
+    venv.step = timed  # the runner's DictInfoToList calls the instance's step
+    return spent
+
+
+def one_sample(r: Any, steps: int, seed: int, spent: list[float]) -> tuple[int, float, float, float, float]:
+    """(env steps, wall s, CPU s of this process, sum of the rewards, wall s in the vector env's step) of one
+    ``sample``, its exploration noise drawn from torch seeded with ``seed``: every mode samples the same actions, so
+    the same episodes (the same work)."""
     import torch
 
     torch.manual_seed(seed)
-    w0, c0 = time.perf_counter(), time.process_time()
+    s0, w0, c0 = spent[0], time.perf_counter(), time.process_time()
     episodes = r.sample(num_timesteps=steps, explore=True)
     wall, cpu = time.perf_counter() - w0, time.process_time() - c0
-    return sum(len(e) for e in episodes), wall, cpu, float(sum(sum(e.get_rewards()) for e in episodes))
+    return (sum(len(e) for e in episodes), wall, cpu, float(sum(sum(e.get_rewards()) for e in episodes)),
+            spent[0] - s0)
 
 
 def measure(env_id: str, n: int, modes: list[str], steps_per_env: int, rounds: int) -> dict[str, Any]:
     runners = {m: runner(env_id, n, m) for m in modes}
     out: dict[str, Any] = {}
+    spent: dict[str, list[float]] = {}
     try:
         first = next(iter(runners.values()))
         for m, r in runners.items():
@@ -72,20 +90,23 @@ def measure(env_id: str, n: int, modes: list[str], steps_per_env: int, rounds: i
             venv = r.env.unwrapped
             out[m] = {"vector_env": type(venv).__name__, "threads": getattr(venv, "threads", 1),
                       "processes": getattr(venv, "processes", 1)}
-            one_sample(r, 2 * n, 0)  # warm-up: resets, compilation, the first exact strokes
+            spent[m] = timed_steps(venv)
+            one_sample(r, 2 * n, 0, spent[m])  # warm-up: resets, compilation, the first exact strokes
         runs: dict[str, list] = {m: [] for m in modes}
         for k in range(rounds):
             for m in modes[k % len(modes):] + modes[:k % len(modes)]:
-                runs[m].append(one_sample(runners[m], n * steps_per_env, 1 + k))
+                runs[m].append(one_sample(runners[m], n * steps_per_env, 1 + k, spent[m]))
     finally:
         for r in runners.values():
             r.stop()
     for m, rs in runs.items():
-        rates = [s / w for s, w, _, _ in rs]
+        rates = [s / w for s, w, *_ in rs]
+        wall = sum(w for _, w, *_ in rs)
         out[m].update({
             "env_steps_per_s_best": round(max(rates), 1), "env_steps_per_s_median": round(statistics.median(rates), 1),
-            "cpu_per_wall": round(sum(c for _, _, c, _ in rs) / sum(w for _, w, _, _ in rs), 2),
-            "env_steps": [s for s, _, _, _ in rs], "reward_sums": [round(x, 9) for _, _, _, x in rs]})
+            "cpu_per_wall": round(sum(c for _, _, c, *_ in rs) / wall, 2),
+            "env_step_share": round(sum(x[4] for x in rs) / wall, 3),
+            "env_steps": [s for s, *_ in rs], "reward_sums": [round(x[3], 9) for x in rs]})
     out["same_episodes"] = len({tuple(o["reward_sums"]) for m, o in out.items() if m in runs}) == 1
     if "sync" in out:
         for m in (m for m in modes if m != "sync"):

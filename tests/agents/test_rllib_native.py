@@ -139,6 +139,7 @@ def test_rate_script_measures_the_same_episodes_in_every_mode(tmp_path: Path) ->
     assert got == {"sync": ("SyncVectorEnv", 1, 1), "native_t1": ("KernelVectorEnv", 1, 1),
                    "native_t2": ("KernelVectorEnv", 2, 1), "native_p2": ("KernelVectorEnv", 1, 2)}
     assert all(res[m]["env_steps_per_s_best"] > 0 and res[m]["env_steps"] == [4] for m in mod.MODES)
+    assert all(0 < res[m]["env_step_share"] < 1 for m in mod.MODES)
     p = subprocess.run([sys.executable, str(SHIPPED.parents[2] / "scripts" / "rllib_vector_rate.py"), "--n", "0"],
                        capture_output=True, text=True, check=False, timeout=120)
     assert p.returncode == 2 and p.stderr.strip().splitlines() == [
