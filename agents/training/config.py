@@ -6,7 +6,8 @@ it is evaluated as code, and ``env_id`` must be an id srenv registers)::
     algo: ppo                      # ppo | sac | a2c | td3
     env_kwargs: {config: default}  # passed to gymnasium.make("srenv/SuckerRod-v0", **env_kwargs)
     n_envs: null                   # null = os.cpu_count(); SubprocVecEnv when > 1
-    vec_env: subproc               # subproc | dummy (SB3's) | native (srenv's vector env, v1/v2 and wrappers)
+    vec_env: subproc               # subproc | dummy (SB3's) | native (srenv's vector env, v1/v2 and wrappers;
+                                   # the RLlib YAML takes sync | native: agents.training.rllib.config)
     vec_processes: 0               # native only: worker processes, 0 = one per core, 1 = threads in this process
     n_timesteps: 200000
     policy: MlpPolicy
@@ -126,6 +127,35 @@ def _yaml12_float(value: Any) -> Any:
     return float(value) if isinstance(value, str) and _FLOAT_RE.match(value) else value
 
 
+# vec_env's values per backend, the default first: SB3's own vector envs or RLlib's (gymnasium's sync), or srenv's
+VEC_ENVS = {"sb3": ("subproc", "dummy", "native"), "rllib": ("sync", "native")}
+
+
+def vec_env_keys(data: dict, backend: str, env_id: str, env_kwargs: dict) -> tuple[str, int]:
+    """``vec_env`` and ``vec_processes`` of a training YAML of either backend, checked (one TrainConfigError line).
+
+    ``native`` needs an env with srenv's vector entry point (v1, v2; with SB3 also the residual / shaped env on
+    one, whose wrappers go inside each slot); ``vec_processes`` is for ``native`` only.
+    """
+    values = VEC_ENVS[backend]
+    vec_env = data.get("vec_env", values[0])
+    _expect(vec_env in values, "vec_env", vec_env, ", ".join(values[:-1]) + " or " + values[-1])
+    vec_processes = declared("vec_processes", data.get("vec_processes", 0))
+    _expect(vec_env == "native" or "vec_processes" not in data, "vec_processes", data.get("vec_processes"),
+            "no value unless vec_env: native")
+    if vec_env == "native":
+        from .native_vec import NATIVE_IDS, native_plan
+
+        try:
+            inner = native_plan(env_id, env_kwargs)[0]
+        except ValueError as exc:
+            raise TrainConfigError(str(exc)) from None
+        _expect(backend == "sb3" or inner == env_id, "env_id", env_id,
+                f"{' or '.join(NATIVE_IDS)} with vec_env: native and backend: {backend} (the residual and shaped "
+                "envs take it with sb3)")
+    return vec_env, vec_processes
+
+
 def parse_train_config(data: Any, source: str = "<dict>") -> TrainConfig:
     """Validate a YAML mapping into a :class:`TrainConfig` (clear errors, no evaluation of strings)."""
     _expect(isinstance(data, dict), source, type(data).__name__, "a mapping of hyperparameters")
@@ -141,23 +171,12 @@ def parse_train_config(data: Any, source: str = "<dict>") -> TrainConfig:
     policy_kwargs = data.get("policy_kwargs") or {}
     _expect(isinstance(policy_kwargs, dict), "policy_kwargs", policy_kwargs,
             "a mapping (strings of Python code are not evaluated)")
-    vec_env = data.get("vec_env", "subproc")
-    _expect(vec_env in ("subproc", "dummy", "native"), "vec_env", vec_env, "subproc, dummy or native")
-    vec_processes = declared("vec_processes", data.get("vec_processes", 0))
-    _expect(vec_env == "native" or "vec_processes" not in data, "vec_processes", data.get("vec_processes"),
-            "no value unless vec_env: native")
     env_id = data.get("env_id", ENV_ID_V0)
     allowed = allowed_env_ids()
     # gymnasium.make("module:Env-v0") imports `module` (from the working directory, too): only ids that
     # srenv itself registers are accepted, so a YAML can never name code to import
     _expect(isinstance(env_id, str) and env_id in allowed, "env_id", env_id, "one of " + ", ".join(allowed))
-    if vec_env == "native":  # the env must have a native vector env (v1, v2, or the residual / shaped env on one)
-        from .native_vec import native_plan
-
-        try:
-            native_plan(env_id, env_kwargs)
-        except ValueError as exc:
-            raise TrainConfigError(str(exc)) from None
+    vec_env, vec_processes = vec_env_keys(data, "sb3", env_id, env_kwargs)
     cfg = TrainConfig(
         algo=algo, env_id=env_id, env_kwargs=dict(env_kwargs), n_envs=n_envs,
         n_timesteps=_positive_int(data, "n_timesteps", 100_000), policy=str(data.get("policy", "MlpPolicy")),

@@ -9,12 +9,21 @@ One YAML describes one run (read with srenv's bounded safe loader; nothing in it
     n_timesteps: 100000              # environment steps in total, resumed ones included
     num_env_runners: 2               # sampling processes (0 = sample in the driver)
     num_envs_per_env_runner: 1
+    vec_env: sync                    # sync (RLlib's: gymnasium's SyncVectorEnv) | native (srenv's vector env, v1/v2)
+    vec_processes: 0                 # native only: worker processes per runner, 0 = one per core, 1 = threads
     seed: 0
     checkpoint_freq: 20000           # environment steps between checkpoints
     num_cpus: null                   # local Ray only: CPUs it may schedule (null = max(cores, runners + 1))
     model_config: {fcnet_hiddens: [64, 64], fcnet_activation: tanh}   # RLlib's DefaultModelConfig
     training: {lr: 3.0e-4, gamma: 0.95, train_batch_size_per_learner: 512, minibatch_size: 64}
     normalize: {clip_std: 10}        # or true (clip_std 10) / false (default): observation mean-std filter
+
+``vec_env: native`` makes each env runner step its ``num_envs_per_env_runner`` wells through srenv's vector entry
+point (RLlib's ``gym_env_vectorize_mode="vector_entry_point"``; the creator of
+:mod:`agents.training.rllib.registry` builds ``gymnasium.make_vec(id, num_envs=N,
+vectorization_mode="vector_entry_point", threads=cores | processes=P)``), with the backend keywords SB3's
+``vec_env: native`` uses (:func:`agents.training.native_vec.native_backend`). Same episodes as ``sync`` for the
+same seeds and weights (tests/agents/test_rllib_native.py); the normaliser below applies to both alike.
 
 ``training`` goes to ``AlgorithmConfig.training`` (checked against its signature). ``normalize`` puts
 :class:`agents.training.rllib.obs_filter.ObsMeanStdFilter` first in the env runners' env-to-module pipeline:
@@ -31,12 +40,20 @@ from typing import Any
 
 from ...envs import ENV_ID_V0
 from ...evaluation.rllib_model import algorithm_configs
-from ..config import TrainConfigError, _expect, _positive_int, _yaml12_float, declared, read_train_yaml
+from ..config import (
+    TrainConfigError,
+    _expect,
+    _positive_int,
+    _yaml12_float,
+    declared,
+    read_train_yaml,
+    vec_env_keys,
+)
 
 BACKEND = "rllib"
 _HARNESS_KEYS = {"backend", "algo", "env_id", "env_kwargs", "n_timesteps", "num_env_runners",
                  "num_envs_per_env_runner", "seed", "checkpoint_freq", "num_cpus", "model_config", "training",
-                 "normalize"}
+                 "normalize", "vec_env", "vec_processes"}
 DEFAULT_CLIP_STD = 10.0  # RLlib's and SB3's default clip of normalised observations
 
 
@@ -55,6 +72,8 @@ class RLlibTrainConfig:
     training: dict[str, Any] = field(default_factory=dict)
     backend: str = BACKEND
     normalize: dict[str, Any] | None = None  # {"clip_std": c}; None = observations as the env gives them
+    vec_env: str = "sync"  # sync: RLlib's vector env of single envs; native: srenv's (agents.training.config.VEC_ENVS)
+    vec_processes: int = 0  # vec_env native: worker processes per env runner, 0 = one per core, 1 = threads
 
 
 def _training_arguments(config_cls: type) -> set[str]:
@@ -101,8 +120,10 @@ def parse_rllib_config(data: Any, source: str = "<dict>") -> RLlibTrainConfig:
     accepted = _training_arguments(configs[algo])
     for key in sorted(set(training) - accepted):
         _expect(False, f"training.{key}", training[key], f"an argument of RLlib's {algo.upper()} training()")
+    env_id, env_kwargs = str(data.get("env_id", ENV_ID_V0)), dict(data.get("env_kwargs") or {})
+    vec_env, vec_processes = vec_env_keys(data, BACKEND, env_id, env_kwargs)
     return RLlibTrainConfig(
-        algo=algo, env_id=str(data.get("env_id", ENV_ID_V0)), env_kwargs=dict(data.get("env_kwargs") or {}),
+        algo=algo, env_id=env_id, env_kwargs=env_kwargs, vec_env=vec_env, vec_processes=vec_processes,
         n_timesteps=_positive_int(data, "n_timesteps", 100_000), num_env_runners=runners,
         num_envs_per_env_runner=_positive_int(data, "num_envs_per_env_runner", 1),
         seed=int(data.get("seed", 0)), checkpoint_freq=_positive_int(data, "checkpoint_freq", 20_000),
@@ -117,12 +138,18 @@ def build_algorithm_config(cfg: RLlibTrainConfig) -> Any:
         registry.register([cfg.env_id])  # the plain id, known to every env runner of the cluster
     runners: dict[str, Any] = {"num_env_runners": cfg.num_env_runners,
                                "num_envs_per_env_runner": cfg.num_envs_per_env_runner}
+    env_config = dict(cfg.env_kwargs)
+    if cfg.vec_env == "native":  # the runners call the creator once with num_envs: srenv's vector entry point
+        from ..native_vec import native_backend
+
+        runners["gym_env_vectorize_mode"] = "vector_entry_point"
+        env_config.update(native_backend(cfg.vec_processes, cfg.num_envs_per_env_runner))
     if cfg.normalize is not None:
         from .obs_filter import connector_factory
 
         runners["env_to_module_connector"] = connector_factory(cfg.normalize["clip_std"])
     return (algorithm_configs()[cfg.algo]()
-            .environment(cfg.env_id, env_config=dict(cfg.env_kwargs))
+            .environment(cfg.env_id, env_config=env_config)
             .env_runners(**runners)
             .framework("torch")
             .rl_module(model_config=dict(cfg.model_config))

@@ -13,7 +13,11 @@ second):
    ``config.environment("any-name", env_config={"env_id": "srenv/SuckerRod-v0", ...})``: the creator
    itself, under a name of your choice (RLlib takes a creator only through its registry).
 
-``env_config`` holds the ``gymnasium.make`` keyword arguments (``config``, ``overrides``, ...). A creator
+``env_config`` holds the ``gymnasium.make`` keyword arguments (``config``, ``overrides``, ...). With RLlib's
+``gym_env_vectorize_mode="vector_entry_point"`` (``vec_env: native`` in the training YAML) a runner calls the creator
+once with ``num_envs``: it returns srenv's native vector env (``gymnasium.make_vec(id, num_envs=N,
+vectorization_mode="vector_entry_point", **env_config)``, so ``threads`` / ``processes`` may be in ``env_config``)
+for an id that has one (v1, v2), gymnasium's ``SyncVectorEnv`` of single envs for the others. A creator
 must return one env per call: ``lambda c: gym.make(...)`` fails in the runners (srenv not imported there),
 and one that returns a vector env where RLlib expects a single one fails later with an ``IndexError``.
 Ray is imported only by :func:`register`, so this module is importable without Ray.
@@ -44,8 +48,9 @@ def _make(env_id: str, env_config: Any) -> Any:
     kwargs = dict(env_config)  # an RLlib EnvContext is a dict; worker_index etc. are attributes, not items
     kwargs.pop("env_id", None)
     num_envs = kwargs.pop("num_envs", None)  # RLlib's gym_env_vectorize_mode="vector_entry_point"
-    if num_envs is not None:
-        return gym.make_vec(env_id, num_envs=int(num_envs), vectorization_mode="sync", **kwargs)
+    if num_envs is not None:  # srenv's native vector env where the id has one, else gymnasium's sync
+        mode = "vector_entry_point" if gym.spec(env_id).vector_entry_point is not None else "sync"
+        return gym.make_vec(env_id, num_envs=int(num_envs), vectorization_mode=mode, **kwargs)
     return gym.make(env_id, **kwargs)
 
 
