@@ -95,3 +95,28 @@ def test_the_preregistered_design_is_the_pilots_choice_on_unplayed_validation_se
     assert [s % 200 for s in seeds] == list(range(16))  # the validation wells, as every gate played them
     assert not set(seeds) & (set(range(20000, 20016)) | set(range(10)) | set(range(100000, 100100)))
     assert not set(seeds) & set(pilot.TRAIN_SEEDS)
+
+
+# ---------------------------------------------------------------- round 2 (t24c): the observer on the described twin
+def test_train2_candidates_are_round_1_with_the_observer_differing_in_gain_only(pilot, tuned):
+    specs = pilot.specs_for("train2", tuned, None)
+    assert specs["described_mpc"] == pilot.design(tuned, pilot.ROUND1)  # the reference: round 1, observer off
+    cands = {g: specs[f"observer_gain_{g}"]["params"] for g in pilot.GAINS}
+    assert len(cands) == len(pilot.GAINS) == 3 and set(pilot.BASES) <= set(specs)
+    ref = specs["described_mpc"]["params"]
+    for g, p in cands.items():
+        assert {k: v for k, v in p.items() if k not in ("observer", "observer_gain")} == ref
+        assert p["observer"] is True and p.get("observer_gain", 0.5) == g
+    env = make_env("srenv/SuckerRod-v2", scenario="train", observation="field", episode_hours=0.5)
+    pol = make_baseline("estimated_mpc", cands[1.0], env.unwrapped.obs_names)
+    assert pol.observer and pol.observer_gain == 1.0 and pol.twin == "described"
+
+
+def _summ2(pilot, means):
+    return {f"observer_gain_{g}": {"vs_alarm_pump_off": {"mean": m}} for g, m in zip(pilot.GAINS, means)}
+
+
+def test_the_gain_choice_rule(pilot):
+    assert pilot.choose_gain(_summ2(pilot, [1.0, 3.0, 2.0])) == 0.75
+    assert pilot.choose_gain(_summ2(pilot, [2.96, 2.0, 3.0])) == 0.5  # within 0.05: the lower gain
+    assert pilot.choose_gain(_summ2(pilot, [-4.0, -3.0, -2.0])) == 1.0
