@@ -120,3 +120,20 @@ def test_the_gain_choice_rule(pilot):
     assert pilot.choose_gain(_summ2(pilot, [1.0, 3.0, 2.0])) == 0.75
     assert pilot.choose_gain(_summ2(pilot, [2.96, 2.0, 3.0])) == 0.5  # within 0.05: the lower gain
     assert pilot.choose_gain(_summ2(pilot, [-4.0, -3.0, -2.0])) == 1.0
+
+
+def test_the_round_2_preregistration_is_the_pilots_choice_on_unplayed_validation_seeds(pilot, tuned):
+    import json
+
+    import yaml
+
+    cfg = yaml.safe_load(pilot.CONFIG2.read_text())
+    train = json.loads((REPO / "docs/archive/described_observer_train.json").read_text())
+    assert train["chosen_observer_gain"] == 1.0 == pilot.choose_gain(train["summary"])
+    assert cfg["designs"] == {"described_observer_mpc": pilot.observer_design(tuned, train["chosen_observer_gain"])}
+    r1 = json.loads((REPO / "docs/archive/described_mpc_train.json").read_text())["per_episode_usd_h"]
+    assert train["per_episode_usd_h"]["described_mpc"] == r1["described_pound_0.7"]  # observer off: as round 1
+    seeds = pilot.seeds_of(cfg)
+    assert [s % 200 for s in seeds] == list(range(16))  # the validation wells, as every gate played them
+    played = set(range(20000, 20016)) | set(pilot.seeds_of(yaml.safe_load(pilot.CONFIG.read_text())))
+    assert not set(seeds) & (played | set(range(10)) | set(range(100000, 100100)) | set(pilot.TRAIN_SEEDS))
