@@ -28,7 +28,10 @@ baselines and the round-1 design (``described_mpc``, observer off: a reference, 
 (written before any of these episodes was played): G = the candidate with the highest mean d against
 alarm_pump_off; a candidate within 0.05 USD/h of it with a LOWER gain wins (the observer as merged, 0.5, first).
 ``--stage gate2``: the design pre-registered in configs/benchmark/v2_described_observer_mpc.yaml on its
-validation episodes, and the same gate.
+validation episodes, and the same gate. ``--stage after2`` (read AFTER the gate2 result was recorded; no gate, no
+choice): round 1's design (observer off) beside round 2's on gate2's validation episodes - what the observer changed.
+
+    PYTHONPATH=. nice -n 5 python scripts/described_mpc_pilot.py --stage after2 --out runs/t24c_after2
 
 """
 
@@ -54,6 +57,7 @@ TRAIN_SEEDS = list(range(30016, 30032))  # training wells 16..31 (seed mod 200),
 CANDIDATES = (None, 0.3, 0.5, 0.7)
 CONFIG2 = ROOT / "configs/benchmark/v2_described_observer_mpc.yaml"
 GAINS = (0.5, 0.75, 1.0)  # observer_gain: 0.5 = the observer as merged (its default, left out of the params)
+STAGES = ("train", "gate", "train2", "gate2", "after2")
 ROUND1 = 0.7  # round 1's chosen pound_prob (configs/benchmark/v2_described_mpc.yaml)
 BASES = ("alarm_pump_off", "pump_off")
 ENV = {"env_id": "srenv/SuckerRod-v2", "env_kwargs": {"observation": "field"}}
@@ -87,6 +91,8 @@ def specs_for(stage: str, tuned: dict[str, dict[str, Any]], cfg: dict[str, Any] 
         out.update({f"observer_gain_{g}": observer_design(tuned, g) for g in GAINS})
     else:
         out.update(cfg["designs"])
+        if stage == "after2":
+            out.update(yaml.safe_load(CONFIG.read_text())["designs"])
     return out
 
 
@@ -110,7 +116,7 @@ def seeds_of(cfg: dict[str, Any]) -> list[int]:
 
 
 def main() -> None:
-    a = emp.arguments(argparse.ArgumentParser(description=__doc__.splitlines()[0]), ("train", "gate", "train2", "gate2"))
+    a = emp.arguments(argparse.ArgumentParser(description=__doc__.splitlines()[0]), STAGES)
     tuned = {k: v["params"] for k, v in load_report(REPORT)["tuned"].items()}
     training = a.stage.startswith("train")
     cfg = None if training else yaml.safe_load((CONFIG if a.stage == "gate" else CONFIG2).read_text())
@@ -127,7 +133,7 @@ def main() -> None:
         res["chosen_pound_prob"] = choose(summ)
     elif a.stage == "train2":
         res["chosen_observer_gain"] = choose_gain(summ)
-    else:
+    elif a.stage != "after2":
         res["gate"] = {n: emp.gate(summ[n], summ["alarm_pump_off"]) for n in cfg["designs"]}
     tmp = a.out / "pilot.json.tmp"
     tmp.write_text(json.dumps(res, indent=1))
@@ -135,7 +141,7 @@ def main() -> None:
     print("\n".join(emp.table(summ, BASES, res["guarded_intervals"])))
     if training:
         print("CHOSEN:", res.get("chosen_pound_prob", res.get("chosen_observer_gain")))
-    else:
+    elif "gate" in res:
         print("GATE:", {n: "passed" if ok else "failed" for n, ok in res["gate"].items()})
 
 

@@ -137,3 +137,19 @@ def test_the_round_2_preregistration_is_the_pilots_choice_on_unplayed_validation
     assert [s % 200 for s in seeds] == list(range(16))  # the validation wells, as every gate played them
     played = set(range(20000, 20016)) | set(pilot.seeds_of(yaml.safe_load(pilot.CONFIG.read_text())))
     assert not set(seeds) & (played | set(range(10)) | set(range(100000, 100100)) | set(pilot.TRAIN_SEEDS))
+
+
+def test_after2_plays_both_rounds_on_gate2s_seeds_without_a_gate(pilot, tuned):
+    import json
+
+    import yaml
+
+    cfg2 = yaml.safe_load(pilot.CONFIG2.read_text())
+    specs = pilot.specs_for("after2", tuned, cfg2)
+    assert set(specs) == {*pilot.BASES, "described_mpc", "described_observer_mpc"}
+    assert specs["described_mpc"] == pilot.design(tuned, pilot.ROUND1)
+    gate, after = (json.loads((REPO / f"docs/archive/described_observer_{n}.json").read_text()) for n in ("gate", "after"))
+    assert gate["seeds"] == after["seeds"] == pilot.seeds_of(cfg2) and "gate" not in after
+    assert gate["gate"] == {"described_observer_mpc": False}
+    for n in ("alarm_pump_off", "described_observer_mpc"):  # the gate's episodes, replayed to the cent
+        assert after["per_episode_usd_h"][n] == gate["per_episode_usd_h"][n]
