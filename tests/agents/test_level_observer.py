@@ -109,30 +109,42 @@ PARAMS = {"horizon": 2, "replan_every": 2, "observer": True, "condition_prob": 0
           "policies": [["pump_off", {"threshold": 0.99, "idle_time_s": 3600, "a_spm": 0.4, "a_stroke": 0.0}]]}
 
 
-def test_observer_policy_never_reads_the_hidden_state():
-    """As tests/agents/test_estimated_mpc.py: with the observer and the condition on, the same observations give
-    the same actions when the env's well, simulator, config, schedule, condition, parting clock and inflow are
-    None after reset."""
+HIDDEN = ("well", "sim", "cfg", "_schedule", "_condition", "_parting", "runner", "inflow_multiplier")
+
+
+def _episode(pol, seed: int, n: int = 6) -> tuple[list, list]:
+    """``pol``'s actions on episode ``seed`` and the observations it saw."""
     env = make_env(ENV, scenario="train", **KW)
-    obs, _ = env.reset(seed=20003)
-    pol = EstimatedMPCPolicy(**PARAMS)
+    obs, _ = env.reset(seed=seed)
     pol.reset(env)
     acts, seen = [], []
-    for k in range(6):
+    for k in range(n):
         a, _ = pol.predict(obs, episode_start=np.array([k == 0]))
         acts.append(np.asarray(a).copy())
         seen.append(np.asarray(obs).copy())
         obs, _, term, trunc, _ = env.step(a)
         if term or trunc:
             break
+    return acts, seen
+
+
+def _blind(pol, seed: int, seen: list) -> list:
+    """``pol`` reset on episode ``seed``, then everything hidden of the env set to None, fed ``seen``: its actions."""
     blind = make_env(ENV, scenario="train", **KW)
-    blind.reset(seed=20003)
-    pol2 = EstimatedMPCPolicy(**PARAMS)
-    pol2.reset(blind)
-    for name in ("well", "sim", "cfg", "_schedule", "_condition", "_parting", "runner", "inflow_multiplier"):
+    blind.reset(seed=seed)
+    pol.reset(blind)
+    for name in HIDDEN:
         setattr(blind.unwrapped, name, None)
-    again = [np.asarray(pol2.predict(o, episode_start=np.array([k == 0]))[0]) for k, o in enumerate(seen)]
-    np.testing.assert_array_equal(np.array(acts), np.array(again))
+    return [np.asarray(pol.predict(o, episode_start=np.array([k == 0]))[0]) for k, o in enumerate(seen)]
+
+
+def test_observer_policy_never_reads_the_hidden_state():
+    """As tests/agents/test_estimated_mpc.py: with the observer and the condition on, the same observations give
+    the same actions when the env's well, simulator, config, schedule, condition, parting clock and inflow are
+    None after reset."""
+    acts, seen = _episode(EstimatedMPCPolicy(**PARAMS), 20003)
+    pol2 = EstimatedMPCPolicy(**PARAMS)
+    np.testing.assert_array_equal(np.array(acts), np.array(_blind(pol2, 20003, seen)))
     assert pol2._obs_level is not None and pol2.sim_steps > len(seen)
 
 
@@ -213,22 +225,6 @@ def test_observer_gain_needs_the_observer():
 
 
 DESCRIBED = {**PARAMS, "twin": "described"}
-HIDDEN = ("well", "sim", "cfg", "_schedule", "_condition", "_parting", "runner", "inflow_multiplier")
-
-
-def _episode(pol, seed: int, n: int = 6) -> tuple[list, list]:
-    env = make_env(ENV, scenario="train", **KW)
-    obs, _ = env.reset(seed=seed)
-    pol.reset(env)
-    acts, seen = [], []
-    for k in range(n):
-        a, _ = pol.predict(obs, episode_start=np.array([k == 0]))
-        acts.append(np.asarray(a).copy())
-        seen.append(np.asarray(obs).copy())
-        obs, _, term, trunc, _ = env.step(a)
-        if term or trunc:
-            break
-    return acts, seen
 
 
 def test_described_twin_with_the_observer_never_reads_the_hidden_state():
@@ -238,13 +234,7 @@ def test_described_twin_with_the_observer_never_reads_the_hidden_state():
     acts, seen = _episode(pol, 20410)
     assert pol.model_well == -1 and pol._obs_level is not None and pol._obs_level.gain == 1.0
     assert pol.sim_steps > len(seen) and pol.params()["twin"] == "described" and pol.params()["observer"] is True
-    blind = make_env(ENV, scenario="train", **KW)
-    blind.reset(seed=20410)
-    pol2 = EstimatedMPCPolicy(**DESCRIBED, observer_gain=1.0)
-    pol2.reset(blind)
-    for name in HIDDEN:
-        setattr(blind.unwrapped, name, None)
-    again = [np.asarray(pol2.predict(o, episode_start=np.array([k == 0]))[0]) for k, o in enumerate(seen)]
+    again = _blind(EstimatedMPCPolicy(**DESCRIBED, observer_gain=1.0), 20410, seen)
     np.testing.assert_array_equal(np.array(acts), np.array(again))
 
 
