@@ -16,6 +16,23 @@ Nothing else of the design is chosen here.
 against ``alarm_pump_off``, and THE GATE written there (the rule of configs/benchmark/v2_estimated_mpc.yaml:
 scripts/estimated_mpc_pilot.py::gate).
 
+Round 2 (helper t24c): the same design with the twin's level AND deliverability from the level observer
+(``observer: true``; agents/policies/level_observer.py), its one obvious parameter - the weight of each shot's
+deliverability estimate, ``observer_gain`` - in :data:`GAINS`:
+
+    PYTHONPATH=. nice -n 5 python scripts/described_mpc_pilot.py --stage train2 --out runs/t24c_train2
+    PYTHONPATH=. nice -n 5 python scripts/described_mpc_pilot.py --stage gate2 --out runs/t24c_gate2
+
+``--stage train2`` (TRAINING wells 16..31, the seeds of ``--stage train``): the candidates beside the tuned
+baselines and the round-1 design (``described_mpc``, observer off: a reference, not a candidate). THE CHOICE
+(written before any of these episodes was played): G = the candidate with the highest mean d against
+alarm_pump_off; a candidate within 0.05 USD/h of it with a LOWER gain wins (the observer as merged, 0.5, first).
+``--stage gate2``: the design pre-registered in configs/benchmark/v2_described_observer_mpc.yaml on its
+validation episodes, and the same gate. ``--stage after2`` (read AFTER the gate2 result was recorded; no gate, no
+choice): round 1's design (observer off) beside round 2's on gate2's validation episodes - what the observer changed.
+
+    PYTHONPATH=. nice -n 5 python scripts/described_mpc_pilot.py --stage after2 --out runs/t24c_after2
+
 """
 
 from __future__ import annotations
@@ -38,6 +55,10 @@ CONFIG = ROOT / "configs/benchmark/v2_described_mpc.yaml"
 REPORT = ROOT / "docs/v2/benchmark.json"
 TRAIN_SEEDS = list(range(30016, 30032))  # training wells 16..31 (seed mod 200), schedules of their own
 CANDIDATES = (None, 0.3, 0.5, 0.7)
+CONFIG2 = ROOT / "configs/benchmark/v2_described_observer_mpc.yaml"
+GAINS = (0.5, 0.75, 1.0)  # observer_gain: 0.5 = the observer as merged (its default, left out of the params)
+STAGES = ("train", "gate", "train2", "gate2", "after2")
+ROUND1 = 0.7  # round 1's chosen pound_prob (configs/benchmark/v2_described_mpc.yaml)
 BASES = ("alarm_pump_off", "pump_off")
 ENV = {"env_id": "srenv/SuckerRod-v2", "env_kwargs": {"observation": "field"}}
 
@@ -54,12 +75,24 @@ def design(tuned: dict[str, dict[str, Any]], pound_prob: float | None) -> dict[s
                        "policies": [[b, tuned[b]] for b in ("pump_off", "fillage_pi")], "guard": guard}}
 
 
+def observer_design(tuned: dict[str, dict[str, Any]], gain: float) -> dict[str, Any]:
+    """Round 2: round 1's design with ``observer: true`` (and ``observer_gain`` unless it is the default 0.5)."""
+    d = design(tuned, ROUND1)
+    extra = {"observer": True, **({"observer_gain": gain} if gain != GAINS[0] else {})}
+    return {**d, "params": {**d["params"], **extra}}
+
+
 def specs_for(stage: str, tuned: dict[str, dict[str, Any]], cfg: dict[str, Any] | None) -> dict[str, Any]:
     out = {b: {"kind": "baseline", "name": b, "params": tuned[b]} for b in BASES}
     if stage == "train":
         out.update({f"described_pound_{p}": design(tuned, p) for p in CANDIDATES})
+    elif stage == "train2":
+        out["described_mpc"] = design(tuned, ROUND1)  # round 1, observer off: the reference
+        out.update({f"observer_gain_{g}": observer_design(tuned, g) for g in GAINS})
     else:
         out.update(cfg["designs"])
+        if stage == "after2":
+            out.update(yaml.safe_load(CONFIG.read_text())["designs"])
     return out
 
 
@@ -70,33 +103,46 @@ def choose(summ: dict[str, Any]) -> float | None:
     return max((p for p in CANDIDATES if d[p] >= best - 0.05), key=lambda p: -1.0 if p is None else p)
 
 
+def choose_gain(summ: dict[str, Any]) -> float:
+    """THE CHOICE of the train2 stage (module doc)."""
+    d = {g: summ[f"observer_gain_{g}"]["vs_alarm_pump_off"]["mean"] for g in GAINS}
+    best = max(d.values())
+    return min(g for g in GAINS if d[g] >= best - 0.05)
+
+
 def seeds_of(cfg: dict[str, Any]) -> list[int]:
     s = cfg["validation"]["seeds"]
     return list(range(int(s["start"]), int(s["start"]) + int(s["count"])))
 
 
 def main() -> None:
-    a = emp.arguments(argparse.ArgumentParser(description=__doc__.splitlines()[0]), ("train", "gate"))
+    a = emp.arguments(argparse.ArgumentParser(description=__doc__.splitlines()[0]), STAGES)
     tuned = {k: v["params"] for k, v in load_report(REPORT)["tuned"].items()}
-    cfg = yaml.safe_load(CONFIG.read_text()) if a.stage == "gate" else None
-    seeds = TRAIN_SEEDS if a.stage == "train" else seeds_of(cfg)
+    training = a.stage.startswith("train")
+    cfg = None if training else yaml.safe_load((CONFIG if a.stage == "gate" else CONFIG2).read_text())
+    seeds = TRAIN_SEEDS if training else seeds_of(cfg)
     specs = specs_for(a.stage, tuned, cfg)
     eps = emp.play(ENV, specs, seeds, a.out, a.workers)
     res = emp.outcome(a.stage, seeds, specs, eps, BASES)
     res["well_id"] = [e["well_id"] for e in eps["alarm_pump_off"]]
     res["guarded_intervals"] = {n: [e.get("guarded_intervals") for e in v] for n, v in eps.items() if n not in BASES}
+    res["deliverability_estimate"] = {n: [e.get("observer_prod") for e in v] for n, v in eps.items()
+                                      if v and v[0].get("observer_prod") is not None}
     summ = res["summary"]
     if a.stage == "train":
         res["chosen_pound_prob"] = choose(summ)
-    else:
+    elif a.stage == "train2":
+        res["chosen_observer_gain"] = choose_gain(summ)
+    elif a.stage != "after2":
         res["gate"] = {n: emp.gate(summ[n], summ["alarm_pump_off"]) for n in cfg["designs"]}
     tmp = a.out / "pilot.json.tmp"
     tmp.write_text(json.dumps(res, indent=1))
     tmp.replace(a.out / "pilot.json")
     print("\n".join(emp.table(summ, BASES, res["guarded_intervals"])))
-    print("CHOSEN pound_prob:" if a.stage == "train" else "GATE:",
-          res.get("chosen_pound_prob") if a.stage == "train" else
-          {n: "passed" if ok else "failed" for n, ok in res["gate"].items()})
+    if training:
+        print("CHOSEN:", res.get("chosen_pound_prob", res.get("chosen_observer_gain")))
+    elif "gate" in res:
+        print("GATE:", {n: "passed" if ok else "failed" for n, ok in res["gate"].items()})
 
 
 if __name__ == "__main__":

@@ -124,6 +124,7 @@ def _job(job: dict[str, Any]) -> dict[str, Any]:
     rec["model_well"] = getattr(pol, "model_well", None)
     rec["sim_steps"] = getattr(pol, "sim_steps", None)
     rec["guarded_intervals"] = getattr(pol, "guarded_intervals", None)
+    rec["observer_prod"] = getattr(getattr(pol, "_obs_level", None), "prod", None)  # the deliverability estimate
     return rec
 
 

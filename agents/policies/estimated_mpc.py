@@ -18,7 +18,9 @@ played. Its annulus level is the only state it is corrected on, from the field o
 Options (issue 24, helper s24; off by default, which is m24's policy): ``observer`` - the twin's level is instead
 :class:`agents.policies.level_observer.LevelObserver`'s (an inflow balance on the twin's IPR and pump
 displacement times the real card's fillage, its deliverability estimated from successive shots, corrected at
-shots and pounding cards), the twin's deliverability the observer's; ``condition_prob`` - the twin carries the
+shots and pounding cards), the twin's deliverability the observer's (from each shot on: the plans made at a shot
+draw at its new estimate), ``observer_gain`` the weight of each shot's deliverability estimate (default 0.5;
+helper t24c); ``condition_prob`` - the twin carries the
 classifier's most probable non-normal label above that probability at a mid severity (``condition_estimate``).
 Option ``twin`` (issue 24, helper t24b): ``library`` (default: the nearest training well, as above) or
 ``described`` - the twin is the played well as its operator's file describes it
@@ -49,7 +51,7 @@ from .alarms import make_field_controller
 from .causal_oracle import CausalOraclePolicy, freeze_future
 from .described_twin import DescribedTwinEnv, check_twin
 from .field import make_field_baseline, obs_names_of
-from .level_observer import LevelObserver, condition_estimate
+from .level_observer import PROD_GAIN, LevelObserver, check_gain, condition_estimate
 
 LIBRARY = Path(__file__).resolve().parent / "estimated_mpc_library.npz"  # data beside the code: not a trained model
 SCALARS = ("spm", "pprl", "mprl", "power_mean", "power_peak", "fillage_est", "level_shot")
@@ -116,7 +118,7 @@ class EstimatedMPCPolicy(CausalOraclePolicy):
     def __init__(self, horizon: int = 6, replan_every: int = 3, steps: Sequence[float] = (0.3, 0.1),
                  anchors: Sequence[Sequence[float]] = (), policies: Sequence[Sequence[Any]] = (),
                  library: str | None = None, guard: dict[str, Any] | None = None, observer: bool = False,
-                 condition_prob: float | None = None, twin: str = "library") -> None:
+                 condition_prob: float | None = None, twin: str = "library", observer_gain: float | None = None) -> None:
         if not (isinstance(horizon, int) and not isinstance(horizon, bool) and 1 <= horizon <= 144):
             raise ValueError(f"estimated_mpc horizon = {horizon!r}: expected an integer in [1, 144] intervals")
         super().__init__(horizon=horizon, replan_every=replan_every, steps=steps, anchors=anchors, policies=policies)
@@ -129,6 +131,9 @@ class EstimatedMPCPolicy(CausalOraclePolicy):
                                            or not 0.0 < condition_prob < 1.0):
             raise ValueError(f"estimated_mpc condition_prob = {condition_prob!r}: expected None or a number in (0, 1)")
         self.observer, self.condition_prob = observer, condition_prob
+        if observer_gain is not None and not observer:
+            raise ValueError(f"estimated_mpc observer_gain = {observer_gain!r}: expected None without observer: true")
+        self.observer_gain = None if observer_gain is None else check_gain(observer_gain, "estimated_mpc observer_gain")
         self.twin = check_twin(twin)
         self._file: dict[str, Any] | None = None
         self._obs_level: LevelObserver | None = None
@@ -173,7 +178,7 @@ class EstimatedMPCPolicy(CausalOraclePolicy):
             ann, depth = twin.sim.annulus, float(twin.sim.mesh.x_m[-1])
             self._obs_level = LevelObserver(ann.area_m2, ann.pump_md_m, ann.nominal_inflow_m3_s,
                                             float(obs[self._names.index("level_shot")]) * depth,
-                                            floor_m=FLOOR_M)
+                                            floor_m=FLOOR_M, gain=self.observer_gain or PROD_GAIN)
             twin.inflow_multiplier = lambda t_s: self._obs_level.prod
         i = self._names.index
         self._last = np.clip(np.array([2.0 * obs[i("avg_spm")] - 1.0, obs[i("stroke")]], np.float32), -1, 1)
@@ -225,6 +230,7 @@ class EstimatedMPCPolicy(CausalOraclePolicy):
         age = float(obs[i("level_shot_age")])
         if age < self._shot_age:
             ob.shot(float(obs[i("level_shot")]) * float(self._twin.sim.mesh.x_m[-1]))
+            self._twin.sim.set_inflow_multiplier(ob.prod)  # the plans from this shot on draw at the new estimate
         elif self._pumped is not None and obs[i("duty")] > 0:  # a card of this interval (pumping came first)
             ob.card(float(obs[i("fillage_est")]), (1.0 - float(obs[i("duty")])) * self._pumped[0], POUNDED, FULL)
         self._shot_age = age
@@ -286,6 +292,7 @@ class EstimatedMPCPolicy(CausalOraclePolicy):
         return {**super().params(), **({"library": self.library_path} if self.library_path else {}),
                 **({"guard": self.guard} if self.guard is not None else {}),
                 **({"observer": True} if self.observer else {}),
+                **({"observer_gain": self.observer_gain} if self.observer_gain is not None else {}),
                 **({"condition_prob": self.condition_prob} if self.condition_prob is not None else {}),
                 **({"twin": self.twin} if self.twin != "library" else {})}
 

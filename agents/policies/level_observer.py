@@ -12,8 +12,8 @@ pump's displacement times the real card's fillage estimate. It is corrected
 * on a full card while the estimate is below ``floor_m`` (the intake is submerged): lifted to the floor.
 
 ``prod`` is re-estimated at each shot from the balance since the previous one, ``(area * d level + pumped) /
-integral of ipr dt``, clipped and blended (a shot-to-shot estimate is noisy: a pounding pump's card fillage is an
-estimate too). Nothing here reads a simulator's hidden state: the caller hands it observations and a model's
+integral of ipr dt``, clipped and blended with weight ``gain`` (default :data:`PROD_GAIN`; a shot-to-shot estimate
+is noisy: a pounding pump's card fillage is an estimate too). Nothing here reads a simulator's hidden state: the caller hands it observations and a model's
 ``ipr`` and displacement.
 
 :func:`condition_estimate` is the classifier's most probable non-normal label above a threshold, at the middle of
@@ -30,7 +30,8 @@ import numpy as np
 from srenv.task.events import EVENTS, NORMAL
 
 PROD_RANGE = (0.1, 5.0)   # deliverability multipliers the balance may give (the v2 schedule stays well inside)
-PROD_GAIN = 0.5           # weight of a new shot-to-shot estimate against the running one
+PROD_GAIN = 0.5           # weight of a new shot-to-shot estimate against the running one (the default)
+GAIN_RANGE = (0.0, 1.0)   # ``gain`` bounds: (0, 1] - 1 takes each shot-to-shot estimate as it is
 SHOT_VAR_M2 = 1.0         # an acoustic shot's level error (m^2): the env's shot is the level at the shot
 POUND_VAR_M2 = 25.0       # a pounding card: the level is near the intake, up to a few metres of liquid
 INFLOW_REL_SD = 0.3       # process noise: the inflow's relative error per interval
@@ -39,10 +40,11 @@ NOT_IN_TWIN = ("parted_rods",)  # its physics is the episode's end: nothing a pl
 
 class LevelObserver:
     def __init__(self, area_m2: float, depth_m: float, ipr: Callable[[float], float], level_m: float,
-                 prod: float = 1.0, floor_m: float = 0.0) -> None:
+                 prod: float = 1.0, floor_m: float = 0.0, gain: float = PROD_GAIN) -> None:
         if not (area_m2 > 0 and depth_m > 0 and math.isfinite(level_m)):
             raise ValueError(f"LevelObserver: area {area_m2!r} m2, depth {depth_m!r} m, level {level_m!r} m: "
                              "expected positive area and depth and a finite level")
+        self.gain = check_gain(gain, "LevelObserver gain")
         self.area_m2, self.depth_m, self.ipr, self.floor_m = float(area_m2), float(depth_m), ipr, float(floor_m)
         self.level_m = float(np.clip(level_m, 0.0, depth_m))
         self.var_m2 = SHOT_VAR_M2
@@ -68,7 +70,7 @@ class LevelObserver:
         if self._inflow1_m3 > 1e-6:
             est = (self.area_m2 * (level_m - self._shot_level) + self._pumped_m3) / self._inflow1_m3
             est = float(np.clip(est, *PROD_RANGE))
-            self.prod = (1.0 - PROD_GAIN) * self.prod + PROD_GAIN * est
+            self.prod = (1.0 - self.gain) * self.prod + self.gain * est
         self._update(float(level_m), SHOT_VAR_M2)
         self._shot_level, self._inflow1_m3, self._pumped_m3 = float(level_m), 0.0, 0.0
 
@@ -80,6 +82,15 @@ class LevelObserver:
             self._update(min(refill, self.depth_m), POUND_VAR_M2)
         elif fillage_est >= full and self.level_m < self.floor_m:
             self.level_m = self.floor_m
+
+
+def check_gain(gain: object, field: str) -> float:
+    """A deliverability gain in :data:`GAIN_RANGE` (low excluded), or one line naming ``field``, the value and the
+    range."""
+    lo, hi = GAIN_RANGE
+    if isinstance(gain, bool) or not isinstance(gain, (int, float)) or not lo < gain <= hi:
+        raise ValueError(f"{field} = {gain!r}: expected a number in ({lo:g}, {hi:g}]")
+    return float(gain)
 
 
 def condition_estimate(obs: np.ndarray, names: Sequence[str], threshold: float) -> tuple[str | None, float]:

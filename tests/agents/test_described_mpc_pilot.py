@@ -95,3 +95,61 @@ def test_the_preregistered_design_is_the_pilots_choice_on_unplayed_validation_se
     assert [s % 200 for s in seeds] == list(range(16))  # the validation wells, as every gate played them
     assert not set(seeds) & (set(range(20000, 20016)) | set(range(10)) | set(range(100000, 100100)))
     assert not set(seeds) & set(pilot.TRAIN_SEEDS)
+
+
+# ---------------------------------------------------------------- round 2 (t24c): the observer on the described twin
+def test_train2_candidates_are_round_1_with_the_observer_differing_in_gain_only(pilot, tuned):
+    specs = pilot.specs_for("train2", tuned, None)
+    assert specs["described_mpc"] == pilot.design(tuned, pilot.ROUND1)  # the reference: round 1, observer off
+    cands = {g: specs[f"observer_gain_{g}"]["params"] for g in pilot.GAINS}
+    assert len(cands) == len(pilot.GAINS) == 3 and set(pilot.BASES) <= set(specs)
+    ref = specs["described_mpc"]["params"]
+    for g, p in cands.items():
+        assert {k: v for k, v in p.items() if k not in ("observer", "observer_gain")} == ref
+        assert p["observer"] is True and p.get("observer_gain", 0.5) == g
+    env = make_env("srenv/SuckerRod-v2", scenario="train", observation="field", episode_hours=0.5)
+    pol = make_baseline("estimated_mpc", cands[1.0], env.unwrapped.obs_names)
+    assert pol.observer and pol.observer_gain == 1.0 and pol.twin == "described"
+
+
+def _summ2(pilot, means):
+    return {f"observer_gain_{g}": {"vs_alarm_pump_off": {"mean": m}} for g, m in zip(pilot.GAINS, means)}
+
+
+def test_the_gain_choice_rule(pilot):
+    assert pilot.choose_gain(_summ2(pilot, [1.0, 3.0, 2.0])) == 0.75
+    assert pilot.choose_gain(_summ2(pilot, [2.96, 2.0, 3.0])) == 0.5  # within 0.05: the lower gain
+    assert pilot.choose_gain(_summ2(pilot, [-4.0, -3.0, -2.0])) == 1.0
+
+
+def test_the_round_2_preregistration_is_the_pilots_choice_on_unplayed_validation_seeds(pilot, tuned):
+    import json
+
+    import yaml
+
+    cfg = yaml.safe_load(pilot.CONFIG2.read_text())
+    train = json.loads((REPO / "docs/archive/described_observer_train.json").read_text())
+    assert train["chosen_observer_gain"] == 1.0 == pilot.choose_gain(train["summary"])
+    assert cfg["designs"] == {"described_observer_mpc": pilot.observer_design(tuned, train["chosen_observer_gain"])}
+    r1 = json.loads((REPO / "docs/archive/described_mpc_train.json").read_text())["per_episode_usd_h"]
+    assert train["per_episode_usd_h"]["described_mpc"] == r1["described_pound_0.7"]  # observer off: as round 1
+    seeds = pilot.seeds_of(cfg)
+    assert [s % 200 for s in seeds] == list(range(16))  # the validation wells, as every gate played them
+    played = set(range(20000, 20016)) | set(pilot.seeds_of(yaml.safe_load(pilot.CONFIG.read_text())))
+    assert not set(seeds) & (played | set(range(10)) | set(range(100000, 100100)) | set(pilot.TRAIN_SEEDS))
+
+
+def test_after2_plays_both_rounds_on_gate2s_seeds_without_a_gate(pilot, tuned):
+    import json
+
+    import yaml
+
+    cfg2 = yaml.safe_load(pilot.CONFIG2.read_text())
+    specs = pilot.specs_for("after2", tuned, cfg2)
+    assert set(specs) == {*pilot.BASES, "described_mpc", "described_observer_mpc"}
+    assert specs["described_mpc"] == pilot.design(tuned, pilot.ROUND1)
+    gate, after = (json.loads((REPO / f"docs/archive/described_observer_{n}.json").read_text()) for n in ("gate", "after"))
+    assert gate["seeds"] == after["seeds"] == pilot.seeds_of(cfg2) and "gate" not in after
+    assert gate["gate"] == {"described_observer_mpc": False}
+    for n in ("alarm_pump_off", "described_observer_mpc"):  # the gate's episodes, replayed to the cent
+        assert after["per_episode_usd_h"][n] == gate["per_episode_usd_h"][n]

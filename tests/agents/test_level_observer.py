@@ -11,7 +11,7 @@ import pytest
 
 from agents.envs import make_env
 from agents.policies.estimated_mpc import EstimatedMPCPolicy
-from agents.policies.level_observer import LevelObserver, condition_estimate
+from agents.policies.level_observer import GAIN_RANGE, PROD_GAIN, LevelObserver, condition_estimate
 from srenv.envs.sucker_rod_v2 import SuckerRodV2Env
 from srenv.task.events import EVENTS
 
@@ -109,30 +109,42 @@ PARAMS = {"horizon": 2, "replan_every": 2, "observer": True, "condition_prob": 0
           "policies": [["pump_off", {"threshold": 0.99, "idle_time_s": 3600, "a_spm": 0.4, "a_stroke": 0.0}]]}
 
 
-def test_observer_policy_never_reads_the_hidden_state():
-    """As tests/agents/test_estimated_mpc.py: with the observer and the condition on, the same observations give
-    the same actions when the env's well, simulator, config, schedule, condition, parting clock and inflow are
-    None after reset."""
+HIDDEN = ("well", "sim", "cfg", "_schedule", "_condition", "_parting", "runner", "inflow_multiplier")
+
+
+def _episode(pol, seed: int, n: int = 6) -> tuple[list, list]:
+    """``pol``'s actions on episode ``seed`` and the observations it saw."""
     env = make_env(ENV, scenario="train", **KW)
-    obs, _ = env.reset(seed=20003)
-    pol = EstimatedMPCPolicy(**PARAMS)
+    obs, _ = env.reset(seed=seed)
     pol.reset(env)
     acts, seen = [], []
-    for k in range(6):
+    for k in range(n):
         a, _ = pol.predict(obs, episode_start=np.array([k == 0]))
         acts.append(np.asarray(a).copy())
         seen.append(np.asarray(obs).copy())
         obs, _, term, trunc, _ = env.step(a)
         if term or trunc:
             break
+    return acts, seen
+
+
+def _blind(pol, seed: int, seen: list) -> list:
+    """``pol`` reset on episode ``seed``, then everything hidden of the env set to None, fed ``seen``: its actions."""
     blind = make_env(ENV, scenario="train", **KW)
-    blind.reset(seed=20003)
-    pol2 = EstimatedMPCPolicy(**PARAMS)
-    pol2.reset(blind)
-    for name in ("well", "sim", "cfg", "_schedule", "_condition", "_parting", "runner", "inflow_multiplier"):
+    blind.reset(seed=seed)
+    pol.reset(blind)
+    for name in HIDDEN:
         setattr(blind.unwrapped, name, None)
-    again = [np.asarray(pol2.predict(o, episode_start=np.array([k == 0]))[0]) for k, o in enumerate(seen)]
-    np.testing.assert_array_equal(np.array(acts), np.array(again))
+    return [np.asarray(pol.predict(o, episode_start=np.array([k == 0]))[0]) for k, o in enumerate(seen)]
+
+
+def test_observer_policy_never_reads_the_hidden_state():
+    """As tests/agents/test_estimated_mpc.py: with the observer and the condition on, the same observations give
+    the same actions when the env's well, simulator, config, schedule, condition, parting clock and inflow are
+    None after reset."""
+    acts, seen = _episode(EstimatedMPCPolicy(**PARAMS), 20003)
+    pol2 = EstimatedMPCPolicy(**PARAMS)
+    np.testing.assert_array_equal(np.array(acts), np.array(_blind(pol2, 20003, seen)))
     assert pol2._obs_level is not None and pol2.sim_steps > len(seen)
 
 
@@ -173,3 +185,111 @@ def test_pilot_refuses_validation_wells_with_one_line(tmp_path, args):
     lines = r.stderr.strip().splitlines()
     assert len(lines) == 1 and "--wells" in lines[0] and "16..199" in lines[0]
     assert not (tmp_path / "o").exists()
+
+
+# ---------------------------------------------------------------- observer_gain, twin: described + observer (t24c)
+def test_gain_weighs_each_shots_deliverability():
+    """Known answer: a constant-inflow annulus whose reservoir gives 1.6 x the model's IPR; the first shot's
+    balance says 1.6 exactly, so the estimate after it is 1 + gain x 0.6 (gain 1: 1.6 at once)."""
+    for gain, want in ((PROD_GAIN, 1.3), (0.75, 1.45), (1.0, 1.6)):
+        ob = LevelObserver(AREA, DEPTH, lambda h: 2.0e-4, level_m=300.0, gain=gain)
+        true = 300.0
+        for _ in range(48):
+            true = _truth(true, 1.6 * 2.0e-4, 0.08)
+            ob.advance(DT, 0.08)
+        ob.shot(true)
+        assert ob.prod == pytest.approx(want, rel=1e-9)
+
+
+def _bad_gains() -> list:
+    lo, hi = GAIN_RANGE  # generated from the declaration: the open low end, past the high end, non-numbers
+    return [lo, lo - 0.1, hi + 1e-9, hi + 1.0, math.nan, True, "0.5", None]
+
+
+@pytest.mark.parametrize("bad", _bad_gains())
+def test_bad_gain_refused_in_one_line(bad):
+    with pytest.raises(ValueError, match="gain") as exc:
+        LevelObserver(AREA, DEPTH, lambda h: 0.0, level_m=10.0, gain=bad)
+    assert "\n" not in str(exc.value)
+    if bad is not None:  # None is the policy's "the observer's default"
+        with pytest.raises(ValueError, match="estimated_mpc observer_gain") as exc:
+            EstimatedMPCPolicy(**PARAMS, observer_gain=bad)
+        assert "\n" not in str(exc.value) and repr(bad) in str(exc.value)
+
+
+def test_observer_gain_needs_the_observer():
+    with pytest.raises(ValueError, match="observer_gain = 0.75: expected None without observer"):
+        EstimatedMPCPolicy(**{**PARAMS, "observer": False}, observer_gain=0.75)
+    assert "observer_gain" not in EstimatedMPCPolicy(**PARAMS).params()
+    assert EstimatedMPCPolicy(**PARAMS, observer_gain=1.0).params()["observer_gain"] == 1.0
+
+
+DESCRIBED = {**PARAMS, "twin": "described"}
+
+
+def test_described_twin_with_the_observer_never_reads_the_hidden_state():
+    """twin: described + observer: it runs (the twin is the described well, the observer on its annulus and IPR),
+    and the same observations give the same actions when everything hidden of the env is None after reset."""
+    pol = EstimatedMPCPolicy(**DESCRIBED, observer_gain=1.0)
+    acts, seen = _episode(pol, 20410)
+    assert pol.model_well == -1 and pol._obs_level is not None and pol._obs_level.gain == 1.0
+    assert pol.sim_steps > len(seen) and pol.params()["twin"] == "described" and pol.params()["observer"] is True
+    again = _blind(EstimatedMPCPolicy(**DESCRIBED, observer_gain=1.0), 20410, seen)
+    np.testing.assert_array_equal(np.array(acts), np.array(again))
+
+
+def test_a_shot_sets_the_twins_deliverability_to_the_estimate_at_once():
+    """The deliverability the observer re-estimates at a shot is the one the plans made at that shot draw at
+    (freeze_future keeps the twin's present multiplier), not the previous interval's."""
+    from agents.policies.causal_oracle import freeze_future
+
+    env = make_env(ENV, scenario="train", **KW)
+    obs, _ = env.reset(seed=20410)
+    pol = EstimatedMPCPolicy(**DESCRIBED, observer_gain=1.0)
+    pol.reset(env)
+    names = list(env.unwrapped.obs_names)
+    first = np.asarray(obs, np.float64).copy()
+    first[names.index("level_shot_age")] = 0.01  # the first card's shot, 0.01 of a shot period old
+    pol.track(first)
+    pol.played(np.array([0.0, 0.3], np.float32))
+    shot = first.copy()
+    shot[names.index("level_shot_age")] = 0.0  # a new shot, much higher than the balance: inflow beyond nominal
+    shot[names.index("level_shot")] = min(1.0, shot[names.index("level_shot")] + 0.02)
+    before = pol._obs_level.prod
+    pol.track(shot)
+    ann = pol._twin.sim.annulus
+    assert pol._obs_level.prod > before and ann.rate_multiplier == pol._obs_level.prod
+    model = freeze_future(pol._model())
+    assert model.inflow_multiplier(0.0) == pol._obs_level.prod
+
+
+def test_described_design_with_the_observer_off_plays_as_before():
+    """The pre-registered round-1 design (configs/benchmark/v2_described_mpc.yaml: twin described, observer off)
+    plays bit for bit as before the observer options were added (digest computed on the code before them, on
+    numpy's AVX2 kernels: conftest.run_on_avx2_numpy)."""
+    from conftest import run_on_avx2_numpy
+
+    out = run_on_avx2_numpy(DIGEST_CODE).split()
+    assert out == ["e36f478b9e099129", "114", "0"]
+
+
+DIGEST_CODE = """
+import hashlib
+import numpy as np, yaml
+from agents.envs import make_env
+from agents.policies.factory import make_baseline
+params = yaml.safe_load(open("configs/benchmark/v2_described_mpc.yaml"))["designs"]["described_mpc"]["params"]
+env = make_env("srenv/SuckerRod-v2", scenario="train", observation="field", episode_hours=1.0, interval_s=600.0)
+h = hashlib.sha256()
+for seed in (20410, 20414):
+    pol = make_baseline("estimated_mpc", params, env.unwrapped.obs_names)
+    obs, _ = env.reset(seed=seed)
+    pol.reset(env)
+    for k in range(6):
+        a, _ = pol.predict(obs, episode_start=np.array([k == 0]))
+        obs, r, term, trunc, _ = env.step(a)
+        h.update(np.asarray(a, np.float32).tobytes()); h.update(np.float64(r).tobytes())
+        if term or trunc:
+            break
+print(h.hexdigest()[:16], pol.sim_steps, pol.guarded_intervals)
+"""
