@@ -10,6 +10,7 @@ from typing import Any
 import yaml
 
 from .errors import ConfigError, short_repr
+from .input_files import read_regular
 
 # Bounds on what a YAML document may ask of the loader (a config is a few hundred nodes; see
 # docs/reliability.md): bytes read, nesting depth, and nodes after alias expansion - a 600-byte "billion
@@ -115,15 +116,9 @@ def _yaml_problem(exc: yaml.YAMLError) -> str:
 
 
 def load_yaml_file(path: str | Path, field_name: str) -> Any:
-    """Read one YAML file with the bounded, duplicate-refusing safe loader; every problem (unreadable, too
-    large, not UTF-8, bad syntax) is one ConfigError naming ``field_name`` and the path."""
-    try:
-        with open(path, "rb") as fh:
-            raw = fh.read(MAX_YAML_BYTES + 1)
-    except OSError as exc:
-        raise ConfigError(field_name, str(path), f"a readable YAML file ({exc.strerror or exc})") from None
-    if len(raw) > MAX_YAML_BYTES:
-        raise ConfigError(field_name, str(path), f"a YAML file of at most {MAX_YAML_BYTES} bytes")
+    """Read one YAML file with the bounded, duplicate-refusing safe loader; every problem (unreadable, not a
+    regular file, too large, not UTF-8, bad syntax) is one ConfigError naming ``field_name`` and the path."""
+    raw = read_regular(path, field_name, "YAML file", MAX_YAML_BYTES)  # a FIFO or a device is refused, not read
     try:
         text = raw.decode("utf-8")
     except UnicodeDecodeError:

@@ -32,9 +32,12 @@ from typing import Any
 
 import numpy as np
 
+from srenv.input_files import read_json
+
 from .normalizer import ObsNormalizer
 
 STATS_SUFFIX = "_vecnormalize.json"
+MAX_STATS_BYTES = 10_000_000  # a statistics JSON: mean and var of the observation, a few kB
 MAX_MODEL_BYTES = 200_000_000  # a zip member larger than this is refused before it is read
 
 # policy_kwargs keys that are plain data in the policies this package trains (MlpPolicy of PPO, A2C, SAC,
@@ -201,9 +204,7 @@ def write_stats(vecnormalize: Any, path: str | Path) -> None:
 def read_stats(path: str | Path, obs_shape: tuple[int, ...]) -> ObsNormalizer | None:
     """The observation normaliser of a statistics JSON (None when it does not normalise observations)."""
     try:
-        if Path(path).stat().st_size > 10_000_000:
-            raise ModelFileError(f"{path}: statistics file larger than 10 MB")
-        rec = json.loads(Path(path).read_text(encoding="utf-8"))
+        rec = read_json(path, "statistics", "statistics file", MAX_STATS_BYTES)
         if not rec.get("norm_obs", True):
             return None
         mean = np.asarray(rec["obs_rms"]["mean"], dtype=np.float64)
