@@ -57,5 +57,6 @@ def read_json(path: str | Path, field: str, what: str, max_bytes: int) -> Any:
     try:
         return json.loads(raw.decode("utf-8"))
     except (UnicodeDecodeError, ValueError, RecursionError) as exc:  # RecursionError: [[[[...]]]] a million deep
-        detail = "nested too deeply" if isinstance(exc, RecursionError) else short_repr(str(exc), 120)
+        detail = ("nested too deeply" if isinstance(exc, RecursionError) else "not UTF-8 text"
+                  if isinstance(exc, UnicodeDecodeError) else f"not JSON: {short_repr(str(exc), 120)}")
         raise ConfigError(field, str(path), f"a readable JSON {what} ({type(exc).__name__}: {detail})") from None
