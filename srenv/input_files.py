@@ -53,10 +53,15 @@ def read_regular(path: str | Path, field: str, what: str, max_bytes: int) -> byt
 def read_json(path: str | Path, field: str, what: str, max_bytes: int) -> Any:
     """The JSON value of a regular file of at most ``max_bytes`` (``json``: data only). Not UTF-8, not JSON or
     nested deeper than the parser's recursion allows: one ConfigError naming the field and the path."""
-    raw = read_regular(path, field, what, max_bytes)
+    return parse_json(read_regular(path, field, what, max_bytes), field, str(path), what)
+
+
+def parse_json(raw: bytes, field: str, source: str, what: str) -> Any:
+    """The JSON value of ``raw`` (a file's bytes, a zip member's): one ConfigError naming the field and the
+    source when it is not UTF-8, not JSON, or nested deeper than the parser's recursion allows."""
     try:
         return json.loads(raw.decode("utf-8"))
     except (UnicodeDecodeError, ValueError, RecursionError) as exc:  # RecursionError: [[[[...]]]] a million deep
         detail = ("nested too deeply" if isinstance(exc, RecursionError) else "not UTF-8 text"
                   if isinstance(exc, UnicodeDecodeError) else f"not JSON: {short_repr(str(exc), 120)}")
-        raise ConfigError(field, str(path), f"a readable JSON {what} ({type(exc).__name__}: {detail})") from None
+        raise ConfigError(field, source, f"a readable JSON {what} ({type(exc).__name__}: {detail})") from None

@@ -80,17 +80,19 @@ _ConfigLoader.add_implicit_resolver(
 )
 
 
-_AMBIGUOUS_NUMBER = re.compile(r"^[-+]?(?:0[0-9_]+|[0-9][0-9_]*(?::[0-5]?[0-9])+(?:\.[0-9_]*)?)$")
+_AMBIGUOUS_NUMBER = re.compile(r"^[-+]?(?:0[0-9_]+|[0-9][0-9_]*(?::[0-5]?[0-9])+(?:\.[0-9_]*)?|0b[01_]+"
+                               r"|[0-9.][0-9.]*_[0-9_.]*(?:[eE][-+]?[0-9]+)?)$")
+AMBIGUOUS_WHY = "YAML 1.1 reads 010 as octal 8, 0b10 as binary 2, 1:30 as 90 and 1_0 as 10; YAML 1.2 reads 10 or a string"
 
 
 def _unambiguous(construct: Any) -> Any:
-    """YAML 1.1 reads ``010`` as octal 8 and ``1:30`` as 90 (base 60); YAML 1.2 and every other tool read
-    10 and a string. Neither reading is safe to pick without a word: such a number is refused."""
+    """YAML 1.1 reads ``010`` as octal 8, ``0b10`` as 2, ``1:30`` as 90 (base 60) and ``1_0`` as 10; YAML 1.2
+    and every other tool read 10 or a string. Neither reading is safe to pick without a word: such a number is refused."""
     def build(loader: yaml.SafeLoader, node: yaml.ScalarNode) -> Any:
         if _AMBIGUOUS_NUMBER.match(node.value):
             raise yaml.constructor.ConstructorError(
-                None, None, f"the number {node.value} is ambiguous (YAML 1.1 reads a leading 0 as octal and "
-                "a:b as base 60): write it without the leading zero or colon, or quote it", node.start_mark)
+                None, None, f"the number {node.value} is ambiguous ({AMBIGUOUS_WHY}): write it without the leading "
+                "zero, 0b, colon or underscore, or quote it", node.start_mark)
         return construct(loader, node)
     return build
 

@@ -261,3 +261,29 @@ def test_validate_fit_refuses_a_field_without_effect_as_fit_does(tmp_path: Path,
     one_line(rc, err, "--fit", "economics.oil_price_usd_m3", "change the simulated card")
     rc, err = run_srenv(["validate", "card.csv", "--config", FIG3, "--fit", "nosuch.key"], capsys)
     one_line(rc, err, "--fit", "nosuch.key")  # the flag of the command, not fit's --param
+
+
+@pytest.mark.parametrize("text", ["1_0", "0b110", "1_0.5", "6.0_0"])
+def test_a_number_yaml_versions_read_differently_is_refused(text: str, tmp_path: Path) -> None:
+    """Before: --set surface.spm=1_0 ran at 10 strokes/min (YAML 1.1 drops the underscore; YAML 1.2 and every
+    other tool read a string) and 0b110 at 6; the leading-zero and colon forms were already refused."""
+    import re
+
+    from srenv.config import CONFIG_DIR, load_config
+
+    with pytest.raises(ConfigError, match=rf"surface.spm.*'{re.escape(text)}'.*ambiguous"):
+        load_config(FIG3, [f"surface.spm={text}"])
+    yaml_text = (CONFIG_DIR / f"{FIG3}.yaml").read_text()
+    (tmp_path / "w.yaml").write_text(re.sub(r"(?m)^(\s+)spm: .*$", rf"\g<1>spm: {text}", yaml_text, count=1))
+    with pytest.raises(ConfigError, match=f"{re.escape(text)} is ambiguous"):
+        load_config(tmp_path / "w.yaml")
+
+
+def test_a_model_zip_whose_data_is_nested_a_million_deep_is_one_line(tmp_path: Path,
+                                                                     capsys: pytest.CaptureFixture) -> None:
+    import zipfile
+
+    with zipfile.ZipFile(tmp_path / "m.zip", "w") as z:
+        z.writestr("data", "[" * 1_000_000 + "]" * 1_000_000)
+    rc, err = run_agents(["evaluate", "--policy", str(tmp_path / "m.zip"), "--episodes", "1"], capsys)
+    one_line(rc, err, "m.zip", "nested too deeply")  # before: a RecursionError traceback

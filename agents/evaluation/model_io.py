@@ -32,7 +32,7 @@ from typing import Any
 
 import numpy as np
 
-from srenv.input_files import read_json
+from srenv.input_files import parse_json, read_json
 
 from .normalizer import ObsNormalizer
 
@@ -81,11 +81,10 @@ def read_data(path: str | Path) -> dict[str, Any]:
     """The ``data`` JSON of an SB3 zip (no ``:serialized:`` payload is decoded)."""
     with _open_zip(path) as zf:
         try:
-            data = json.loads(zf.read("data"))
+            raw = zf.read("data")
         except KeyError:
             raise ModelFileError(f"{path}: not an SB3 model zip (no 'data' member)") from None
-        except (ValueError, UnicodeDecodeError) as exc:
-            raise ModelFileError(f"{path}: its 'data' member is not JSON ({exc})") from None
+    data = parse_json(raw, str(path), "data", "SB3 model member")
     if not isinstance(data, dict):
         raise ModelFileError(f"{path}: its 'data' member is not a JSON mapping")
     return data
