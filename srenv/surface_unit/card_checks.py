@@ -37,14 +37,16 @@ def loop_work(x: np.ndarray, f: np.ndarray) -> float:
     return float(np.sum(0.5 * (fc[1:] + fc[:-1]) * np.diff(xc)))
 
 
-def check_magnitude(values: np.ndarray, field: str, source: str, what: str, row: str = "sample") -> None:
-    """Every value finite and of magnitude at most MAX_ABS_CARD_VALUE, checked as read (before any unit
-    conversion or arithmetic, which would overflow): one ConfigError naming the first bad `row`."""
-    bad = ~(np.abs(values) <= MAX_ABS_CARD_VALUE)
+def check_magnitude(values: np.ndarray, field: str, source: str, what: str, row: str = "sample",
+                    bound: float = MAX_ABS_CARD_VALUE) -> None:
+    """Every value finite and of magnitude at most `bound`, checked as read (before any unit conversion or
+    arithmetic, which would overflow): one ConfigError naming the first bad `row`. (A time column is checked
+    finite only, ``bound=inf``: its size is judged as the stroke period it gives, ``check_period``.)"""
+    bad = ~(np.isfinite(values) & (np.abs(values) <= bound))
     if bad.any():
         i = int(np.argmax(bad))
-        raise ConfigError(field, source, f"finite {what} of magnitude at most {MAX_ABS_CARD_VALUE:g} ({row} {i + 1} "
-                          f"is {values[i]})")
+        size = f" of magnitude at most {bound:g}" if np.isfinite(bound) else ""
+        raise ConfigError(field, source, f"finite {what}{size} ({row} {i + 1} is {values[i]})")
 
 
 def check_card(position_m: np.ndarray, load_n: np.ndarray | None, field: str, source: str,

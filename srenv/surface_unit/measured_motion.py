@@ -26,7 +26,7 @@ import numpy as np
 
 from ..errors import ConfigError, short_repr
 from ..input_files import read_regular
-from .card_checks import MAX_CARD_BYTES, check_card, check_magnitude, check_period
+from .card_checks import MAX_ABS_CARD_VALUE, MAX_CARD_BYTES, check_card, check_magnitude, check_period
 
 MIN_SAMPLES = 16
 
@@ -71,13 +71,16 @@ def read_card_csv(path: str | Path, field: str, required: tuple[str, ...],
                 cell = r[j] if j < len(r) else "<missing>"
                 raise ConfigError(field, str(path), f"a number in column {name} on data row {i + 1} "
                                   f"(found {cell!r})") from None
-        check_magnitude(col, field, str(path), f"numbers in column {name}", "row")
+        check_magnitude(col, field, str(path), f"numbers in column {name}", "row",
+                        math.inf if name == "t_s" else MAX_ABS_CARD_VALUE)
         out[name] = col * units.get(name, 1.0)
-    if "t_s" in out and not np.all(np.diff(out["t_s"]) > 0):
-        i = int(np.argmax(np.diff(out["t_s"]) <= 0)) + 2
-        raise ConfigError(field, str(path), f"strictly increasing t_s (data row {i} does not advance)")
-    if "t_s" in out and "polished_rod_position_m" in out:
-        check_period(stroke_period_s(out["t_s"], out["polished_rod_position_m"]), field, str(path))
+    with np.errstate(over="ignore", invalid="ignore"):  # times of 1e308: inf steps and periods, refused below
+        steps = np.diff(out["t_s"]) if "t_s" in out else None
+        if steps is not None and not np.all(steps > 0):
+            i = int(np.argmax(steps <= 0)) + 2
+            raise ConfigError(field, str(path), f"strictly increasing t_s (data row {i} does not advance)")
+        if "t_s" in out and "polished_rod_position_m" in out:
+            check_period(stroke_period_s(out["t_s"], out["polished_rod_position_m"]), field, str(path))
     if "polished_rod_position_m" in out:
         x, f = check_card(out["polished_rod_position_m"], out.get("polished_rod_load_n"), field, str(path), reverse)
         out["polished_rod_position_m"] = x
