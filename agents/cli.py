@@ -141,11 +141,13 @@ def cmd_replay(args: argparse.Namespace) -> dict:
 
 
 def cmd_train(args: argparse.Namespace) -> dict:
+    from .inputs import check_output_dir
     from .training.config import load_train_config
     from .training.rllib.config import read_backend
     from .training.sb3.train import train
 
     out = args.out or str(Path("runs") / Path(args.config).stem)
+    check_output_dir(Path(out), (), "--out")  # a file there, or under a file: refused before any work
     if read_backend(args.config) == "rllib":
         from .training.rllib import backend as rllib_backend
         from .training.rllib.config import load_rllib_config

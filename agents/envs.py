@@ -18,7 +18,9 @@ def make_env(env_id: str = ENV_ID_V1, **kwargs: Any) -> Any:
     """``gymnasium.make(env_id, **kwargs)`` with srenv's envs registered in this process."""
     import gymnasium as gym
 
-    return gym.make(env_id, **kwargs)
+    from .inputs import make_kwargs
+
+    return gym.make(env_id, **make_kwargs(kwargs))
 
 
 def env_tag(env_id: str) -> str:

@@ -19,6 +19,8 @@ import numpy as np
 
 from srenv.declarations import Number
 from srenv.errors import ConfigError, short_repr
+from srenv.input_files import open_regular
+from srenv.outputs import check_writable
 
 # --------------------------------------------------------------------------- resource-derived bounds
 MAX_SEED = 2**32 - 1           # numpy's seed range
@@ -80,6 +82,24 @@ FIELDS: dict[str, dict[str, Number]] = {
         "epsilon": Number("epsilon", float, hi=1.0),
     },
 }
+# gymnasium.make's own keywords (the env's are checked by the env): a wrong one is one line, not an assertion
+MAKE_NUMBERS = {"max_episode_steps": Number("max_episode_steps", int, hi=MAX_TIMESTEPS, why="wall time")}
+MAKE_FLAGS = ("autoreset", "disable_env_checker", "apply_api_compatibility")
+
+
+def make_kwargs(kwargs: Mapping[str, Any]) -> dict[str, Any]:
+    """``gymnasium.make`` keywords checked: its numbers declared, its switches booleans, ``render_mode`` a name."""
+    out = dict(kwargs)
+    for key, value in kwargs.items():
+        if key in MAKE_NUMBERS and value is not None:
+            out[key] = MAKE_NUMBERS[key].check(value)
+        elif key in MAKE_FLAGS and not isinstance(value, bool):
+            raise ConfigError(key, value, "true or false")
+        elif key == "render_mode" and not (value is None or isinstance(value, str)):
+            raise ConfigError(key, value, "a render mode name (rgb_array or human) or null")
+    return out
+
+
 UNIT_INTERVAL = Number("action", float, "", lo=-1.0, hi=1.0, lo_open=False)
 FRACTION = Number("fillage", float, "", lo=0.0, hi=1.0, lo_open=False)
 GAIN = Number("gain", float, "", lo=0.0, hi=100.0, lo_open=False)
@@ -186,7 +206,7 @@ def obs_norm_npz(path: str | Path) -> dict[str, Any]:
     try:
         if p.stat().st_size > MAX_NPZ_BYTES:
             raise ConfigError("obs_norm", str(p), f"an .npz of at most {MAX_NPZ_BYTES} bytes")
-        with np.load(p, allow_pickle=False) as z:
+        with open_regular(p, "obs_norm", ".npz file") as fh, np.load(fh, allow_pickle=False) as z:
             missing = [k for k in ("mean", "var", "clip_obs", "epsilon") if k not in z.files]
             if missing:
                 raise ConfigError("obs_norm", str(p), f"an .npz with mean, var, clip_obs, epsilon (missing "
@@ -220,18 +240,22 @@ def checkpoint_progress(record: Any, path: str | Path) -> tuple[int, int]:
             field("checkpoint", "iterations", record["iterations"], f"{path}: "))
 
 
-def check_output_dir(out: Path, names: tuple[str, ...]) -> None:
-    """The files a command will write under ``out``, checked before any work: ``out`` a directory (or
-    absent), no file a directory or a symbolic link (outputs never write through nor replace a link)."""
+def check_output_dir(out: Path, names: tuple[str, ...], flag: str = "--out-dir") -> None:
+    """The files a command will write under ``out`` (given by ``flag``), checked before any work: ``out`` a
+    directory (or absent, under a directory), no file a directory or a symbolic link (outputs never write
+    through nor replace a link)."""
     if out.exists() and not out.is_dir():
-        raise ConfigError("--out-dir", str(out), "a directory (this is a file)")
+        raise ConfigError(flag, str(out), "a directory (this is a file)")
+    if not out.exists() and any(p.exists() and not p.is_dir() for p in out.parents):
+        raise ConfigError(flag, str(out), "a path under directories (a parent is a file)")
+    check_writable(flag, str(out), next(p for p in (out, *out.parents) if p.exists()))  # where it will be made
     for name in names:
         p = out / name
         if p.is_symlink():
-            raise ConfigError("--out-dir", str(p), "no symbolic link among the outputs (an output is never "
+            raise ConfigError(flag, str(p), "no symbolic link among the outputs (an output is never "
                               "written through a link nor replaces one)")
         if p.is_dir():
-            raise ConfigError("--out-dir", str(p), "a file path for this output (it is a directory)")
+            raise ConfigError(flag, str(p), "a file path for this output (it is a directory)")
 
 
 def policy_json(meta: Any, path: str | Path) -> dict[str, Any]:

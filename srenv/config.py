@@ -62,6 +62,7 @@ from .config_units import si_mapping
 from .errors import ConfigError
 from .safe_yaml import (  # noqa: F401
     _AMBIGUOUS_NUMBER,
+    AMBIGUOUS_WHY,
     MAX_YAML_BYTES,
     MAX_YAML_DEPTH,
     MAX_YAML_NODES,
@@ -202,8 +203,8 @@ def apply_overrides(data: dict, overrides: dict[str, Any] | list[str] | None, ow
                 raise ConfigError("--set", s, "key.path=value")
             k, v = s.split("=", 1)
             if _AMBIGUOUS_NUMBER.match(v.strip()):  # YAML 1.1 would read 010 as 8 and 1:30 as 90
-                raise ConfigError(k.strip(), v.strip(), "a number without a leading zero or colon (ambiguous: "
-                                  "YAML 1.1 reads 010 as octal 8 and 1:30 as 90)")
+                raise ConfigError(k.strip(), v.strip(), "a number without a leading zero, 0b, colon or underscore "
+                                  f"(ambiguous: {AMBIGUOUS_WHY})")
             pairs.append((k.strip(), _parse_override_value(v.strip())))
         items = pairs
     for key, value in items:

@@ -39,8 +39,14 @@ def check_output_path(flag: str, path: str | None, suffixes: tuple[str, ...]) ->
         raise ConfigError(flag, path, "a path in an existing directory")
     if p.exists() and not p.is_file():
         raise ConfigError(flag, path, "a regular file path (this is a special file)")
-    try:  # the one reliable test of writability (permissions, read-only mounts, root on /proc)
-        fd, probe = tempfile.mkstemp(dir=parent, prefix=f".{p.name}.", suffix=".probe")
+    check_writable(flag, path, parent)
+
+
+def check_writable(flag: str, path: str, directory: Path) -> None:
+    """``directory`` (where ``path`` will be written) takes a new file: a temporary one is made and removed,
+    the one reliable test of writability (permissions, read-only mounts, root on /proc)."""
+    try:
+        fd, probe = tempfile.mkstemp(dir=directory, prefix=f".{Path(path).name}.", suffix=".probe")
         os.close(fd)
         os.remove(probe)
     except OSError as exc:

@@ -10,6 +10,7 @@ from typing import Any
 import yaml
 
 from .errors import ConfigError, short_repr
+from .input_files import read_regular
 
 # Bounds on what a YAML document may ask of the loader (a config is a few hundred nodes; see
 # docs/reliability.md): bytes read, nesting depth, and nodes after alias expansion - a 600-byte "billion
@@ -79,17 +80,19 @@ _ConfigLoader.add_implicit_resolver(
 )
 
 
-_AMBIGUOUS_NUMBER = re.compile(r"^[-+]?(?:0[0-9_]+|[0-9][0-9_]*(?::[0-5]?[0-9])+(?:\.[0-9_]*)?)$")
+_AMBIGUOUS_NUMBER = re.compile(r"^[-+]?(?:0[0-9_]+|[0-9][0-9_]*(?::[0-5]?[0-9])+(?:\.[0-9_]*)?|0b[01_]+"
+                               r"|[0-9.][0-9.]*_[0-9_.]*(?:[eE][-+]?[0-9]+)?)$")
+AMBIGUOUS_WHY = "YAML 1.1 reads 010 as octal 8, 0b10 as binary 2, 1:30 as 90 and 1_0 as 10; YAML 1.2 reads 10 or a string"
 
 
 def _unambiguous(construct: Any) -> Any:
-    """YAML 1.1 reads ``010`` as octal 8 and ``1:30`` as 90 (base 60); YAML 1.2 and every other tool read
-    10 and a string. Neither reading is safe to pick without a word: such a number is refused."""
+    """YAML 1.1 reads ``010`` as octal 8, ``0b10`` as 2, ``1:30`` as 90 (base 60) and ``1_0`` as 10; YAML 1.2
+    and every other tool read 10 or a string. Neither reading is safe to pick without a word: such a number is refused."""
     def build(loader: yaml.SafeLoader, node: yaml.ScalarNode) -> Any:
         if _AMBIGUOUS_NUMBER.match(node.value):
             raise yaml.constructor.ConstructorError(
-                None, None, f"the number {node.value} is ambiguous (YAML 1.1 reads a leading 0 as octal and "
-                "a:b as base 60): write it without the leading zero or colon, or quote it", node.start_mark)
+                None, None, f"the number {node.value} is ambiguous ({AMBIGUOUS_WHY}): write it without the leading "
+                "zero, 0b, colon or underscore, or quote it", node.start_mark)
         return construct(loader, node)
     return build
 
@@ -115,15 +118,9 @@ def _yaml_problem(exc: yaml.YAMLError) -> str:
 
 
 def load_yaml_file(path: str | Path, field_name: str) -> Any:
-    """Read one YAML file with the bounded, duplicate-refusing safe loader; every problem (unreadable, too
-    large, not UTF-8, bad syntax) is one ConfigError naming ``field_name`` and the path."""
-    try:
-        with open(path, "rb") as fh:
-            raw = fh.read(MAX_YAML_BYTES + 1)
-    except OSError as exc:
-        raise ConfigError(field_name, str(path), f"a readable YAML file ({exc.strerror or exc})") from None
-    if len(raw) > MAX_YAML_BYTES:
-        raise ConfigError(field_name, str(path), f"a YAML file of at most {MAX_YAML_BYTES} bytes")
+    """Read one YAML file with the bounded, duplicate-refusing safe loader; every problem (unreadable, not a
+    regular file, too large, not UTF-8, bad syntax) is one ConfigError naming ``field_name`` and the path."""
+    raw = read_regular(path, field_name, "YAML file", MAX_YAML_BYTES)  # a FIFO or a device is refused, not read
     try:
         text = raw.decode("utf-8")
     except UnicodeDecodeError:

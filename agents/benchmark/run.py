@@ -56,6 +56,9 @@ from .stages import run_test_episodes, train_agents, tune_baselines, validate
 __all__ = ["benchmark_main", "quickstart", "run_benchmark"]
 
 
+REPORT_FILES = ("benchmark.json", "benchmark.md", "figures/benchmark_v1.png")  # what run_benchmark writes in out_dir
+
+
 def run_benchmark(cfg: dict[str, Any], out_dir: str | Path, quick: bool = False,
                   log: Any = None, models_dir: str | Path | None = None) -> dict[str, Any]:
     """The protocol of the module doc: tune, train, validate, test (:mod:`.stages`), then the report, its
@@ -63,7 +66,7 @@ def run_benchmark(cfg: dict[str, Any], out_dir: str | Path, quick: bool = False,
     the report."""
     log = log or (lambda m: print(m, file=sys.stderr, flush=True))
     out = Path(out_dir)
-    check_output_dir(out, ("benchmark.json", "benchmark.md", "figures/benchmark_v1.png"))  # before any work
+    check_output_dir(out, REPORT_FILES)  # before any work
     models = Path(models_dir) if models_dir is not None else out / "models"
     t_start = time.perf_counter()
     wall: dict[str, float] = {}
@@ -151,6 +154,7 @@ def quickstart(config: str, out_dir: str, total_timesteps: int | None = None, ep
     """``python -m agents quickstart``: the benchmark on a small scale, its table and a one-line verdict on
     stdout; the long JSON goes to ``OUT/benchmark.json``."""
     cfg = load_benchmark_config(config, quick=False)
+    check_output_dir(Path(out_dir), REPORT_FILES, "--out")  # before the notice below and any work
     if total_timesteps:
         for run in cfg["agents"]["runs"].values():
             run.setdefault("overrides", {})["n_timesteps"] = int(total_timesteps)

@@ -29,6 +29,8 @@ from typing import Any
 
 import numpy as np
 
+from srenv.errors import ConfigError
+
 from ..envs import ENV_ID_V0, make_env
 from ..policies.protocol import Policy
 from ..policies.v0 import FillagePolicy, RockingMachinePolicy
@@ -205,6 +207,8 @@ def evaluate(specs: list[str], episodes: int, seed: int, config: str = "default"
     from srenv.outputs import atomic_write, check_output_path
 
     check_output_path("--plot", None if plot is None else str(plot), (".png",))  # before any work; no symlink
+    if "config" in (env_kwargs or {}):
+        raise ConfigError("--env-kwarg config", env_kwargs["config"], "the well given by --config instead")
     env = make_env(env_id, config=config, **(env_kwargs or {}))
     control = well_config(env).control
     results: dict[str, dict] = {}

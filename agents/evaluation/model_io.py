@@ -32,9 +32,12 @@ from typing import Any
 
 import numpy as np
 
+from srenv.input_files import parse_json, read_json
+
 from .normalizer import ObsNormalizer
 
 STATS_SUFFIX = "_vecnormalize.json"
+MAX_STATS_BYTES = 10_000_000  # a statistics JSON: mean and var of the observation, a few kB
 MAX_MODEL_BYTES = 200_000_000  # a zip member larger than this is refused before it is read
 
 # policy_kwargs keys that are plain data in the policies this package trains (MlpPolicy of PPO, A2C, SAC,
@@ -78,11 +81,10 @@ def read_data(path: str | Path) -> dict[str, Any]:
     """The ``data`` JSON of an SB3 zip (no ``:serialized:`` payload is decoded)."""
     with _open_zip(path) as zf:
         try:
-            data = json.loads(zf.read("data"))
+            raw = zf.read("data")
         except KeyError:
             raise ModelFileError(f"{path}: not an SB3 model zip (no 'data' member)") from None
-        except (ValueError, UnicodeDecodeError) as exc:
-            raise ModelFileError(f"{path}: its 'data' member is not JSON ({exc})") from None
+    data = parse_json(raw, str(path), "data", "SB3 model member")
     if not isinstance(data, dict):
         raise ModelFileError(f"{path}: its 'data' member is not a JSON mapping")
     return data
@@ -201,9 +203,7 @@ def write_stats(vecnormalize: Any, path: str | Path) -> None:
 def read_stats(path: str | Path, obs_shape: tuple[int, ...]) -> ObsNormalizer | None:
     """The observation normaliser of a statistics JSON (None when it does not normalise observations)."""
     try:
-        if Path(path).stat().st_size > 10_000_000:
-            raise ModelFileError(f"{path}: statistics file larger than 10 MB")
-        rec = json.loads(Path(path).read_text(encoding="utf-8"))
+        rec = read_json(path, "statistics", "statistics file", MAX_STATS_BYTES)
         if not rec.get("norm_obs", True):
             return None
         mean = np.asarray(rec["obs_rms"]["mean"], dtype=np.float64)

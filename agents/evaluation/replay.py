@@ -21,12 +21,13 @@ mismatch; bad input (a report that is not one, an unknown policy, a missing mode
 
 from __future__ import annotations
 
-import json
 import math
 from pathlib import Path
 from typing import Any
 
 import numpy as np
+
+from srenv.input_files import read_json
 
 from ..envs import ENV_ID_V1, ENV_ID_V2, make_env
 from ..inputs import baseline_params, report_env_kwargs, report_episodes
@@ -50,12 +51,7 @@ def load_report(path: str | Path) -> dict[str, Any]:
     p = Path(path)
     if not p.is_file():
         raise ReplayError(f"report {p}: no such file (expected a benchmark.json)")
-    if p.stat().st_size > MAX_REPORT_BYTES:
-        raise ReplayError(f"report {p}: {p.stat().st_size} bytes, expected at most {MAX_REPORT_BYTES}")
-    try:
-        rep = json.loads(p.read_text(encoding="utf-8"))
-    except (ValueError, UnicodeDecodeError) as exc:
-        raise ReplayError(f"report {p}: not JSON ({str(exc)[:120]})") from None
+    rep = read_json(p, "report", "benchmark report", MAX_REPORT_BYTES)  # data only, bounded, one line
     if not isinstance(rep, dict) or rep.get("schema") != "srenv benchmark v1":
         raise ReplayError(f"report {p}: schema = {rep.get('schema') if isinstance(rep, dict) else None!r}, "
                           "expected 'srenv benchmark v1'")

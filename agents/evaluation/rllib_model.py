@@ -3,14 +3,17 @@
 
 from __future__ import annotations
 
-import json
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
+from srenv.input_files import read_json
+
 from .model_io import check_spaces
 from .normalizer import OBS_NORMALIZER_KEY, ObsNormalizer
+
+MAX_POLICY_JSON_BYTES = 1_000_000  # algo, model config, shapes: a few hundred bytes in practice
 
 POLICY_WEIGHTS = "srenv_policy_weights.pt"  # the policy as data (evaluate without --trust-model)
 POLICY_JSON = "srenv_policy.json"
@@ -71,10 +74,8 @@ def _module_from_data(p: Path, env: Any) -> tuple[Any, Any]:
 
     from ..inputs import policy_json
 
-    try:
-        meta = policy_json(json.loads((p / POLICY_JSON).read_text(encoding="utf-8")), p / POLICY_JSON)
-    except (OSError, UnicodeDecodeError, json.JSONDecodeError) as exc:
-        raise ValueError(f"{p / POLICY_JSON}: not a readable JSON file ({type(exc).__name__})") from None
+    meta = policy_json(read_json(p / POLICY_JSON, str(p / POLICY_JSON), "policy file", MAX_POLICY_JSON_BYTES),
+                       p / POLICY_JSON)
     configs = algorithm_configs()
     if meta.get("algo") not in configs or not isinstance(meta.get("model_config"), dict):
         raise ValueError(f"{p / POLICY_JSON}: expected algo one of {', '.join(configs)} and a model_config mapping")

@@ -13,10 +13,13 @@ simulated cards only (docs/conditions.md).
 
 from __future__ import annotations
 
+import zipfile
 from pathlib import Path
 
 import numpy as np
 
+from ..errors import ConfigError
+from ..input_files import open_regular
 from ..physics.conditions import LABELS
 from .card_shape import CARD_TYPES, N_FEATURES, features
 from .pump_level import FEATURE_SETS, with_level, with_offset
@@ -86,10 +89,12 @@ class CardClassifier:
 
     @classmethod
     def load(cls, path: str | Path = DEFAULT_MODEL) -> CardClassifier:
-        try:
-            with np.load(path, allow_pickle=False) as z:
+        try:  # a regular file (a FIFO would block np.load), read as arrays only
+            with open_regular(path, "--model", "model file") as fh, np.load(fh, allow_pickle=False) as z:
                 data = {k: z[k] for k in z.files}
-        except (OSError, ValueError, EOFError) as exc:
+        except ConfigError as exc:
+            raise BadModel(f"model file {path}: {exc.expected}") from None
+        except (OSError, ValueError, EOFError, zipfile.BadZipFile) as exc:
             raise BadModel(f"model file {path}: not a readable NPZ of arrays ({exc})") from None
         try:
             labels = tuple(str(x) for x in data["labels"])

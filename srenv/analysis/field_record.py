@@ -9,7 +9,6 @@ stored in reverse time needs ``reverse=True``).
 
 from __future__ import annotations
 
-import json
 import math
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -18,7 +17,8 @@ import numpy as np
 
 from .. import field_units as fu
 from ..errors import ConfigError
-from ..surface_unit.card_checks import check_card, loop_work
+from ..input_files import read_json
+from ..surface_unit.card_checks import check_card, check_magnitude, loop_work
 
 MAX_RECORD_BYTES = 20_000_000
 
@@ -178,12 +178,7 @@ def load_record_json(path: str | Path):
     p = Path(path)
     if not p.is_file():
         raise ConfigError("RECORD", str(path), "an existing field record file (.json, or .csv with --config)")
-    if p.stat().st_size > MAX_RECORD_BYTES:
-        raise ConfigError("RECORD", str(path), f"a record of at most {MAX_RECORD_BYTES} bytes")
-    try:
-        return json.loads(p.read_text())
-    except (OSError, UnicodeDecodeError, ValueError, RecursionError) as exc:  # RecursionError: nesting too deep
-        raise ConfigError("RECORD", str(path), f"a readable JSON file ({type(exc).__name__})") from None
+    return read_json(p, "RECORD", "record", MAX_RECORD_BYTES)
 
 
 def read_dynacard_json(path: str | Path, reverse: bool = False, auto_orient: bool = False) -> FieldRecord:
@@ -197,6 +192,8 @@ def read_dynacard_json(path: str | Path, reverse: bool = False, auto_orient: boo
     ip = _section(d, "InputParameters", "record")
     cd = _section(d, "cardData", "record")
     x_in, f_lbf = _series(cd, "Position", "cardData"), _series(cd, "Load", "cardData")
+    for what, values in (("positions", x_in), ("loads", f_lbf)):  # as read: the unit conversion would overflow
+        check_magnitude(values, "cardData", str(path), what)
     if len(x_in) != len(f_lbf):
         raise ConfigError("cardData", f"{len(x_in)} positions, {len(f_lbf)} loads", "one load per position")
     x_m, f_n = fu.to_si(x_in, "in"), fu.to_si(f_lbf, "lbf")

@@ -27,8 +27,8 @@ from ..surface_unit.measured_motion import read_card_csv, stroke_period_s
 DEFAULT_STROKES = 4
 
 
-def _field_meta(key: str) -> tuple[type, dict]:
-    """Type and metadata of a dotted config field (numeric fields only)."""
+def _field_meta(key: str, flag: str = "--param") -> tuple[type, dict]:
+    """Type and metadata of a dotted config field (numeric fields only); ``flag`` names it in a refusal."""
     from ..config import WellConfig
 
     cls: typing.Any = WellConfig
@@ -37,19 +37,19 @@ def _field_meta(key: str) -> tuple[type, dict]:
         hints = typing.get_type_hints(cls)
         fields = {f.name: f for f in dataclasses.fields(cls)}
         if part not in fields:
-            raise ConfigError("--param", key, "a numeric config field such as damping.damping_factor, "
+            raise ConfigError(flag, key, "a numeric config field such as damping.damping_factor, "
                               "friction.coefficient, pump.intake_pressure_pa, fluid.wellhead_pressure_pa, "
                               "pump.plunger_friction_n")
         tp = hints[part]
         if i < len(parts) - 1:
             if not (isinstance(tp, type) and dataclasses.is_dataclass(tp)):
-                raise ConfigError("--param", key, "a path to a numeric field (tapers are not fitted)")
+                raise ConfigError(flag, key, "a path to a numeric field (tapers are not fitted)")
             cls = tp
         else:
             if tp is not float:
-                raise ConfigError("--param", key, "a real-valued (float) config field")
+                raise ConfigError(flag, key, "a real-valued (float) config field")
             return tp, dict(fields[part].metadata)
-    raise ConfigError("--param", key, "a numeric config field")
+    raise ConfigError(flag, key, "a numeric config field")
 
 
 def _get(cfg_dict: dict, key: str) -> float:
@@ -63,19 +63,20 @@ class CardFit:
     """Residuals of the model against one measured card, as a function of the fitted parameters."""
 
     def __init__(self, card_path: str, config: str, params: list[str], overrides: list[str] | None = None,
-                 strokes: int = DEFAULT_STROKES) -> None:
+                 strokes: int = DEFAULT_STROKES, flag: str = "--param") -> None:
+        self.flag = flag  # the command's flag naming the fitted fields (fit --param, validate --fit)
         cols = read_card_csv(card_path, "CARD.csv", ("t_s", "polished_rod_position_m", "polished_rod_load_n"))
         self.card_path = str(Path(card_path).resolve())
         self.params = list(params)
         if not self.params:
-            raise ConfigError("--param", "", "at least one config field to fit")
+            raise ConfigError(flag, "", "at least one config field to fit")
         if len(set(self.params)) != len(self.params):
-            raise ConfigError("--param", " ".join(self.params), "each field once")
+            raise ConfigError(flag, " ".join(self.params), "each field once")
         for k in self.params:  # the card drives the model: its period and motion are data, not parameters
             if k.startswith("surface.measured_"):
-                raise ConfigError("--param", k, "a model field (the card's own period and motion are measured, "
+                raise ConfigError(flag, k, "a model field (the card's own period and motion are measured, "
                                   "not fitted)")
-        self.meta = [_field_meta(k)[1] for k in self.params]
+        self.meta = [_field_meta(k, flag)[1] for k in self.params]
         raw = apply_overrides(read_raw(config), list(overrides or []) + [
             "surface.motion=measured", f"surface.measured_card_csv={self.card_path}"])
         self.raw = raw
@@ -175,6 +176,15 @@ def fit_card(fit: CardFit, max_evaluations: int = 200) -> dict:
         "success": bool(sol.success),
         "message": str(sol.message),
     }
+
+
+def refuse_inert(fit: CardFit) -> None:
+    """Refuse, before the fit, fields that do not change the simulated card (``inert_params``): one line
+    naming the command's flag."""
+    inert = inert_params(fit)
+    if inert:
+        raise ConfigError(fit.flag, " ".join(inert), "config fields that change the simulated card (a 1 % change "
+                          "of these leaves it identical, so the card cannot determine them)")
 
 
 def inert_params(fit: CardFit) -> list[str]:

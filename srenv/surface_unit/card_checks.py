@@ -21,6 +21,8 @@ MAX_ABS_LOAD_N = 1e7          # the config's bound on pump loads
 # A stroke's period: 0.1 to 60 strokes/min covers every beam, long-stroke and hydraulic unit (1-20 SPM in
 # practice); outside it a card's time column is in the wrong unit or broken (1e5 s a stroke, 1e298 s a sample)
 MIN_PERIOD_S, MAX_PERIOD_S = 1.0, 600.0
+MAX_CARD_BYTES = 64 * 1024 * 1024  # a card file read whole (CSV rows in memory): far above any measured card
+MAX_ABS_CARD_VALUE = 1e12     # any cell of a card, in any unit: beyond it arithmetic on the card overflows
 CLOSURE_FRACTION = 0.05       # a one-stroke card ends within 5 % of its stroke from where it began
 
 
@@ -33,6 +35,18 @@ def loop_work(x: np.ndarray, f: np.ndarray) -> float:
     """Closed-loop integral of F dx over the samples in order (trapezoids, closed back to the first)."""
     xc, fc = np.r_[x, x[0]], np.r_[f, f[0]]
     return float(np.sum(0.5 * (fc[1:] + fc[:-1]) * np.diff(xc)))
+
+
+def check_magnitude(values: np.ndarray, field: str, source: str, what: str, row: str = "sample",
+                    bound: float = MAX_ABS_CARD_VALUE) -> None:
+    """Every value finite and of magnitude at most `bound`, checked as read (before any unit conversion or
+    arithmetic, which would overflow): one ConfigError naming the first bad `row`. (A time column is checked
+    finite only, ``bound=inf``: its size is judged as the stroke period it gives, ``check_period``.)"""
+    bad = ~(np.isfinite(values) & (np.abs(values) <= bound))
+    if bad.any():
+        i = int(np.argmax(bad))
+        size = f" of magnitude at most {bound:g}" if np.isfinite(bound) else ""
+        raise ConfigError(field, source, f"finite {what}{size} ({row} {i + 1} is {values[i]})")
 
 
 def check_card(position_m: np.ndarray, load_n: np.ndarray | None, field: str, source: str,

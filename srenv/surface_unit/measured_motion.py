@@ -16,6 +16,7 @@ repeat its first sample one period later; if yours does, give ``surface.measured
 from __future__ import annotations
 
 import csv
+import io
 import math
 from dataclasses import dataclass
 from functools import lru_cache
@@ -23,8 +24,9 @@ from pathlib import Path
 
 import numpy as np
 
-from ..errors import ConfigError
-from .card_checks import check_card, check_period
+from ..errors import ConfigError, short_repr
+from ..input_files import read_regular
+from .card_checks import MAX_ABS_CARD_VALUE, MAX_CARD_BYTES, check_card, check_magnitude, check_period
 
 MIN_SAMPLES = 16
 
@@ -39,11 +41,12 @@ def read_card_csv(path: str | Path, field: str, required: tuple[str, ...],
         raise ConfigError(field, str(path), "a path to a CSV file")
     if not p.is_file():
         raise ConfigError(field, str(path), "an existing CSV file")
+    raw = read_regular(p, field, "CSV file", MAX_CARD_BYTES)  # a FIFO is refused, a huge file not read
     try:
-        with open(p, newline="") as fh:
-            rows = [r for r in csv.reader(fh) if r and any(c.strip() for c in r)]
-    except (OSError, UnicodeDecodeError) as exc:
-        raise ConfigError(field, str(path), f"a readable text CSV file ({type(exc).__name__})") from None
+        rows = [r for r in csv.reader(io.StringIO(raw.decode("utf-8"), newline="")) if r and any(c.strip() for c in r)]
+    except (UnicodeDecodeError, csv.Error) as exc:  # csv.Error: a field over csv's limit, a broken quote
+        raise ConfigError(field, str(path), f"a readable UTF-8 text CSV file ({type(exc).__name__}: "
+                          f"{short_repr(str(exc), 80)})") from None
     if not rows:
         raise ConfigError(field, str(path), "a CSV file with a header row and data rows (it is empty)")
     header = [c.strip() for c in rows[0]]
@@ -68,15 +71,16 @@ def read_card_csv(path: str | Path, field: str, required: tuple[str, ...],
                 cell = r[j] if j < len(r) else "<missing>"
                 raise ConfigError(field, str(path), f"a number in column {name} on data row {i + 1} "
                                   f"(found {cell!r})") from None
-        if not np.all(np.isfinite(col)):
-            i = int(np.argmax(~np.isfinite(col)))
-            raise ConfigError(field, str(path), f"finite numbers in column {name} (row {i + 1} is {col[i]})")
+        check_magnitude(col, field, str(path), f"numbers in column {name}", "row",
+                        math.inf if name == "t_s" else MAX_ABS_CARD_VALUE)
         out[name] = col * units.get(name, 1.0)
-    if "t_s" in out and not np.all(np.diff(out["t_s"]) > 0):
-        i = int(np.argmax(np.diff(out["t_s"]) <= 0)) + 2
-        raise ConfigError(field, str(path), f"strictly increasing t_s (data row {i} does not advance)")
-    if "t_s" in out and "polished_rod_position_m" in out:
-        check_period(stroke_period_s(out["t_s"], out["polished_rod_position_m"]), field, str(path))
+    with np.errstate(over="ignore", invalid="ignore"):  # times of 1e308: inf steps and periods, refused below
+        steps = np.diff(out["t_s"]) if "t_s" in out else None
+        if steps is not None and not np.all(steps > 0):
+            i = int(np.argmax(steps <= 0)) + 2
+            raise ConfigError(field, str(path), f"strictly increasing t_s (data row {i} does not advance)")
+        if "t_s" in out and "polished_rod_position_m" in out:
+            check_period(stroke_period_s(out["t_s"], out["polished_rod_position_m"]), field, str(path))
     if "polished_rod_position_m" in out:
         x, f = check_card(out["polished_rod_position_m"], out.get("polished_rod_load_n"), field, str(path), reverse)
         out["polished_rod_position_m"] = x

@@ -21,12 +21,12 @@ from ..declarations import MAX_SWEEP_WORKERS as MAX_WORKERS  # noqa: F401
 def _label_list(text: str) -> tuple[str, ...]:
     from ..physics.conditions import LABELS
 
-    names = tuple(x.strip() for x in text.split(",") if x.strip())
+    names = tuple(x.strip() for x in text.split(","))
     bad = [x for x in names if x not in LABELS]
-    if bad or not names:
-        raise argparse.ArgumentTypeError(f"--conditions = {text!r}: expected a comma-separated list of "
-                                         f"{', '.join(LABELS)}")
-    return tuple(dict.fromkeys(names))
+    if bad or len(set(names)) != len(names):  # an empty item (a stray comma) or a label given twice too
+        raise argparse.ArgumentTypeError(f"--conditions = {text[:200]!r}: expected a comma-separated list of "
+                                         f"distinct labels among {', '.join(LABELS)}")
+    return names
 
 
 def add_parser(sub) -> None:
@@ -53,8 +53,12 @@ def add_parser(sub) -> None:
     c.set_defaults(func=main)
 
 
+OUT_FILES = ("cards.npz", "dataset_card.json")
+
+
 def check_out_dir(path: str) -> Path:
     from ..errors import ConfigError
+    from ..outputs import check_writable
 
     p = Path(path)
     if p.is_symlink():
@@ -64,9 +68,12 @@ def check_out_dir(path: str) -> Path:
     parent = p.parent if str(p.parent) else Path(".")
     if not parent.is_dir():
         raise ConfigError("--out", path, "a path in an existing directory")
-    for name in ("cards.npz", "dataset_card.json"):
+    for name in OUT_FILES:
         if (p / name).is_symlink():
             raise ConfigError("--out", str(p / name), "a regular file, not a symbolic link")
+        if (p / name).is_dir():
+            raise ConfigError("--out", str(p / name), "a file path for this output (it is a directory)")
+    check_writable("--out", path, p if p.is_dir() else parent)  # before the simulation, not after it
     return p
 
 
@@ -132,7 +139,7 @@ def dataset_card(cols: dict, seed: int, labels: tuple[str, ...], surface: str = 
 
 
 def main(args: argparse.Namespace) -> int:
-    from ..outputs import atomic_write
+    from ..outputs import atomic_write_all
     from ..physics.conditions import LABELS
     from ..task.card_set import columns, write_npz
 
@@ -145,10 +152,16 @@ def main(args: argparse.Namespace) -> int:
     cards = simulate_set(args.n, args.seed, labels, min(workers, args.n), not args.no_progress, surface, equipment,
                          plungers)
     cols = columns(cards)
-    out.mkdir(exist_ok=True)
-    atomic_write(out / "cards.npz", lambda tmp: write_npz(tmp, cols))
     meta = dataset_card(cols, args.seed, labels, surface, equipment, plungers)
-    atomic_write(out / "dataset_card.json",
-                 lambda tmp: Path(tmp).write_text(json.dumps(meta, indent=1, sort_keys=True) + "\n"))
+    created = not out.exists()
+    out.mkdir(exist_ok=True)
+    try:  # both files or neither (and no directory of ours left empty)
+        atomic_write_all([(out / "cards.npz", lambda tmp: write_npz(tmp, cols)),
+                          (out / "dataset_card.json",
+                           lambda tmp: Path(tmp).write_text(json.dumps(meta, indent=1, sort_keys=True) + "\n"))])
+    except BaseException:
+        if created and not any(out.iterdir()):
+            out.rmdir()
+        raise
     print(json.dumps({"out": str(out), "n_cards": meta["n_cards"], "splits": meta["splits"]}))
     return 0

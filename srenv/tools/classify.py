@@ -35,6 +35,7 @@ from __future__ import annotations
 
 import argparse
 import csv
+import io
 import json
 import sys
 from pathlib import Path
@@ -42,9 +43,10 @@ from pathlib import Path
 import numpy as np
 
 from ..analysis.card_shape import CARD_TYPES
-from ..errors import ConfigError
+from ..errors import ConfigError, short_repr
+from ..input_files import read_regular
+from ..surface_unit.card_checks import MAX_CARD_BYTES, check_magnitude
 
-MAX_CARD_BYTES = 64 * 1024 * 1024
 MAX_FILES = 100_000
 POS, LOAD = "polished_rod_position_m", "polished_rod_load_n"
 BOTTOM_BAND = 0.02  # share of the stroke: samples this close to the lowest position are at the bottom
@@ -104,11 +106,11 @@ def read_card(path: Path, si: bool = False) -> tuple[np.ndarray, np.ndarray]:
         raise _bad(path, "a regular CSV file")
     if path.stat().st_size > MAX_CARD_BYTES:
         raise _bad(path, f"a card file under {MAX_CARD_BYTES // 2**20} MiB")
+    raw = read_regular(path, "card", "CSV file", MAX_CARD_BYTES)
     try:
-        with open(path, newline="", encoding="utf-8") as fh:
-            rows = [r for r in csv.reader(fh) if r and any(c.strip() for c in r)]
-    except (OSError, UnicodeDecodeError, csv.Error) as exc:
-        raise _bad(path, f"a readable UTF-8 CSV ({exc.__class__.__name__})") from None
+        rows = [r for r in csv.reader(io.StringIO(raw.decode("utf-8"), newline="")) if r and any(c.strip() for c in r)]
+    except (UnicodeDecodeError, csv.Error) as exc:
+        raise _bad(path, f"a readable UTF-8 CSV ({exc.__class__.__name__}: {short_repr(str(exc), 80)})") from None
     if not rows:
         raise _bad(path, f"a CSV with columns {POS},{LOAD} (the file is empty)")
     head = [c.strip() for c in rows[0]]
@@ -123,6 +125,7 @@ def read_card(path: Path, si: bool = False) -> tuple[np.ndarray, np.ndarray]:
         raise _bad(path, "numbers in every row below the header") from None
     if data.ndim != 2 or len(data) == 0:
         raise _bad(path, "rows of equal length with numbers")
+    check_magnitude(data.ravel(), "card", str(path), "numbers", "value")  # before any arithmetic on the card
     if si and (names is None or POS not in names or LOAD not in names):
         got = ",".join(names) if names is not None else "no header"
         raise _bad(path, f"with --config a header naming {POS} and {LOAD} (SI: the loads are read in N against the "

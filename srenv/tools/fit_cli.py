@@ -13,11 +13,10 @@ import os
 
 import yaml
 
-from ..analysis.fit import DEFAULT_STROKES, CardFit, fit_card, inert_params
+from ..analysis.fit import DEFAULT_STROKES, CardFit, fit_card, refuse_inert
 from ..cli_types import card_command
 from ..config import apply_overrides, check_run_samples, config_from_dict, steps_per_stroke
 from ..declarations import OUTPUTS, add_number
-from ..errors import ConfigError
 from ..outputs import atomic_write, check_outputs, json_line
 
 
@@ -39,10 +38,7 @@ def cmd_fit(args: argparse.Namespace) -> int:
     fit = CardFit(args.card, args.config, list(args.param), list(args.set or []), strokes=args.strokes)
     # each evaluation simulates --strokes strokes at the card's own period, not at surface.spm
     check_run_samples(fit.strokes * steps_per_stroke(fit.base, 60.0 / fit.period), "--strokes", args.strokes)
-    inert = inert_params(fit)
-    if inert:
-        raise ConfigError("--param", " ".join(inert), "config fields that change the simulated card (a 1 % change "
-                          "of these leaves it identical, so the card cannot determine them)")
+    refuse_inert(fit)
     result = fit_card(fit, max_evaluations=args.max_evaluations)
     result["out"] = os.fspath(args.out)
     line = json_line(result)

@@ -145,7 +145,7 @@ def run_ray(cases: list[Case], duration_s: float, settle_fraction: float, worker
         quiet = {"include_dashboard": False, "log_to_driver": False, "logging_level": logging.ERROR}
         try:
             ray.init(address=address, **quiet)
-        except ConnectionError as exc:
+        except (ConnectionError, ValueError) as exc:  # ValueError: not an address at all ("garbage")
             raise ConfigError("--address", address, f"the address of a running Ray cluster ({exc})") from None
         started = True
     if timings is not None:

@@ -203,7 +203,7 @@ def _simulate_motor(cfg: dict, card, rec, strokes: int, work_dir: str, block: di
 
 
 def _fit(cfg_dict: dict, rec, params: list[str], strokes: int, work_dir: str) -> dict:
-    from ..analysis.fit import CardFit, fit_card
+    from ..analysis.fit import CardFit, fit_card, refuse_inert
 
     cfg_path = os.path.join(work_dir, "well.yaml")
     card_path = os.path.join(work_dir, "card.csv")
@@ -211,8 +211,9 @@ def _fit(cfg_dict: dict, rec, params: list[str], strokes: int, work_dir: str) ->
         yaml.safe_dump(cfg_dict, fh, sort_keys=False)
     np.savetxt(card_path, np.c_[rec.t_s, rec.position_m, rec.load_n], delimiter=",", comments="", fmt="%.12g",
                header="t_s,polished_rod_position_m,polished_rod_load_n")
-    result = fit_card(CardFit(card_path, cfg_path, params, strokes=strokes))
-    return result
+    fit = CardFit(card_path, cfg_path, params, strokes=strokes, flag="--fit")
+    refuse_inert(fit)
+    return fit_card(fit)
 
 
 def compare(rec, sim, result, pump_card, convention: str) -> dict:
