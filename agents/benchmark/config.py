@@ -11,7 +11,8 @@ import copy
 from pathlib import Path
 from typing import Any
 
-from srenv.safe_yaml import load_yaml_file
+from srenv.errors import short_repr
+from srenv.safe_yaml import load_yaml_file, yaml_kind
 from srenv.shipped import shipped_dir
 
 from ..envs import ENV_ID_V1
@@ -44,14 +45,34 @@ def _seeds(value: Any, key: str) -> list[int]:
     return seeds(value, key)
 
 
+# The top-level keys of a benchmark YAML, the one declaration (anything else is refused by name, before the
+# blocks are checked): the env, the splits, the contenders, and the pipeline's settings.
+TOP_KEYS = ("env_id", "env_kwargs", "workers", "tuning", "validation", "test", "figure_episode", "history",
+            "baselines", "agents", "guarded", "evaluate_only", "quick", "work_dir")
+
+
+def _check_keys(block: Any, where: str, allowed: tuple[str, ...]) -> dict:
+    """``block`` is a mapping whose keys are all in ``allowed``: else one line naming the unknown keys (or the
+    value and its type) and listing the allowed ones."""
+    if not isinstance(block, dict):
+        raise BenchmarkConfigError(f"{where} = {short_repr(block, 80)} ({yaml_kind(block)}): expected a mapping of "
+                                   f"the keys {', '.join(allowed)}")
+    unknown = sorted(map(str, set(block) - set(allowed)))
+    if unknown:
+        raise BenchmarkConfigError(f"{where}: unknown key(s) {short_repr(unknown, 120)}: expected only "
+                                   f"{', '.join(allowed)}")
+    return block
+
+
 def load_benchmark_config(path: str | Path, quick: bool = False) -> dict[str, Any]:
     """Read and check a benchmark YAML (``quick``: merge its ``quick:`` block); the resolved dict."""
     p = Path(path)
     if not p.is_file():
         raise FileNotFoundError(f"benchmark config {path}: no such file")
     raw = load_yaml_file(p, "benchmark config")  # bounded: alias bombs, duplicate keys, syntax in one line
-    if not isinstance(raw, dict):
-        raise BenchmarkConfigError(f"benchmark config {path}: expected a mapping")
+    _check_keys(raw, f"benchmark config {path}", TOP_KEYS)
+    if raw.get("quick") is not None:  # the blocks --quick replaces: any top-level key but quick itself
+        _check_keys(raw["quick"], f"benchmark config {path}: quick", tuple(k for k in TOP_KEYS if k != "quick"))
     cfg = _deep_merge(raw, raw.get("quick") or {}) if quick else copy.deepcopy(raw)
     cfg.pop("quick", None)
     cfg["source"] = str(path)
@@ -120,7 +141,8 @@ def _check_splits(cfg: dict[str, Any]) -> dict[str, set[int]]:
     """The tuning, validation and test seeds, resolved in ``cfg`` and checked disjoint; their sets."""
     for part in ("tuning", "test"):
         if not isinstance(cfg.get(part), dict) or "seeds" not in cfg[part]:
-            raise BenchmarkConfigError(f"benchmark config: {part}: expected a mapping with seeds")
+            found = "missing" if part not in cfg else f"= {short_repr(cfg[part], 80)} ({yaml_kind(cfg[part])})"
+            raise BenchmarkConfigError(f"benchmark config: {part} {found}: expected a mapping with seeds")
         cfg[part]["seeds"] = _seeds(cfg[part]["seeds"], f"{part}.seeds")
     cfg["tuning"].setdefault("scenario", "train")
     refuse_test_split(cfg["tuning"]["scenario"], "tune")
