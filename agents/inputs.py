@@ -243,7 +243,10 @@ def checkpoint_progress(record: Any, path: str | Path) -> tuple[int, int]:
 def check_output_dir(out: Path, names: tuple[str, ...], flag: str = "--out-dir") -> None:
     """The files a command will write under ``out`` (given by ``flag``), checked before any work: ``out`` a
     directory (or absent, under a directory), no file a directory or a symbolic link (outputs never write
-    through nor replace a link)."""
+    through nor replace a link). The one check of every agents command's output folder (train, quickstart,
+    benchmark, its --evaluate-only), made before any file is read for the work."""
+    if out.is_symlink():
+        raise ConfigError(flag, str(out), "a directory path that is not a symbolic link (name the target itself)")
     if out.exists() and not out.is_dir():
         raise ConfigError(flag, str(out), "a directory (this is a file)")
     if not out.exists() and any(p.exists() and not p.is_dir() for p in out.parents):
@@ -256,6 +259,8 @@ def check_output_dir(out: Path, names: tuple[str, ...], flag: str = "--out-dir")
                               "written through a link nor replaces one)")
         if p.is_dir():
             raise ConfigError(flag, str(p), "a file path for this output (it is a directory)")
+        if p.exists() and not p.is_file():
+            raise ConfigError(flag, str(p), "a regular file path for this output (this is a special file)")
 
 
 def policy_json(meta: Any, path: str | Path) -> dict[str, Any]:

@@ -108,6 +108,16 @@ def _yaml_load(stream: Any) -> Any:
 
 
 
+_KINDS = ((bool, "a boolean"), (int, "an integer"), (float, "a number"), (str, "a string"), (dict, "a mapping"),
+          (list, "a list"), (type(None), "null"))
+
+
+def yaml_kind(value: Any) -> str:
+    """What a YAML value is, in a message's words ("a list", "a mapping", "null", ...): for refusals that name
+    the type found beside the type expected."""
+    return next((name for cls, name in _KINDS if isinstance(value, cls)), f"a {type(value).__name__}")
+
+
 def _yaml_problem(exc: yaml.YAMLError) -> str:
     """One line locating a YAML error: 'line L column C: problem' (the full text spans several lines)."""
     mark = getattr(exc, "problem_mark", None)

@@ -69,6 +69,104 @@ def test_bad_benchmark_yaml_is_one_line_exit_2(text: str, needle: str, tmp_path:
     assert not (tmp_path / "o").exists()
 
 
+# the file's own top level: unknown keys named (with the allowed ones, agents.benchmark.config.TOP_KEYS) before any
+# missing block is, the quick block a mapping of top-level blocks, the document a mapping
+BENCH_KEY_CASES = [("unknown-key", "v1_quick", "bogus_key: 1\n", [], "unknown key(s) ['bogus_key']"),
+                   ("unknown-before-missing", None, "bogus: 1\n", [], "unknown key(s) ['bogus']"),
+                   ("quick-list", "v1", "quick: [1]\n", ["--quick"], "quick = [1] (a list): expected a mapping"),
+                   ("quick-unknown", "v1", "quick: {bogus: 1}\n", ["--quick"], "quick: unknown key(s) ['bogus']"),
+                   ("document-list", None, "- 1\n", [], "= [1] (a list): expected a mapping"),
+                   ("block-list", None, "tuning: [1]\n", [], "tuning = [1] (a list)"),
+                   ("block-missing", None, "workers: 2\n", [], "tuning missing"),
+                   ("baselines-list", "v1_quick", "baselines: [pump_off]\n", [], "baselines = ['pump_off'] (a list)"),
+                   ("validation-list", "v1_quick", "validation: [1]\n", [], "validation = [1] (a list)"),
+                   ("workers-bool", "v1_quick", "workers: true\n", [], "workers = True (a boolean)"),
+                   ("agents-unknown", "v1_quick", "agents: {runs: {}, bogus: 1}\n", [], "agents: unknown key(s) ['bogus']"),
+                   ("quick-agents-unknown", "v1", "quick: {agents: {bogus: 1}}\n", ["--quick"],
+                    "quick.agents: unknown key(s) ['bogus']"),
+                   ("evaluate-only-unknown", "v1_quick", "evaluate_only: {agent: [ppo]}\n", [],
+                    "evaluate_only: unknown key(s) ['agent']"),
+                   ("evaluate-only-agents", "v1_quick", "evaluate_only: {agents: ppo}\n", [],
+                    "evaluate_only: agents = 'ppo' (a string)")]
+
+
+@pytest.mark.parametrize(("base", "text", "flags", "needle"),
+                         [pytest.param(b, t, f, n, id=i) for i, b, t, f, n in BENCH_KEY_CASES])
+def test_a_benchmark_yamls_top_level_is_named_before_any_work(base: str | None, text: str, flags: list[str],
+                                                              needle: str, tmp_path: Path,
+                                                              capsys: pytest.CaptureFixture,
+                                                              monkeypatch: pytest.MonkeyPatch) -> None:
+    """Before: an unknown top-level key was accepted silently (the run went on without it), one in a file with
+    no tuning block was refused as 'tuning: expected a mapping with seeds', and quick: [1] was a traceback."""
+    import yaml
+
+    from agents.benchmark import run
+    from agents.benchmark.config import TOP_KEYS
+
+    def work(*_a: Any, **_k: Any) -> None:
+        raise AssertionError("the benchmark started")
+    monkeypatch.setattr(run, "tune_baselines", work)
+    root = Path(__file__).resolve().parents[1]
+    doc = yaml.safe_load(text)  # the case's blocks over the shipped config's (or alone)
+    if base:
+        doc = {**yaml.safe_load((root / "configs" / "benchmark" / f"{base}.yaml").read_text()), **doc}
+    (tmp_path / "b.yaml").write_text(yaml.safe_dump(doc))
+    rc, err = run_agents(["benchmark", str(tmp_path / "b.yaml"), *flags, "--out-dir", str(tmp_path / "o")], capsys)
+    line = one_line(rc, err, needle)
+    if needle.startswith("unknown"):  # the allowed top-level keys are listed
+        assert all(k in line for k in TOP_KEYS)
+    assert sorted(os.listdir(tmp_path)) == ["b.yaml"]
+
+
+def test_every_shipped_benchmark_config_uses_only_the_declared_top_level_keys() -> None:
+    from agents.benchmark.config import TOP_KEYS, load_benchmark_config
+
+    root = Path(__file__).resolve().parents[1]
+    for path in sorted((root / "configs" / "benchmark").glob("*.yaml")):
+        text = path.read_text()
+        if "designs:" in text:  # the model-based designs' pre-registrations: read by scripts/, not a benchmark
+            continue
+        for quick in (False, True):
+            cfg = load_benchmark_config(path, quick=quick)
+            assert set(cfg) - {"source"} <= set(TOP_KEYS), path
+
+
+# a training YAML in rl-zoo3's layout (keyed by env id, configs/train/zoo_ppo.yml) or not a mapping at all
+ZOO_CASES = [("list", {"srenv/SuckerRod-v0": [1, 2]}, "srenv/SuckerRod-v0 = [1, 2] (a list)", "a mapping of hyperparameters"),
+             ("integer", {"srenv/SuckerRod-v1": 3}, "srenv/SuckerRod-v1 = 3 (an integer)", "a mapping of hyperparameters"),
+             ("null", {"srenv/SuckerRod-v0": None}, "srenv/SuckerRod-v0 = None (null)", "a mapping of hyperparameters"),
+             ("mapping", {"srenv/SuckerRod-v2": {"n_steps": 256}}, "srenv/SuckerRod-v2 = {'n_steps': 256} (a mapping)",
+              "the flat layout"),
+             ("document-list", [1, 2], "= [1, 2] (a list)", "a mapping of hyperparameters")]
+
+
+@pytest.mark.parametrize("backend", ["sb3", "rllib"])
+@pytest.mark.parametrize(("data", "found", "expected"), [pytest.param(d, f, e, id=i) for i, d, f, e in ZOO_CASES])
+def test_a_zoo_layout_training_yaml_names_the_env_id_its_value_and_type(data: Any, found: str, expected: str,
+                                                                       backend: str, tmp_path: Path,
+                                                                       capsys: pytest.CaptureFixture) -> None:
+    """Before: 'train config: algo = None: expected one of ppo, ...' whatever stood under the env id (with
+    backend: rllib, the env id as an unknown key, without its type)."""
+    import yaml
+
+    if backend == "rllib" and isinstance(data, dict):
+        data = {"backend": "rllib", **data}
+    (tmp_path / "zoo.yml").write_text(yaml.safe_dump(data))
+    rc, err = run_agents(["train", str(tmp_path / "zoo.yml"), "--out", str(tmp_path / "o")], capsys)
+    one_line(rc, err, str(tmp_path / "zoo.yml"), found, f"expected {expected}")
+    if isinstance(data, dict):
+        one_line(rc, err, "rl_zoo3.train", "flat layout")
+    assert sorted(os.listdir(tmp_path)) == ["zoo.yml"]
+
+
+def test_the_shipped_zoo_file_is_named_as_rl_zoo3s_layout(tmp_path: Path, capsys: pytest.CaptureFixture) -> None:
+    root = Path(__file__).resolve().parents[1]
+    rc, err = run_agents(["train", str(root / "configs" / "train" / "zoo_ppo.yml"), "--out", str(tmp_path / "o")],
+                         capsys)
+    one_line(rc, err, "srenv/SuckerRod-v0 = {", "(a mapping): expected the flat layout", "rl_zoo3.train")
+    assert not (tmp_path / "o").exists()
+
+
 def _each_episode(rep: dict, key: str, value: Any) -> None:
     for p in rep["policies"].values():
         for e in p.get("episodes", []):

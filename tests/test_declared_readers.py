@@ -203,39 +203,57 @@ def test_evaluate_env_kwargs_name_the_flag(capsys: pytest.CaptureFixture) -> Non
 
 # ------------------------------------------------------------------------ outputs checked before any work
 def _no_work(monkeypatch: pytest.MonkeyPatch) -> None:
-    """Any work (a card simulated, a benchmark run, a training) fails the test."""
+    """Any work (a card simulated, a benchmark run, a training) or any reading for it (the benchmark config and
+    its training YAMLs, a shipped report and its models) fails the test."""
     def work(*_a: Any, **_k: Any) -> None:
         raise AssertionError("work started before the outputs were checked")
+    import agents.benchmark.config as bench_config
     import agents.training.sb3.train as sb3_train
-    from agents.benchmark import run
+    from agents.benchmark import fresh, run, shipped_quickstart
     from srenv.tools import cards
 
     monkeypatch.setattr(cards, "simulate_set", work)
     monkeypatch.setattr(run, "tune_baselines", work)
     monkeypatch.setattr(sb3_train, "train", work)
+    for module in (bench_config, run):
+        monkeypatch.setattr(module, "load_benchmark_config", work)
+    for module in (fresh, shipped_quickstart):
+        monkeypatch.setattr(module, "load_report", work)
 
 
 OUT_CASES = [("train", ["train", "configs/train/ppo_quick.yaml", "--out"], "--out"),
              ("quickstart-train", ["quickstart", "--train", "--out"], "--out"),
+             ("quickstart-shipped", ["quickstart", "--out"], "--out"),
+             ("benchmark", ["benchmark", "configs/benchmark/v1_quick.yaml", "--out-dir"], "--out-dir"),
+             ("benchmark-evaluate-only", ["benchmark", "configs/benchmark/v2.yaml", "--evaluate-only", "--fresh-seed",
+                                          "1", "--episodes", "1", "--out-dir"], "--out-dir"),
              ("cards", ["cards", "--n", "1", "--out"], "--out")]
 
 
-@pytest.mark.parametrize("where", ["file", "under-file", "unwritable"])
+@pytest.mark.parametrize("where", ["file", "under-file", "unwritable", "link-to-file", "link-to-dir"])
 @pytest.mark.parametrize(("argv", "flag"), [pytest.param(a, f, id=i) for i, a, f in OUT_CASES])
 def test_an_output_directory_that_cannot_be_made_is_refused_before_any_work(
         argv: list[str], flag: str, where: str, tmp_path: Path, capsys: pytest.CaptureFixture,
         monkeypatch: pytest.MonkeyPatch) -> None:
     """Before: train --out FILE a FileExistsError traceback after building the envs; quickstart --train a notice
-    line, minutes of tuning, then the error; cards --out /proc/x a traceback after the simulation."""
+    line, minutes of tuning, then the error; cards --out /proc/x a traceback after the simulation; benchmark
+    --evaluate-only --out-dir FILE refused only after the config, the report and its models were read (~7 s),
+    quickstart --train and benchmark --out-dir after the config and its training YAMLs."""
     root = Path(__file__).resolve().parents[1]
     monkeypatch.chdir(root)
     _no_work(monkeypatch)
     (tmp_path / "f.txt").write_text("keep")
-    out = {"file": tmp_path / "f.txt", "under-file": tmp_path / "f.txt" / "x", "unwritable": Path("/proc/srenv_x")}
+    (tmp_path / "d").mkdir()
+    os.symlink(tmp_path / "f.txt", tmp_path / "link_f")
+    os.symlink(tmp_path / "d", tmp_path / "link_d")
+    before = set(os.listdir(tmp_path))
+    out = {"file": tmp_path / "f.txt", "under-file": tmp_path / "f.txt" / "x", "unwritable": Path("/proc/srenv_x"),
+           "link-to-file": tmp_path / "link_f", "link-to-dir": tmp_path / "link_d"}[where]
     run = run_srenv if argv[0] == "cards" else run_agents
-    rc, err = run([*argv, str(out[where])], capsys)
-    one_line(rc, err, flag, str(out[where]))
-    assert (tmp_path / "f.txt").read_text() == "keep" and sorted(os.listdir(tmp_path)) == ["f.txt"]
+    rc, err = run([*argv, str(out)], capsys)
+    one_line(rc, err, flag, str(out))
+    assert (tmp_path / "f.txt").read_text() == "keep" and os.listdir(tmp_path / "d") == []
+    nothing_left(tmp_path, before)
 
 
 # ------------------------------------------------------------------------------------------ flags

@@ -11,7 +11,8 @@ import copy
 from pathlib import Path
 from typing import Any
 
-from srenv.safe_yaml import load_yaml_file
+from srenv.errors import short_repr
+from srenv.safe_yaml import load_yaml_file, yaml_kind
 from srenv.shipped import shipped_dir
 
 from ..envs import ENV_ID_V1
@@ -44,14 +45,66 @@ def _seeds(value: Any, key: str) -> list[int]:
     return seeds(value, key)
 
 
+# The top-level keys of a benchmark YAML, the one declaration (anything else is refused by name, before the
+# blocks are checked), each with the YAML types it takes and what that is: the env, the splits, the contenders,
+# and the pipeline's settings. Each block's contents are checked below.
+Declared = dict[str, tuple[tuple[type, ...], str]]  # key -> (the YAML types it takes, what that is)
+_NULL = type(None)
+TOP_KEYS: Declared = {
+    "env_id": ((str,), "an srenv env id (srenv/SuckerRod-v1 or srenv/SuckerRod-v2)"),
+    "env_kwargs": ((dict,), "a mapping of the env's keywords"),
+    "workers": ((int, float), "a positive integer (worker processes; bounded in agents/inputs.py)"),
+    "tuning": ((dict,), "a mapping with seeds"),
+    "validation": ((dict,), "a mapping with seeds"),
+    "test": ((dict,), "a mapping with seeds"),
+    "figure_episode": ((int,), "an integer (the test episode of the report's figure)"),
+    "history": ((list,), "a list of strings (one line per earlier test evaluation)"),
+    "baselines": ((dict,), "a mapping baseline -> its search"),
+    "agents": ((dict,), "a mapping {selection, runs}"),
+    "guarded": ((dict, _NULL), "a mapping {fallback, scale, guard}"),
+    "evaluate_only": ((dict, _NULL), "a mapping {agents, alarm_params, references}"),
+    "quick": ((dict, _NULL), "a mapping of the top-level blocks --quick replaces"),
+    "work_dir": ((str, _NULL), "a directory path (the runs' temporary files)"),
+}
+QUICK_KEYS = {k: v for k, v in TOP_KEYS.items() if k != "quick"}
+AGENTS_KEYS: Declared = {"selection": ((str,), "mean or best_on_validation"), "runs": ((dict,), "a mapping algo -> run")}
+EVALUATE_ONLY_KEYS: Declared = {
+    "agents": ((list,), "a list of the shipped report's agent names"),
+    "alarm_params": ((dict, _NULL), "a mapping of alarm_pump_off's parameters"),
+    "references": ((dict, _NULL), "a mapping causal_oracle / oracle -> parameters or null"),
+}
+
+
+def _check_keys(block: Any, where: str, declared: Declared) -> dict:
+    """``block`` is a mapping whose keys are all ``declared``, each value of its declared type: else one line
+    naming the unknown keys (listing the declared ones), or the key, the value and the type found."""
+    if not isinstance(block, dict):
+        raise BenchmarkConfigError(f"{where} = {short_repr(block, 80)} ({yaml_kind(block)}): expected a mapping of "
+                                   f"the keys {', '.join(declared)}")
+    unknown = sorted(map(str, set(block) - set(declared)))
+    if unknown:
+        raise BenchmarkConfigError(f"{where}: unknown key(s) {short_repr(unknown, 120)}: expected only "
+                                   f"{', '.join(declared)}")
+    for key, value in block.items():
+        types, what = declared[key]
+        if not isinstance(value, types) or (isinstance(value, bool) and bool not in types):
+            raise BenchmarkConfigError(f"{where}: {key} = {short_repr(value, 80)} ({yaml_kind(value)}): "
+                                       f"expected {what}")
+    return block
+
+
 def load_benchmark_config(path: str | Path, quick: bool = False) -> dict[str, Any]:
     """Read and check a benchmark YAML (``quick``: merge its ``quick:`` block); the resolved dict."""
     p = Path(path)
     if not p.is_file():
         raise FileNotFoundError(f"benchmark config {path}: no such file")
     raw = load_yaml_file(p, "benchmark config")  # bounded: alias bombs, duplicate keys, syntax in one line
-    if not isinstance(raw, dict):
-        raise BenchmarkConfigError(f"benchmark config {path}: expected a mapping")
+    _check_keys(raw, f"benchmark config {path}", TOP_KEYS)
+    for name, declared in (("quick", QUICK_KEYS), ("agents", AGENTS_KEYS), ("evaluate_only", EVALUATE_ONLY_KEYS)):
+        if raw.get(name) is not None:
+            _check_keys(raw[name], f"benchmark config {path}: {name}", declared)
+        if name != "quick" and (raw.get("quick") or {}).get(name) is not None:
+            _check_keys(raw["quick"][name], f"benchmark config {path}: quick.{name}", declared)
     cfg = _deep_merge(raw, raw.get("quick") or {}) if quick else copy.deepcopy(raw)
     cfg.pop("quick", None)
     cfg["source"] = str(path)
@@ -120,7 +173,8 @@ def _check_splits(cfg: dict[str, Any]) -> dict[str, set[int]]:
     """The tuning, validation and test seeds, resolved in ``cfg`` and checked disjoint; their sets."""
     for part in ("tuning", "test"):
         if not isinstance(cfg.get(part), dict) or "seeds" not in cfg[part]:
-            raise BenchmarkConfigError(f"benchmark config: {part}: expected a mapping with seeds")
+            found = "missing" if part not in cfg else f"= {short_repr(cfg[part], 80)} ({yaml_kind(cfg[part])})"
+            raise BenchmarkConfigError(f"benchmark config: {part} {found}: expected a mapping with seeds")
         cfg[part]["seeds"] = _seeds(cfg[part]["seeds"], f"{part}.seeds")
     cfg["tuning"].setdefault("scenario", "train")
     refuse_test_split(cfg["tuning"]["scenario"], "tune")

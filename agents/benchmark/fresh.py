@@ -35,10 +35,12 @@ from ..envs import ENV_ID_V1, env_tag
 from ..evaluation.replay import ReplayError, load_report, policy_specs
 from ..evaluation.rollout import Runner, _cached_env, run_episode
 from ..evaluation.v1_view import build_policy_any
+from ..inputs import check_output_dir
 from .report import _atomic_write, _json_clean, build_report, markdown_tables, verdict
 
 SHIPPED_BASELINES = ("installed", "best_constant", "pump_off", "fillage_pi")
 DEFAULT_AGENTS = ("ppo_residual_distilled_ensemble",)
+OUT_FILES = ("benchmark.json", "benchmark.md")  # what evaluate_fresh writes in --out-dir
 
 
 def fresh_wells(fresh_seed: int, n: int) -> list[int]:
@@ -97,23 +99,6 @@ def _specs(cfg: dict[str, Any], rep: dict[str, Any], root: Path) -> dict[str, li
     return specs
 
 
-def check_out_dir(flag: str, out: Path, names: tuple[str, ...]) -> None:
-    """The output folder and its files, checked before any work (created when missing)."""
-    from srenv.errors import ConfigError
-    from srenv.outputs import check_output_path
-
-    if out.is_symlink():
-        raise ConfigError(flag, str(out), "a directory that is not a symlink")
-    try:
-        out.mkdir(parents=True, exist_ok=True)
-    except OSError as exc:
-        raise ConfigError(flag, str(out), f"a directory that can be created ({exc.strerror or exc})") from None
-    for name in names:
-        if (out / name).is_symlink():
-            raise ConfigError(flag, str(out / name), "a path that is not a symlink")
-        check_output_path(flag, str(out / name), (Path(name).suffix,))
-
-
 def evaluate_fresh(config: str, fresh_seed: int, episodes: int, out_dir: str | Path,
                    workers: int | None = None, report: str | Path | None = None) -> dict[str, Any]:
     """``report``: the benchmark report whose tuned baselines and agents are played (``--report``; its models
@@ -121,13 +106,13 @@ def evaluate_fresh(config: str, fresh_seed: int, episodes: int, out_dir: str | P
     from .config import load_benchmark_config
 
     t0 = time.perf_counter()
+    check_output_dir(Path(out_dir), OUT_FILES, "--out-dir")  # first: before the config, report and models are read
     cfg = load_benchmark_config(config)
     path = Path(report) if report is not None else default_report(cfg)
-    rep = load_report(path)  # data only (JSON, schema and fields checked), before the output folder is made
+    rep = load_report(path)  # data only (JSON, schema and fields checked)
     if rep["env_id"] not in (cfg["env_id"], ENV_ID_V1):
         raise ReplayError(f"--report {path}: env_id = {rep['env_id']!r}, expected {cfg['env_id']!r} (the config's) "
                           f"or {ENV_ID_V1!r} (v1 agents on v1's part of the observation)")
-    check_out_dir("--out-dir", Path(out_dir), ("benchmark.json", "benchmark.md"))
     specs = _specs(cfg, rep, path.resolve().parent)
     wells = fresh_wells(fresh_seed, episodes)
     jobs, owner = [], []

@@ -131,6 +131,8 @@ def _interval_s(env_id: str, kwargs: dict[str, Any], seed: int) -> float:
 
 def benchmark_main(config: str, quick: bool = False, out_dir: str | None = None) -> dict[str, Any]:
     """``python -m agents benchmark``: the whole protocol; prints the table and returns the JSON summary."""
+    if out_dir is not None:  # first: before the config and its training YAMLs are read (run_benchmark checks again)
+        check_output_dir(Path(out_dir), REPORT_FILES)
     cfg = load_benchmark_config(config, quick=quick)
     # the shipped run (no --out-dir): its report where the env version's shipped report lives (docs/ for v1,
     # docs/v2/ for v2: one version's run never overwrites another's), its models in the repository's models/
@@ -153,8 +155,8 @@ def quickstart(config: str, out_dir: str, total_timesteps: int | None = None, ep
                first_seed: int | None = None) -> dict[str, Any]:
     """``python -m agents quickstart``: the benchmark on a small scale, its table and a one-line verdict on
     stdout; the long JSON goes to ``OUT/benchmark.json``."""
+    check_output_dir(Path(out_dir), REPORT_FILES, "--out")  # first: before the config is read, the notice, any work
     cfg = load_benchmark_config(config, quick=False)
-    check_output_dir(Path(out_dir), REPORT_FILES, "--out")  # before the notice below and any work
     if total_timesteps:
         for run in cfg["agents"]["runs"].values():
             run.setdefault("overrides", {})["n_timesteps"] = int(total_timesteps)

@@ -60,10 +60,11 @@ def quickstart_shipped(out_dir: str | Path, episodes: int = 3, agent: str | None
     """Run the shipped agent of env ``version`` and its tuned baselines on ``episodes`` test episodes; print the
     table and the verdicts."""
     from ..evaluation.shipped import shipped_report
-    from .fresh import _renormalise, check_out_dir
+    from ..inputs import check_output_dir
+    from .fresh import _renormalise
 
     t0 = time.perf_counter()
-    check_out_dir("--out", Path(out_dir), ("quickstart.json", "episode.png"))
+    check_output_dir(Path(out_dir), ("quickstart.json", "episode.png"), "--out")
     path = Path(report) if report else shipped_report(version)
     rep = load_report(path)
     root = path.resolve().parent

@@ -34,6 +34,7 @@ from pathlib import Path
 from typing import Any
 
 from srenv.errors import short_repr
+from srenv.safe_yaml import yaml_kind
 
 from ..envs import ENV_ID_V0
 from ..evaluation.model_io import algorithms
@@ -156,9 +157,32 @@ def vec_env_keys(data: dict, backend: str, env_id: str, env_kwargs: dict) -> tup
     return vec_env, vec_processes
 
 
+# rl-zoo3's hyperparameter files (configs/train/zoo_ppo.yml) are keyed by env id: a top-level key of that form
+_ENV_ID_KEY = re.compile(r"^(?:[\w.:-]+/)?[\w.:-]+-v\d+$")
+_FLAT = "python -m agents train reads the flat layout: algo, env_id, ... at the top level"
+_ZOO = "rl-zoo3's layout, read by python -m rl_zoo3.train -conf"
+
+
+def require_mapping(data: Any, source: str) -> dict:
+    """A training YAML (either backend) is a mapping at the top level, not in rl-zoo3's layout (a mapping under
+    each env id): otherwise one TrainConfigError line naming the file or the env id, the value and its type, and
+    what is expected."""
+    if not isinstance(data, dict):
+        raise TrainConfigError(f"train config {source} = {short_repr(data, 80)} ({yaml_kind(data)}): expected a "
+                               "mapping of hyperparameters (key: value lines)")
+    key = next((k for k in data if isinstance(k, str) and k not in _HARNESS_KEYS and _ENV_ID_KEY.match(k)), None)
+    if key is not None:
+        value = data[key]
+        expected = (f"the flat layout, not {_ZOO} ({_FLAT})" if isinstance(value, dict)
+                    else f"a mapping of hyperparameters under the env id ({_ZOO}; {_FLAT})")
+        raise TrainConfigError(f"train config {source}: {key[:80]} = {short_repr(value, 80)} ({yaml_kind(value)}): "
+                               f"expected {expected}")
+    return data
+
+
 def parse_train_config(data: Any, source: str = "<dict>") -> TrainConfig:
     """Validate a YAML mapping into a :class:`TrainConfig` (clear errors, no evaluation of strings)."""
-    _expect(isinstance(data, dict), source, type(data).__name__, "a mapping of hyperparameters")
+    require_mapping(data, source)
     _expect(data.get("backend", "sb3") == "sb3", "backend", data.get("backend"),
             "sb3 here (backend: rllib is read by agents.training.rllib.config)")
     algo = str(data.get("algo", "")).lower()

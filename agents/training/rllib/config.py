@@ -47,6 +47,7 @@ from ..config import (
     _yaml12_float,
     declared,
     read_train_yaml,
+    require_mapping,
     vec_env_keys,
 )
 
@@ -103,7 +104,7 @@ def _normalize(value: Any) -> dict[str, Any] | None:
 
 def parse_rllib_config(data: Any, source: str = "<dict>") -> RLlibTrainConfig:
     """Validate a YAML mapping into a :class:`RLlibTrainConfig` (one clear error naming the key)."""
-    _expect(isinstance(data, dict), source, type(data).__name__, "a mapping of hyperparameters")
+    require_mapping(data, source)
     unknown = sorted(set(data) - _HARNESS_KEYS)
     _expect(not unknown, unknown[0] if unknown else "", data.get(unknown[0]) if unknown else None,
             f"one of {sorted(_HARNESS_KEYS)} (algorithm arguments go under training:)")
