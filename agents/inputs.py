@@ -20,7 +20,7 @@ import numpy as np
 from srenv.declarations import Number
 from srenv.errors import ConfigError, short_repr
 from srenv.input_files import open_regular
-from srenv.outputs import check_writable
+from srenv.outputs import check_output_dir  # noqa: F401 - agents' callers import it from here
 
 # --------------------------------------------------------------------------- resource-derived bounds
 MAX_SEED = 2**32 - 1           # numpy's seed range
@@ -238,29 +238,6 @@ def checkpoint_progress(record: Any, path: str | Path) -> tuple[int, int]:
         raise ConfigError(f"{path}", short_repr(record, 80), "a JSON mapping with num_timesteps and iterations")
     return (field("checkpoint", "num_timesteps", record["num_timesteps"], f"{path}: "),
             field("checkpoint", "iterations", record["iterations"], f"{path}: "))
-
-
-def check_output_dir(out: Path, names: tuple[str, ...], flag: str = "--out-dir") -> None:
-    """The files a command will write under ``out`` (given by ``flag``), checked before any work: ``out`` a
-    directory (or absent, under a directory), no file a directory or a symbolic link (outputs never write
-    through nor replace a link). The one check of every agents command's output folder (train, quickstart,
-    benchmark, its --evaluate-only), made before any file is read for the work."""
-    if out.is_symlink():
-        raise ConfigError(flag, str(out), "a directory path that is not a symbolic link (name the target itself)")
-    if out.exists() and not out.is_dir():
-        raise ConfigError(flag, str(out), "a directory (this is a file)")
-    if not out.exists() and any(p.exists() and not p.is_dir() for p in out.parents):
-        raise ConfigError(flag, str(out), "a path under directories (a parent is a file)")
-    check_writable(flag, str(out), next(p for p in (out, *out.parents) if p.exists()))  # where it will be made
-    for name in names:
-        p = out / name
-        if p.is_symlink():
-            raise ConfigError(flag, str(p), "no symbolic link among the outputs (an output is never "
-                              "written through a link nor replaces one)")
-        if p.is_dir():
-            raise ConfigError(flag, str(p), "a file path for this output (it is a directory)")
-        if p.exists() and not p.is_file():
-            raise ConfigError(flag, str(p), "a regular file path for this output (this is a special file)")
 
 
 def policy_json(meta: Any, path: str | Path) -> dict[str, Any]:

@@ -53,6 +53,32 @@ def check_writable(flag: str, path: str, directory: Path) -> None:
         raise ConfigError(flag, path, f"a path in a writable directory ({exc.strerror or exc})") from None
 
 
+def check_output_dir(out: Path, names: tuple[str, ...], flag: str = "--out-dir", parents: bool = True) -> None:
+    """The files a command will write under ``out`` (given by ``flag``), checked before any work: ``out`` a
+    directory (or absent, under a directory; with ``parents`` False its parent must exist, for commands that make
+    only the folder itself), no file a directory, a symbolic link or a special file (outputs never write through
+    nor replace a link). The one check of every command's output folder (``srenv cards``; agents' train,
+    quickstart, benchmark and its --evaluate-only), made before any file is read for the work."""
+    if out.is_symlink():
+        raise ConfigError(flag, str(out), "a directory path that is not a symbolic link (name the target itself)")
+    if out.exists() and not out.is_dir():
+        raise ConfigError(flag, str(out), "a directory (this is a file)")
+    if not parents and not out.exists() and not (out.parent if str(out.parent) else Path(".")).is_dir():
+        raise ConfigError(flag, str(out), "a path in an existing directory")
+    if not out.exists() and any(p.exists() and not p.is_dir() for p in out.parents):
+        raise ConfigError(flag, str(out), "a path under directories (a parent is a file)")
+    check_writable(flag, str(out), next(p for p in (out, *out.parents) if p.exists()))  # where it will be made
+    for name in names:
+        p = out / name
+        if p.is_symlink():
+            raise ConfigError(flag, str(p), "no symbolic link among the outputs (an output is never "
+                              "written through a link nor replaces one)")
+        if p.is_dir():
+            raise ConfigError(flag, str(p), "a file path for this output (it is a directory)")
+        if p.exists() and not p.is_file():
+            raise ConfigError(flag, str(p), "a regular file path for this output (this is a special file)")
+
+
 def check_outputs(outputs: dict[str, tuple[str | None, tuple[str, ...]]]) -> None:
     """Check every output of a command (flag -> (path, suffixes)) and that no two name the same file
     (one would overwrite the other)."""

@@ -256,6 +256,19 @@ def test_an_output_directory_that_cannot_be_made_is_refused_before_any_work(
     nothing_left(tmp_path, before)
 
 
+def test_cards_refuses_a_special_file_among_its_outputs(tmp_path: Path, capsys: pytest.CaptureFixture,
+                                                        monkeypatch: pytest.MonkeyPatch) -> None:
+    """srenv cards checks its folder with the one check agents' commands use (srenv.outputs.check_output_dir):
+    a FIFO where cards.npz will go is refused before any card is simulated (its own copy did not look)."""
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "o").mkdir()
+    os.mkfifo(tmp_path / "o" / "cards.npz")
+    before = set(os.listdir(tmp_path / "o"))
+    rc, err = run_srenv(["cards", "--n", "1", "--out", "o"], capsys)
+    one_line(rc, err, "--out", "special file")
+    assert set(os.listdir(tmp_path / "o")) == before
+
+
 # ------------------------------------------------------------------------------------------ flags
 @pytest.mark.parametrize("text", ["full,full", "full,,", "full, ,fluid_pound"])
 def test_cards_conditions_refuse_repeats_and_empty_items(text: str, tmp_path: Path,

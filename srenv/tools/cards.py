@@ -57,23 +57,11 @@ OUT_FILES = ("cards.npz", "dataset_card.json")
 
 
 def check_out_dir(path: str) -> Path:
-    from ..errors import ConfigError
-    from ..outputs import check_writable
+    """``--out``, checked before the simulation (srenv.outputs.check_output_dir: the folder and its two files)."""
+    from ..outputs import check_output_dir
 
     p = Path(path)
-    if p.is_symlink():
-        raise ConfigError("--out", path, "a directory path that is not a symbolic link")
-    if p.exists() and not p.is_dir():
-        raise ConfigError("--out", path, "a directory (this is a file)")
-    parent = p.parent if str(p.parent) else Path(".")
-    if not parent.is_dir():
-        raise ConfigError("--out", path, "a path in an existing directory")
-    for name in OUT_FILES:
-        if (p / name).is_symlink():
-            raise ConfigError("--out", str(p / name), "a regular file, not a symbolic link")
-        if (p / name).is_dir():
-            raise ConfigError("--out", str(p / name), "a file path for this output (it is a directory)")
-    check_writable("--out", path, p if p.is_dir() else parent)  # before the simulation, not after it
+    check_output_dir(p, OUT_FILES, "--out", parents=False)
     return p
 
 
