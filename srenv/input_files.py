@@ -39,8 +39,11 @@ def open_regular(path: str | Path, field: str, what: str) -> BinaryIO:
 
 
 def read_regular(path: str | Path, field: str, what: str, max_bytes: int) -> bytes:
-    """The bytes of a regular file of at most ``max_bytes`` (read at most one byte more to tell)."""
+    """The bytes of a regular file of at most ``max_bytes``: its size on the open descriptor first (a huge file is
+    refused unread), then read at most one byte more (a file growing meanwhile is refused too)."""
     with open_regular(path, field, what) as fh:
+        if os.fstat(fh.fileno()).st_size > max_bytes:
+            raise ConfigError(field, str(path), f"a {what} of at most {max_bytes} bytes")
         try:
             raw = fh.read(max_bytes + 1)
         except OSError as exc:

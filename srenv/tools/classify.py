@@ -104,8 +104,6 @@ def read_card(path: Path, si: bool = False) -> tuple[np.ndarray, np.ndarray]:
     (``--config``), so the file must say so by its header; a header in other units or none is refused."""
     if path.is_symlink() or not path.is_file():
         raise _bad(path, "a regular CSV file")
-    if path.stat().st_size > MAX_CARD_BYTES:
-        raise _bad(path, f"a card file under {MAX_CARD_BYTES // 2**20} MiB")
     raw = read_regular(path, "card", "CSV file", MAX_CARD_BYTES)
     try:
         rows = [r for r in csv.reader(io.StringIO(raw.decode("utf-8"), newline="")) if r and any(c.strip() for c in r)]
