@@ -11,7 +11,7 @@ from __future__ import annotations
 import json
 import math
 import os
-import tempfile
+import secrets
 from collections.abc import Callable, Iterable
 from pathlib import Path
 from typing import Any
@@ -45,12 +45,37 @@ def check_output_path(flag: str, path: str | None, suffixes: tuple[str, ...]) ->
 def check_writable(flag: str, path: str, directory: Path) -> None:
     """``directory`` (where ``path`` will be written) takes a new file: a temporary one is made and removed,
     the one reliable test of writability (permissions, read-only mounts, root on /proc)."""
+    made: list[str] = []
     try:
-        fd, probe = tempfile.mkstemp(dir=directory, prefix=f".{Path(path).name}.", suffix=".probe")
-        os.close(fd)
-        os.remove(probe)
+        _new_file(directory, f".{Path(path).name}.", ".probe", made)
     except OSError as exc:
         raise ConfigError(flag, path, f"a path in a writable directory ({exc.strerror or exc})") from None
+    finally:
+        _remove_existing(made)
+
+
+def _new_file(directory: Path, prefix: str, suffix: str, made: list[str]) -> None:
+    """Create a new empty file (mode 0600) named ``prefix + random + suffix`` in ``directory``, entering its name
+    in ``made`` *before* creating it: an interruption (Ctrl-C, SIGTERM) at any instant leaves nothing the caller's
+    cleanup of ``made`` misses. (``tempfile.mkstemp`` names the file only once it exists, and a signal in between
+    left the file behind; seen once in CI.) Never follows a link; OSError as raised."""
+    flags = os.O_WRONLY | os.O_CREAT | os.O_EXCL | getattr(os, "O_NOFOLLOW", 0) | getattr(os, "O_CLOEXEC", 0)
+    while True:
+        name = os.path.join(directory, f"{prefix}{secrets.token_hex(6)}{suffix}")
+        made.append(name)
+        try:
+            fd = os.open(name, flags, 0o600)
+        except FileExistsError:  # another file's name (not ours to remove): draw again
+            made.pop()
+            continue
+        os.close(fd)
+        return
+
+
+def _remove_existing(names: list[str]) -> None:
+    for name in names:
+        if os.path.lexists(name):
+            os.remove(name)
 
 
 def check_output_dir(out: Path, names: tuple[str, ...], flag: str = "--out-dir", parents: bool = True) -> None:
@@ -93,14 +118,12 @@ def check_outputs(outputs: dict[str, tuple[str | None, tuple[str, ...]]]) -> Non
         seen[key] = flag
 
 
-def _temporary(path: Path) -> str:
+def _temporary(path: Path, temps: list[str]) -> None:
+    """The temporary beside ``path``, entered in ``temps`` before it exists (see :func:`_new_file`)."""
     try:
-        fd, tmp = tempfile.mkstemp(dir=path.parent if str(path.parent) else ".", prefix=f".{path.name}.",
-                                   suffix=".tmp" + path.suffix)
+        _new_file(path.parent if str(path.parent) else Path("."), f".{path.name}.", ".tmp" + path.suffix, temps)
     except OSError as exc:
         raise ConfigError("output", str(path), f"a writable path ({exc.strerror or exc})") from None
-    os.close(fd)
-    return tmp
 
 
 def atomic_write_all(items: Iterable[tuple[str | Path, Callable[[str], object]]]) -> None:
@@ -117,7 +140,7 @@ def atomic_write_all(items: Iterable[tuple[str | Path, Callable[[str], object]]]
     try:
         for path, write in items:
             at = path
-            temps.append(_temporary(path))
+            _temporary(path, temps)
             write(temps[-1])
         umask = os.umask(0)
         os.umask(umask)
@@ -128,9 +151,7 @@ def atomic_write_all(items: Iterable[tuple[str | Path, Callable[[str], object]]]
             os.replace(tmp, path)
             renamed.append(path)
     except BaseException as exc:
-        for tmp in temps:
-            if os.path.exists(tmp):
-                os.remove(tmp)
+        _remove_existing(temps)
         if len(renamed) < len(items):  # all or nothing: a run that failed leaves none of its outputs
             for path in renamed:
                 path.unlink(missing_ok=True)

@@ -154,6 +154,24 @@ def test_an_interrupted_run_leaves_none_of_its_outputs(tmp_path: Path) -> None:
     assert list(tmp_path.iterdir()) == []
 
 
+def test_an_interruption_just_after_the_temporary_is_made_leaves_nothing(tmp_path: Path,
+                                                                          monkeypatch: pytest.MonkeyPatch) -> None:
+    """The instant between the temporary's creation and its entry in the cleanup list (a SIGTERM there left a
+    file behind in CI): the signal is raised at the first close after the file exists."""
+    import srenv.outputs as outputs
+
+    real_close = os.close
+
+    def close_then_interrupt(fd: int) -> None:
+        real_close(fd)
+        raise KeyboardInterrupt
+    monkeypatch.setattr(outputs.os, "close", close_then_interrupt)
+    with pytest.raises(KeyboardInterrupt):
+        outputs.atomic_write_all([(tmp_path / "a.csv", lambda tmp: Path(tmp).write_text("done"))])
+    monkeypatch.setattr(outputs.os, "close", real_close)
+    assert list(tmp_path.iterdir()) == []
+
+
 SRENV_COMMANDS = {"simulate": "srenv.tools.cli.cmd_simulate", "diagnose": "srenv.tools.diagnose_cli.cmd_diagnose",
                   "fit": "srenv.tools.fit_cli.cmd_fit", "validate": "srenv.tools.validate.cmd_validate"}
 AGENTS_COMMANDS = ["train", "evaluate", "quickstart", "benchmark", "replay", "convert-stats"]
