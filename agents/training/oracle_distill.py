@@ -172,6 +172,7 @@ def _warm_student(teacher: dict[str, Any], seed: int, norm: Path) -> tuple[Any, 
     src, src_norm = init_files(teacher["init"], seed)
     student = AgentPolicy(str(src), str(src_norm))
     if norm.resolve() != src_norm.resolve():
+        norm.parent.mkdir(parents=True, exist_ok=True)
         student.norm.save(norm)  # the statistics as they are, beside the run's student
     return student, src
 
