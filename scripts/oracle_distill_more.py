@@ -14,6 +14,11 @@ ones the shipped students were distilled with). A student already recorded in OU
 ``--stage gate``: alarm_pump_off (those tuned parameters), the shipped ensemble and the continued ensemble on the
 gate's validation episodes (:data:`GATE_SEEDS`: training wells 0..15 with schedules no earlier design played), and
 THE GATE (:func:`gate`), written to OUT/gate.json. Played once.
+``--stage fit`` (training labels only, no episode played): each student's MSE against the continuation's labels
+(:func:`fit_table`) - the shipped and the continued student of every seed on its own labels (the continued one
+in-sample) and on the other seeds' labels (held out from both) - written to OUT/fit.json.
+
+    PYTHONPATH=. python scripts/oracle_distill_more.py --stage fit --out runs/d24_more
 """
 
 from __future__ import annotations
@@ -42,7 +47,7 @@ REPORT = ROOT / "docs/v2/benchmark.json"
 SHIPPED = ROOT / "models"
 GATE_SEEDS = list(range(20800, 20816))  # THE GATE's validation seeds (the config's history)
 BASES = ("alarm_pump_off", "shipped_ensemble")
-STAGES = ("dagger", "gate")
+STAGES = ("dagger", "gate", "fit")
 
 
 def setup() -> tuple[dict[str, Any], str, dict[str, Any], dict[str, Any], dict[str, Any]]:
@@ -93,7 +98,8 @@ def play_gate(out: Path, workers: int) -> dict[str, Any]:
     for spec in specs.values():
         for m in spec.get("members", []):
             if not Path(m["path"]).is_file():
-                raise SystemExit(f"oracle_distill_more: {m['path']}: no such student (run --stage dagger first)")
+                print(f"oracle_distill_more: {m['path']}: no such student (run --stage dagger first)", file=sys.stderr)
+                sys.exit(2)
     gcfg = {**copy.deepcopy(cfg), "validation": {"seeds": GATE_SEEDS}}
     eps = play_validation(gcfg, specs, out / "gate", workers)
     summ = summarise(eps, BASES)
@@ -108,6 +114,26 @@ def play_gate(out: Path, workers: int) -> dict[str, Any]:
                "per_episode_cost": {k: [round(e["cost"], 4) for e in v] for k, v in eps.items()}}
     write_json(out / "gate.json", res_out)
     return res_out
+
+
+def fit_table(out: Path) -> dict[str, Any]:
+    """MSE (clipped correction against the oracle's label) of the shipped and the continued student of each seed
+    on each seed's continuation labels (OUT/models/*_labels.npz: training episodes only), and the labels' mean
+    square (the MSE of correction 0, the base controller)."""
+    from agents.evaluation.agent import AgentPolicy
+
+    _, name, run, _, _ = setup()
+    labels = {k: np.load(out / "models" / f"{name}_v2_seed{k}_labels.npz") for k in run["seeds"]}
+    rows: dict[str, Any] = {"label_mean_square": {str(k): float(np.mean(z["label"] ** 2)) for k, z in labels.items()}}
+    for tag, directory in (("shipped", SHIPPED), ("continued", out / "models")):
+        for st in students(directory, name, run["seeds"], {}):
+            pol = AgentPolicy(st["path"], st["obs_norm"])
+            k = int(Path(st["path"]).stem.rsplit("seed", 1)[1])
+            rows[f"{tag}_seed{k}"] = {
+                str(j): float(np.mean((np.clip(pol.model.predict(pol.norm(z["x"]), deterministic=True)[0], -1, 1)
+                                       - z["label"]) ** 2)) for j, z in labels.items()}
+    write_json(out / "fit.json", rows)
+    return rows
 
 
 def table(summ: dict[str, Any]) -> list[str]:
@@ -135,6 +161,10 @@ def main() -> None:
         for seed, spec in dagger(a.out, a.workers).items():
             print(f"seed {seed}: {spec['path']} mse {[round(h['mse'], 5) for h in spec['distill']]} rollout return "
                   f"{[round(h['rollout_mean_return'], 1) for h in spec['distill']]}")
+        return
+    if a.stage == "fit":
+        for k, v in fit_table(a.out).items():
+            print(f"{k:22s}", "  ".join(f"labels {j}: {m:.4f}" for j, m in v.items()))
         return
     res = play_gate(a.out, a.workers)
     print("\n".join(table(res["summary"])))
