@@ -33,6 +33,7 @@ from typing import Any
 import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
+from estimated_mpc_pilot import arguments
 from guard_pilot import INTERVALS, play_validation, summarise
 
 from agents.benchmark.config import load_benchmark_config
@@ -147,15 +148,7 @@ def table(summ: dict[str, Any]) -> list[str]:
 
 
 def main() -> None:
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--stage", choices=STAGES, required=True)
-    ap.add_argument("--out", type=Path, required=True)
-    ap.add_argument("--workers", type=int, default=2, help="worker processes, 1 or 2")
-    a = ap.parse_args()
-    if not 1 <= a.workers <= 2 or a.out.is_symlink() or a.out.is_file():
-        print(f"oracle_distill_more: --workers {a.workers} / --out {str(a.out)!r}: expected 1 or 2 workers and a "
-              "directory that is not a symlink", file=sys.stderr)
-        sys.exit(2)
+    a = arguments(argparse.ArgumentParser(description=__doc__.splitlines()[0]), STAGES)
     a.out.mkdir(parents=True, exist_ok=True)
     if a.stage == "dagger":
         for seed, spec in dagger(a.out, a.workers).items():

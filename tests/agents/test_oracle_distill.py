@@ -167,15 +167,20 @@ def test_config_refuses_a_bad_oracle_teacher(tmp_path, monkeypatch, change, matc
         load_benchmark_config(p)
 
 
-def test_cli_names_the_bad_field_in_one_line(tmp_path):
-    raw = _raw()
-    raw["agents"]["runs"]["oracle_distilled"]["teacher"]["params"]["horizon"] = -3
+@pytest.mark.parametrize("config, change, expected", [
+    (CONFIG, lambda t: t["params"].update(horizon=-3), "teacher.params.horizon = -3"),
+    (MORE, lambda t: t["init"].update(obs_norm="models/none_seed{seed}.npz"),
+     "teacher.init.obs_norm = 'models/none_seed0.npz': expected an existing .npz"),
+], ids=["horizon", "init-missing-file"])
+def test_cli_names_the_bad_field_in_one_line(tmp_path, config, change, expected):
+    raw = _raw(config)
+    change(raw["agents"]["runs"]["oracle_distilled"]["teacher"])
     p = tmp_path / "bad.yaml"
     p.write_text(yaml.safe_dump(raw))
     r = subprocess.run([sys.executable, "-m", "agents", "benchmark", str(p), "--out-dir", str(tmp_path / "o")],
                        check=False, capture_output=True, text=True, cwd=REPO, timeout=120)
     assert r.returncode == 2 and "Traceback" not in r.stderr
-    assert "teacher.params.horizon = -3" in r.stderr.strip().splitlines()[-1]
+    assert expected in r.stderr.strip().splitlines()[-1]
 
 
 def test_config_refuses_a_symlinked_init_student(tmp_path, monkeypatch):
@@ -187,17 +192,6 @@ def test_config_refuses_a_symlinked_init_student(tmp_path, monkeypatch):
     p.write_text(yaml.safe_dump(raw))
     with pytest.raises(ValueError, match=r"teacher.init.path = .*s0.zip': expected an existing .zip file \(not a sym"):
         load_benchmark_config(p)
-
-
-def test_cli_names_a_missing_init_student_in_one_line(tmp_path):
-    raw = _raw(MORE)
-    raw["agents"]["runs"]["oracle_distilled"]["teacher"]["init"]["obs_norm"] = "models/none_seed{seed}.npz"
-    p = tmp_path / "bad.yaml"
-    p.write_text(yaml.safe_dump(raw))
-    r = subprocess.run([sys.executable, "-m", "agents", "benchmark", str(p), "--out-dir", str(tmp_path / "o")],
-                       check=False, capture_output=True, text=True, cwd=REPO, timeout=120)
-    assert r.returncode == 2 and "Traceback" not in r.stderr
-    assert "teacher.init.obs_norm = 'models/none_seed0.npz': expected an existing .npz" in r.stderr.strip().splitlines()[-1]
 
 
 def test_continued_design_starts_from_the_shipped_students_on_unused_seeds(monkeypatch):

@@ -4,7 +4,7 @@ the shipped and the continued students on the shipped residual, and bad argument
 
 from __future__ import annotations
 
-import importlib.util
+import importlib
 import json
 import subprocess
 import sys
@@ -18,11 +18,8 @@ SCRIPT = REPO / "scripts" / "oracle_distill_more.py"
 
 @pytest.fixture(scope="module")
 def more():
-    sys.path.insert(0, str(SCRIPT.parent))
-    spec = importlib.util.spec_from_file_location("oracle_distill_more", SCRIPT)
-    mod = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(mod)
-    return mod
+    sys.path.insert(0, str(SCRIPT.parent))  # the script and the pilots it imports, as when it runs
+    return importlib.import_module(SCRIPT.stem)
 
 
 def test_gate_seeds_are_unplayed_training_wells_0_to_15(more):
