@@ -290,8 +290,9 @@ def _check_teacher(algo: str, run: dict[str, Any], runs: dict[str, Any], held: s
 
 def _check_oracle_teacher(key: str, run: dict[str, Any], t: dict[str, Any], held: set[int]) -> None:
     """``teacher: {kind: causal_oracle, params: {horizon, replan_every[, steps]}, iterations, episodes,
-    seed_start[, beta0]}`` (agents/training/oracle_distill.py): a fresh student, no PPO teacher."""
-    from ..training.oracle_distill import ORACLE_KIND, ORACLE_PARAM_KEYS, ORACLE_TEACHER_KEYS
+    seed_start[, beta0][, init: {path, obs_norm}]}`` (agents/training/oracle_distill.py): a fresh student (or the
+    one ``init`` names, continued), no PPO teacher."""
+    from ..training.oracle_distill import ORACLE_KIND, ORACLE_PARAM_KEYS, ORACLE_TEACHER_KEYS, init_files
 
     if t["kind"] != ORACLE_KIND:
         raise BenchmarkConfigError(f"{key}.kind = {t['kind']!r}: expected {ORACLE_KIND} (or no kind: PPO teachers)")
@@ -318,6 +319,11 @@ def _check_oracle_teacher(key: str, run: dict[str, Any], t: dict[str, Any], held
     if not run.get("residual"):
         raise BenchmarkConfigError(f"{key}: expected a residual run (the label is the oracle's action as a "
                                    "correction of the run's residual base)")
+    for seed in run["seeds"] if t.get("init") is not None else ():  # a warm start: every seed's student exists
+        try:
+            init_files(t["init"], seed)
+        except ValueError as exc:
+            raise BenchmarkConfigError(f"{key}.{str(exc).removeprefix('teacher.')}") from None
     _check_disjoint(key, run, t, held)
 
 

@@ -17,7 +17,10 @@ true model); this module teaches its decisions to a *student* that sees the fiel
 
 With no trained model to start from, the student is a fresh SB3 PPO actor (seeded; the run's training
 YAML gives its network) whose correction is 0 - the base controller itself - until its first fit, and whose
-observation statistics are those of iteration 0's inputs. Episodes run in the benchmark's worker
+observation statistics are those of iteration 0's inputs. With ``teacher.init: {path, obs_norm}`` (``{seed}`` in
+either = the run seed) the DAgger continues that student instead (warm start, :func:`init_files`): it acts from
+iteration 0 on (with ``beta0`` 0), its observation statistics are kept as they are, and its fits are on the
+labels of this run only. Episodes run in the benchmark's worker
 processes (one job per episode); every random draw is seeded by (run seed, episode seed), so the same job
 gives the same student whatever the number of workers.
 """
@@ -36,7 +39,9 @@ from ..policies.residual import _Base, augment, compose
 from .tuning import refuse_test_split
 
 ORACLE_KIND = "causal_oracle"
-ORACLE_TEACHER_KEYS = {"kind", "params", "iterations", "episodes", "seed_start", "beta0"}
+ORACLE_TEACHER_KEYS = {"kind", "params", "iterations", "episodes", "seed_start", "beta0", "init"}
+INIT_FILES = (("path", ".zip"), ("obs_norm", ".npz"))  # teacher.init: the student to continue, its statistics
+MAX_PATH = 4096
 ORACLE_PARAM_KEYS = {"horizon", "replan_every", "steps"}
 ORACLE_POLICIES = ("pump_off", "fillage_pi")  # the tuned baselines the oracle also weighs (the lead's pilot)
 CLIP_OBS = 10.0    # the student's observation clip, as SB3's VecNormalize
@@ -135,6 +140,43 @@ def save_obs_norm(x: np.ndarray, path: Path) -> None:
     ObsNormalizer.from_variance(x64.mean(0), x64.var(0), CLIP_OBS, EPSILON).save(path)
 
 
+def init_files(init: Any, seed: int) -> tuple[Path, Path]:
+    """The student a warm-started run continues (``teacher.init: {path, obs_norm}``, ``{seed}`` = the run seed):
+    its zip and its observation statistics, each an existing regular file (read later as data); a ValueError
+    naming the field, its value and what is expected otherwise."""
+    if not (isinstance(init, dict) and set(init) == {k for k, _ in INIT_FILES}
+            and all(isinstance(v, str) and 0 < len(v) <= MAX_PATH for v in init.values())):
+        raise ValueError(f"teacher.init = {str(init)[:120]!r}: expected {{path: STUDENT.zip, obs_norm: STATS.npz}} "
+                         "(paths, {seed} = the run seed)")
+    out = []
+    for key, ext in INIT_FILES:
+        try:
+            p = Path(init[key].format(seed=int(seed)))
+        except (KeyError, IndexError, ValueError):
+            raise ValueError(f"teacher.init.{key} = {init[key][:120]!r}: expected a path whose only placeholder "
+                             "is {seed}") from None
+        if p.suffix != ext or p.is_symlink() or not p.is_file():
+            raise ValueError(f"teacher.init.{key} = {str(p)[:120]!r}: expected an existing {ext} file (not a "
+                             "symlink)")
+        out.append(p)
+    return out[0], out[1]
+
+
+def _warm_student(teacher: dict[str, Any], seed: int, norm: Path) -> tuple[Any, Path | None]:
+    """(the student to continue, its zip) from ``teacher.init`` - its statistics written to ``norm`` unchanged -
+    or (None, None) for a fresh student."""
+    from ..evaluation.agent import AgentPolicy
+
+    if teacher.get("init") is None:
+        return None, None
+    src, src_norm = init_files(teacher["init"], seed)
+    student = AgentPolicy(str(src), str(src_norm))
+    if norm.resolve() != src_norm.resolve():
+        norm.parent.mkdir(parents=True, exist_ok=True)
+        student.norm.save(norm)  # the statistics as they are, beside the run's student
+    return student, src
+
+
 def oracle_jobs(env_id: str, env_kwargs: dict[str, Any], oracle: dict[str, Any], residual: dict[str, Any],
                 student: dict[str, Any] | None, seeds: Sequence[int], beta: float, run_seed: int,
                 history: int = 1) -> list[dict]:
@@ -146,7 +188,8 @@ def oracle_jobs(env_id: str, env_kwargs: dict[str, Any], oracle: dict[str, Any],
 def distill_oracle(runner: Any, teacher: dict[str, Any], oracle: dict[str, Any], residual: dict[str, Any],
                    env_id: str, env_kwargs: dict[str, Any], policy_kwargs: dict[str, Any], seeds: Sequence[int],
                    seed: int, dest_zip: Path, log: Callable[[str], None] | None = None) -> dict[str, Any]:
-    """DAgger from the causal oracle into a fresh field student (``teacher``: the run's checked teacher block;
+    """DAgger from the causal oracle into a fresh field student, or the one ``teacher.init`` names (warm start)
+    (``teacher``: the run's checked teacher block;
     ``oracle``: the CausalOraclePolicy kwargs with the tuned baselines; its ``history`` K, default 1, is how many
     field observations the student sees, stacked); the student's policy spec."""
     from ..evaluation.agent import AgentPolicy
@@ -163,7 +206,9 @@ def distill_oracle(runner: Any, teacher: dict[str, Any], oracle: dict[str, Any],
     xs: list[np.ndarray] = []
     ys: list[np.ndarray] = []
     acts: list[np.ndarray] = []  # the oracle's and the base's actions: a student of another scale can be refitted
-    history, student, spec = [], None, None
+    history: list[dict[str, Any]] = []
+    student, template = _warm_student(teacher, seed, norm)
+    spec = None if student is None else {"path": str(template), "obs_norm": str(norm), **hist_key}
     for it in range(n_it):
         jobs = oracle_jobs(env_id, env_kwargs, oracle, residual, spec, seeds[it * per:(it + 1) * per],
                            float(teacher.get("beta0", 0.5)) if it == 0 else 0.0, seed, k_hist)
@@ -174,10 +219,10 @@ def distill_oracle(runner: Any, teacher: dict[str, Any], oracle: dict[str, Any],
         if student is None:  # the fresh actor and its statistics from iteration 0's inputs
             fresh_student(xs[0].shape[1], policy_kwargs, seed, init)
             save_obs_norm(np.concatenate(xs), norm)
-            student = AgentPolicy(str(init), str(norm))
+            student, template = AgentPolicy(str(init), str(norm)), init
         x = np.concatenate(xs)
         loss = fit_actor(student.model, student.norm(x), np.concatenate(ys), seed + it)
-        write_student(init, student.model, dest_zip)
+        write_student(template, student.model, dest_zip)
         spec = {"path": str(dest_zip), "obs_norm": str(norm), **hist_key}
         a_o, a_b = np.concatenate([e["a_oracle"] for e in eps]), np.concatenate([e["a_base"] for e in eps])
         history.append({"iteration": it, "episodes": len(eps), "labels": len(x), "mse": loss,

@@ -1,6 +1,7 @@
 """The causal oracle as a DAgger teacher (agents/training/oracle_distill.py) on a tiny v2 env (30 min episodes of 5 min
 intervals, no events): its labels are its own actions as residual corrections, the held-out splits are refused, the same seed
-gives the same student, the benchmark config checks the teacher block, and the design's config runs --quick."""
+gives the same student, a warm start continues the given student, the benchmark config checks the teacher block, and
+the design's config runs --quick."""
 
 from __future__ import annotations
 
@@ -29,6 +30,7 @@ PO = {"threshold": 0.9, "idle_time_s": 900, "a_spm": 0.3, "a_stroke": 1.0}
 FPI = {"setpoint": 0.95, "kp": 0.5, "ki": 0.2, "a_stroke": 0.0}
 ORACLE = {"horizon": 2, "replan_every": 2, "steps": [0.3], "policies": [["pump_off", PO], ["fillage_pi", FPI]]}
 CONFIG = REPO / "configs/benchmark/v2_oracle_distilled.yaml"
+MORE = REPO / "configs/benchmark/v2_oracle_distilled_more.yaml"  # the shipped students continued (issue 24, d24)
 
 
 def test_label_inverts_compose_and_clips_out_of_reach():
@@ -100,8 +102,34 @@ def test_same_seed_same_student_and_it_fits_the_labels(tmp_path):
     assert not (tmp_path / "a/student_init.zip").exists()
 
 
-def _raw() -> dict:
-    return yaml.safe_load(CONFIG.read_text())
+def test_warm_start_continues_the_given_student_and_fits_it_toward_the_labels(tmp_path):
+    """teacher.init: before any fit the run's student IS the given one (its episode, return for return; its statistics
+    kept byte for byte), and the fit moves it toward the new labels."""
+    from agents.evaluation.rollout import episode_jobs
+
+    first, _ = _student(tmp_path / "a", 3)
+    res = {"base": "fillage_pi", "params": FPI, "scale": 0.5}
+    init = {"path": str(tmp_path / "a/student.zip"),
+            "obs_norm": str(tmp_path / "a/student_obs_norm.npz")}
+    with Runner(1) as runner:
+        spec = distill_oracle(runner, {"iterations": 1, "episodes": 1, "beta0": 0.0, "init": init}, ORACLE, res, ENV,
+                              {**KW, "scenario": "train"}, {"net_arch": [8, 8]}, [50002], 3, tmp_path / "b/more.zip")
+        own = runner.map(episode_jobs(ENV, {**KW, "scenario": "train"}, {**first, "residual": res}, [50002]))[0]
+    assert spec["distill"][0]["rollout_mean_return"] == pytest.approx(own["reward"], rel=1e-9)
+    assert (tmp_path / "b/more_obs_norm.npz").read_bytes() != b""
+    za, zb = np.load(first["obs_norm"]), np.load(spec["obs_norm"])
+    assert all(np.array_equal(za[k], zb[k]) for k in za.files)
+    z = np.load(tmp_path / "b/more_labels.npz")
+    assert len(z["x"]) == 6  # this run's labels only, not the first run's
+    before, after = AgentPolicy(first["path"], first["obs_norm"]), AgentPolicy(spec["path"], spec["obs_norm"])
+    mse = [np.mean((np.array([p.predict(x)[0] for x in z["x"]]).reshape(-1, 2) - z["label"]) ** 2)
+           for p in (before, after)]
+    assert mse[1] < mse[0]
+    assert (tmp_path / "a/student.zip").exists() and not (tmp_path / "b/more_init.zip").exists()
+
+
+def _raw(path: Path = CONFIG) -> dict:
+    return yaml.safe_load(path.read_text())
 
 
 @pytest.mark.parametrize("change, match", [
@@ -116,9 +144,20 @@ def _raw() -> dict:
     (lambda t, r: t["params"].update(steps=[0.0]), "teacher.params.steps = "),
     (lambda t, r: r.pop("residual"), "expected a residual run"),
     (lambda t, r: t.update(seed_start=19990), "share seeds"),
+    (lambda t, r: t.update(init="models/x.zip"), r"teacher.init = 'models/x.zip': expected \{path: STUDENT.zip"),
+    (lambda t, r: t.update(init={"path": "models/oracle_distilled_v2_seed{seed}.zip"}), r"teacher.init = .\{'path': .*\}.: expected \{path"),
+    (lambda t, r: t.update(init={"path": 3, "obs_norm": "a.npz"}), r"teacher.init = .*expected \{path"),
+    (lambda t, r: t.update(init={"path": "models/nothing_seed{seed}.zip", "obs_norm": "models/ppo_v1_obs_norm.npz"}),
+     r"teacher.init.path = 'models/nothing_seed0.zip': expected an existing .zip file"),
+    (lambda t, r: t.update(init={"path": "models/ppo_v1_seed{k}.zip", "obs_norm": "models/ppo_v1_obs_norm.npz"}),
+     r"teacher.init.path = 'models/ppo_v1_seed\{k\}.zip': expected a path whose only placeholder is \{seed\}"),
+    (lambda t, r: t.update(init={"path": "models/ppo_v1_seed{seed}.zip", "obs_norm": "models/ppo_v1.zip"}),
+     r"teacher.init.obs_norm = 'models/ppo_v1.zip': expected an existing .npz file"),
 ], ids=["kind", "unknown-key", "iterations-zero", "episodes-missing", "beta0", "horizon", "replan-float",
-        "params-key", "steps", "no-residual", "validation-overlap"])
-def test_config_refuses_a_bad_oracle_teacher(tmp_path, change, match):
+        "params-key", "steps", "no-residual", "validation-overlap", "init-not-mapping", "init-key-missing",
+        "init-not-text", "init-no-file", "init-placeholder", "init-suffix"])
+def test_config_refuses_a_bad_oracle_teacher(tmp_path, monkeypatch, change, match):
+    monkeypatch.chdir(REPO)  # the init paths are the checkout's models/
     raw = _raw()
     run = raw["agents"]["runs"]["oracle_distilled"]
     change(run["teacher"], run)
@@ -128,26 +167,64 @@ def test_config_refuses_a_bad_oracle_teacher(tmp_path, change, match):
         load_benchmark_config(p)
 
 
-def test_cli_names_the_bad_field_in_one_line(tmp_path):
-    raw = _raw()
-    raw["agents"]["runs"]["oracle_distilled"]["teacher"]["params"]["horizon"] = -3
+@pytest.mark.parametrize("config, change, expected", [
+    (CONFIG, lambda t: t["params"].update(horizon=-3), "teacher.params.horizon = -3"),
+    (MORE, lambda t: t["init"].update(obs_norm="models/none_seed{seed}.npz"),
+     "teacher.init.obs_norm = 'models/none_seed0.npz': expected an existing .npz"),
+], ids=["horizon", "init-missing-file"])
+def test_cli_names_the_bad_field_in_one_line(tmp_path, config, change, expected):
+    raw = _raw(config)
+    change(raw["agents"]["runs"]["oracle_distilled"]["teacher"])
     p = tmp_path / "bad.yaml"
     p.write_text(yaml.safe_dump(raw))
     r = subprocess.run([sys.executable, "-m", "agents", "benchmark", str(p), "--out-dir", str(tmp_path / "o")],
                        check=False, capture_output=True, text=True, cwd=REPO, timeout=120)
     assert r.returncode == 2 and "Traceback" not in r.stderr
-    assert "teacher.params.horizon = -3" in r.stderr.strip().splitlines()[-1]
+    assert expected in r.stderr.strip().splitlines()[-1]
 
 
-def test_design_config_keeps_v2s_splits_baselines_and_protocol():
+def test_config_refuses_a_symlinked_init_student(tmp_path, monkeypatch):
+    monkeypatch.chdir(REPO)
+    (tmp_path / "s0.zip").symlink_to(REPO / "models/oracle_distilled_v2_seed0.zip")
+    raw = _raw(MORE)
+    raw["agents"]["runs"]["oracle_distilled"]["teacher"]["init"]["path"] = str(tmp_path / "s{seed}.zip")
+    p = tmp_path / "bad.yaml"
+    p.write_text(yaml.safe_dump(raw))
+    with pytest.raises(ValueError, match=r"teacher.init.path = .*s0.zip': expected an existing .zip file \(not a sym"):
+        load_benchmark_config(p)
+
+
+def test_continued_design_starts_from_the_shipped_students_on_unused_seeds(monkeypatch):
+    """configs/benchmark/v2_oracle_distilled_more.yaml: the shipped students, acting from the start, continued on
+    training seeds neither the shipped run (50000 + 1000 k + 0..59) nor tuning nor validation used."""
+    from agents.benchmark.config import distill_seeds
+
+    monkeypatch.chdir(REPO)
+    cfg = load_benchmark_config(MORE)
+    run, shipped = cfg["agents"]["runs"]["oracle_distilled"], load_benchmark_config(CONFIG)["agents"]["runs"]
+    t = run["teacher"]
+    assert t["beta0"] == 0.0 and (t["iterations"], t["episodes"]) == (2, 16) and run["ensemble"]
+    assert t["init"]["path"].format(seed=1) == "models/oracle_distilled_v2_seed1.zip"
+    assert {**t, "init": None, "beta0": None, "iterations": None, "episodes": None, "seed_start": None} == {
+        **shipped["oracle_distilled"]["teacher"], "init": None, "beta0": None, "iterations": None, "episodes": None,
+        "seed_start": None}
+    ours = {s for k in run["seeds"] for s in distill_seeds(t, k)}
+    before = {s for k in run["seeds"] for s in distill_seeds(shipped["oracle_distilled"]["teacher"], k)}
+    assert len(ours) == 96 and not ours & before and not ours & (set(range(10)) | set(range(20000, 21000)))
+
+
+@pytest.mark.parametrize("config", [CONFIG, MORE], ids=["oracle_distilled", "oracle_distilled_more"])
+def test_design_config_keeps_v2s_splits_baselines_and_protocol(config, monkeypatch):
+    monkeypatch.chdir(REPO)
     for quick in (False, True):
-        ours, v2 = load_benchmark_config(CONFIG, quick=quick), load_benchmark_config(REPO / "configs/benchmark/v2.yaml",
+        ours, v2 = load_benchmark_config(config, quick=quick), load_benchmark_config(REPO / "configs/benchmark/v2.yaml",
                                                                                      quick=quick)
         for k in ("env_id", "env_kwargs", "workers", "tuning", "validation", "test", "baselines", "figure_episode"):
             assert ours[k] == v2[k], k
         assert list(ours["agents"]["runs"]) == ["oracle_distilled"]
         assert ours["agents"]["runs"]["oracle_distilled"]["teacher"]["kind"] == "causal_oracle"
-    assert load_benchmark_config(CONFIG, quick=True)["test"]["scenario"] == "validation"  # --quick spends no look
+        assert ours["evaluate_only"] == load_benchmark_config(CONFIG, quick=quick)["evaluate_only"]
+    assert load_benchmark_config(config, quick=True)["test"]["scenario"] == "validation"  # --quick spends no look
 
 
 def test_quick_run_trains_the_student_and_reports_it(tmp_path):
