@@ -158,7 +158,7 @@ def test_an_interruption_just_after_the_temporary_is_made_leaves_nothing(tmp_pat
                                                                           monkeypatch: pytest.MonkeyPatch) -> None:
     """The instant between the temporary's creation and its entry in the cleanup list (a SIGTERM there left a
     file behind in CI): the signal is raised at the first close after the file exists."""
-    import srenv.outputs as outputs
+    from srenv import outputs
 
     real_close = os.close
 
