@@ -19,7 +19,8 @@ from .. import field_units as fu
 from ..errors import ConfigError
 from ..input_files import read_json
 from ..surface_unit.card_checks import check_card, check_magnitude, loop_work
-from .record_fields import FIELDS, number, raw
+from .record_extras import card_type, coefficients, ideal_card, pump_card
+from .record_fields import FIELDS, number, raw, series
 
 MAX_RECORD_BYTES = 20_000_000
 
@@ -63,13 +64,6 @@ class FieldRecord:
         return float(sum(t["length_m"] for t in self.tapers))
 
 
-def _get(d: dict, key: str, where: str):
-    v = raw(d, key, where)
-    if v is None:
-        raise ConfigError(f"{where}.{key}", "missing", "a value in the record")
-    return v
-
-
 def _section(d: dict, key: str, where: str, required: bool = True) -> dict:
     """A JSON object of the record ({} when optional and absent); anything else is one ConfigError."""
     v = raw(d, key, where)
@@ -78,17 +72,6 @@ def _section(d: dict, key: str, where: str, required: bool = True) -> dict:
     if not isinstance(v, dict):
         raise ConfigError(f"{where}.{key}", "missing" if v is None else type(v).__name__, "a JSON object")
     return v
-
-
-def _series(d: dict, key: str, where: str) -> np.ndarray:
-    v = _get(d, key, where)
-    try:
-        a = np.asarray(v, dtype=float)
-    except (TypeError, ValueError):
-        raise ConfigError(f"{where}.{key}", "a non-numeric list", "a list of numbers") from None
-    if a.ndim != 1:
-        raise ConfigError(f"{where}.{key}", f"shape {a.shape}", "a flat list of numbers")
-    return a
 
 
 # API RP 11L (5th ed., 1988), Table 4.1 "Rod and pump data", column w_r: steel sucker rods with their couplings,
@@ -195,7 +178,7 @@ def load_record_json(path: str | Path):
 def _card(d: dict, source: str, reverse: bool, auto_orient: bool) -> tuple[np.ndarray, np.ndarray, bool]:
     """The surface card (m, N) forward in time, checked (``card_checks``), and whether it was stored reversed."""
     cd = _section(d, "cardData", "record")
-    x_in, f_lbf = _series(cd, "Position", "cardData"), _series(cd, "Load", "cardData")
+    x_in, f_lbf = series(cd, "Position", "cardData"), series(cd, "Load", "cardData")
     for what, values in (("positions", x_in), ("loads", f_lbf)):  # as read: the unit conversion would overflow
         check_magnitude(values, "cardData", source, what)
     if len(x_in) != len(f_lbf):
@@ -261,9 +244,9 @@ def read_dynacard_json(path: str | Path, reverse: bool = False, auto_orient: boo
     d = load_record_json(path)
     if not isinstance(d, dict):
         raise ConfigError("RECORD", str(path), "a JSON object (the dynacard layout)")
-    x, f, reverse = _card(d, str(path), reverse, auto_orient)
     notes: list[str] = []
     eq = _equipment(d, notes)
+    x, f, reverse = _card(d, str(path), reverse, auto_orient)
     ip = _section(d, "InputParameters", "record")
     spm = number(ip, "StrokesPerMinute", "InputParameters")
     pump = _section(eq, "Pump", "equipmentData")
@@ -277,73 +260,16 @@ def read_dynacard_json(path: str | Path, reverse: bool = False, auto_orient: boo
         tubing_pressure_pa=number(ip, "TubingPressure", "InputParameters", notes),
         fluid_density_kg_m3=rho, survey=_survey(raw(d, "surveyData", "record"), notes), water_cut=wcut,
         **_analysis(d, notes),
-        damping_coefficients=_coefficients(eq.get("DampingCoefficient") or _section(
+        damping_coefficients=coefficients(eq.get("DampingCoefficient") or _section(
             d, "dynaoutputData", "record", required=False).get("DampingCoefficient")),
         unit=_unit(_section(eq, "SurfaceUnit", "equipmentData", required=False), "equipmentData.SurfaceUnit", notes))
     rec.notes += _depth_notes(rec)
-    rec.card_type = _card_type(d.get("CardDetails"))
+    rec.card_type = card_type(d.get("CardDetails"))
     motor = eq.get("RodPumpMotor")
     rec.motor = motor if isinstance(motor, dict) else {}
-    rec.reference_prediction = _ideal_card(d.get("Performance"), float(np.ptp(rec.position_m)), notes)
-    rec.pump_position_m, rec.pump_load_n = _pump_card(d.get("downholeCard"), notes)
+    rec.reference_prediction = ideal_card(d.get("Performance"), float(np.ptp(rec.position_m)), notes)
+    rec.pump_position_m, rec.pump_load_n = pump_card(d.get("downholeCard"), notes)
     return rec
-
-
-def _pump_card(dh, notes: list[str]) -> tuple[np.ndarray | None, np.ndarray | None]:
-    """The vendor's pump card (m, N), forward by its own loop (it keeps its own time order, not always the
-    surface card's); (None, None) without one, and one that cannot be read is said."""
-    if not isinstance(dh, dict) or not dh.get("Position") or not dh.get("Load"):
-        return None, None
-    try:
-        xp, fp = _series(dh, "Position", "downholeCard"), _series(dh, "Load", "downholeCard")
-    except ConfigError:
-        xp = fp = np.zeros(0)
-    if not (len(xp) == len(fp) and len(xp) >= 16 and np.all(np.isfinite(xp)) and np.all(np.isfinite(fp))
-            and np.all(np.abs(xp) < 1e4) and np.all(np.abs(fp) < 1e7)):
-        notes.append("downholeCard: not two finite lists of the same length (16 samples at least): the vendor's pump "
-                     "card is not compared")
-        return None, None
-    back = loop_work(xp, fp) < 0
-    return fu.to_si(xp[::-1] if back else xp, "in"), fu.to_si(fp[::-1] if back else fp, "lbf")
-
-
-def _card_type(details) -> str | None:
-    """The vendor's card type (a short word: Startup, Shutdown, ...), or None."""
-    v = details.get("CardType") if isinstance(details, dict) else None
-    return v.strip() if isinstance(v, str) and 0 < len(v.strip()) <= 40 and v.strip().isprintable() else None
-
-
-IDEAL = "Performance.IdealCardSimulation_SurfaceCard_"
-
-
-def _ideal_card(perf, stroke_m: float, notes: list[str]) -> dict | None:
-    """The vendor's predicted full-pump surface card's extremes, where the record carries them. They are in SI
-    (N, m) unlike the record's cards; the unit is checked on the record itself: the ideal card's position
-    range must be the measured stroke (within 10 %), else the figures are left out and a note says why."""
-    if not isinstance(perf, dict):
-        return None
-    keys = ("Load_max", "Load_min", "Position_max", "Position_min")
-    vals = [perf.get("IdealCardSimulation_SurfaceCard_" + k) for k in keys]
-    if all(v is None for v in vals):
-        return None
-    try:
-        f_max, f_min, x_max, x_min = (float(v) for v in vals)
-    except (TypeError, ValueError):
-        notes.append(f"{IDEAL}*: not four numbers; the vendor's predicted card is left out")
-        return None
-    ok = all(math.isfinite(v) for v in (f_max, f_min, x_max, x_min)) and -1e7 < f_min < f_max < 1e7
-    if not ok or abs((x_max - x_min) - stroke_m) > 0.1 * stroke_m:
-        notes.append(f"{IDEAL}*: stroke {x_max - x_min:g} against the measured {stroke_m:.3f} m, or loads out of "
-                     "order; not read as SI, the vendor's predicted card is left out")
-        return None
-    return {"pprl_n": f_max, "mprl_n": f_min, "stroke_m": x_max - x_min}
-
-
-def _coefficients(v) -> list[float]:
-    """The vendor's damping coefficients as given (reported, not used by the model)."""
-    if not isinstance(v, list):
-        return []
-    return [float(c) for c in v if isinstance(c, (int, float)) and not isinstance(c, bool) and math.isfinite(c)]
 
 
 def _survey(rows, notes: list[str]) -> list[dict]:

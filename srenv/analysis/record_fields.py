@@ -16,6 +16,8 @@ import math
 import re
 from dataclasses import dataclass
 
+import numpy as np
+
 from .. import field_units as fu
 from ..declarations import Number
 from ..errors import ConfigError
@@ -128,3 +130,17 @@ def number(d, key: str, where: str, notes: list[str] | None = None):
         raise ConfigError(name, v, decl.number.expected())
     decl.number.check(x, name)
     return fu.to_si(float(x), decl.unit, name)
+
+
+def series(d: dict, key: str, where: str) -> np.ndarray:
+    """A list of numbers of the record (numbers written as text are read), flat; one ConfigError otherwise."""
+    v = raw(d, key, where)
+    if v is None:
+        raise ConfigError(f"{where}.{key}", "missing", "a list of numbers")
+    try:
+        a = np.asarray(v, dtype=float)
+    except (TypeError, ValueError):
+        raise ConfigError(f"{where}.{key}", "a non-numeric list", "a list of numbers") from None
+    if a.ndim != 1:
+        raise ConfigError(f"{where}.{key}", f"shape {a.shape}", "a flat list of numbers")
+    return a

@@ -218,7 +218,7 @@ def _structural(well: str, d0: dict, make) -> Iterator[Variant]:
     yield make("well-test-empty", _set(("WellTestData",), {}), note="WaterCut")
     yield make("dynaoutput-disagrees", _dyna_disagrees, note="dynaoutputData.Pump")
     yield make("equipment-in-dynaoutput-only", _equipment_in_dyna_only, note="dynaoutputData")
-    yield make("not-an-object", lambda d: (d.clear(), d.__setitem__("x", 1)), field="cardData")
+    yield make("not-an-object", lambda d: (d.clear(), d.__setitem__("x", 1)), field="equipmentData")
     yield make("key-case", lambda d: d["InputParameters"].__setitem__(
         "strokesPerMinute", d["InputParameters"].pop("StrokesPerMinute")), field="StrokesPerMinute")
 
