@@ -273,26 +273,41 @@ def read_dynacard_json(path: str | Path, reverse: bool = False, auto_orient: boo
 
 
 def _survey(rows, notes: list[str]) -> list[dict]:
-    """The record's stations (SI, sorted by MD); [] for a vertical well. No survey, or one that is not a list of
-    stations, is a vertical well, said; a station's missing inclination or azimuth is 0, said once per column."""
-    if not isinstance(rows, list) or not rows:
-        notes.append(f"surveyData {'missing' if not rows else 'not a list'}: a vertical well")
-        return []
+    """The record's stations (SI, sorted by MD); [] for a vertical well. No survey, an empty one or one station
+    is a vertical well, said; a station's missing inclination or azimuth is 0, said once per column; a station
+    repeated is dropped, said; two stations at one MD that disagree are refused."""
+    if rows is not None and not isinstance(rows, list):
+        raise ConfigError("surveyData", rows, "a list of stations (MD, Inclination, Azimuth, TVD)")
+    if not rows or len(rows) == 1:
+        notes.append(f"surveyData {'missing' if not rows else 'has one station'}: a vertical well")
     out, taken = [], []
-    for i, s in enumerate(rows):
+    for i, s in enumerate(rows or []):
         w = f"surveyData[{i}]"
         if not isinstance(s, dict):
             raise ConfigError(w, s, "a JSON object (MD, Inclination, Azimuth, TVD)")
         out.append({"md_m": number(s, "MD", w), "inclination_deg": number(s, "Inclination", w, taken),
                     "azimuth_deg": number(s, "Azimuth", w, taken),
                     # the record's own TVD column, read for `validate --survey-weight tvd` only (docs/realism.md)
-                    "tvd_m": number(s, "TVD", w)})
+                    "tvd_m": number(s, "TVD", w), "row": i})
     for key in ("Inclination", "Azimuth"):
         n = sum(f".{key} missing" in t for t in taken)
         if n:
             notes.append(f"surveyData[].{key} missing at {n} of {len(rows)} stations: 0 deg")
     out.sort(key=lambda s: s["md_m"])
-    return out if any(s["inclination_deg"] > 0 for s in out) else []
+    kept = [s for k, s in enumerate(out) if k == 0 or s["md_m"] != out[k - 1]["md_m"] or _disagree(out[k - 1], s)]
+    if len(kept) < len(out):
+        notes.append(f"surveyData: {len(out) - len(kept)} repeated station(s) dropped")
+    for s in kept:
+        s.pop("row")
+    return kept if any(s["inclination_deg"] > 0 for s in kept) else []
+
+
+def _disagree(a: dict, b: dict) -> bool:
+    """Two stations at one MD: the same (a repeat, False) or one ConfigError naming the second."""
+    if (a["inclination_deg"], a["azimuth_deg"]) == (b["inclination_deg"], b["azimuth_deg"]):
+        return False
+    raise ConfigError(f"surveyData[{b['row']}].MD", fu.from_si(b["md_m"], "ft"), f"a depth of its own (surveyData["
+                      f"{a['row']}] is at the same MD with another inclination or azimuth)")
 
 
 def read_record_csv(path: str | Path, config: str, reverse: bool = False) -> FieldRecord:

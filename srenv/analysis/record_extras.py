@@ -56,6 +56,8 @@ def coefficients(v) -> list[float]:
 def pump_card(dh, notes: list[str]) -> tuple[np.ndarray | None, np.ndarray | None]:
     """The vendor's pump card (m, N), forward by its own loop (it keeps its own time order, not always the
     surface card's); (None, None) without one, and one that cannot be read is said."""
+    if dh is not None and not isinstance(dh, dict):
+        notes.append("downholeCard: not a JSON object: the vendor's pump card is not compared")
     if not isinstance(dh, dict) or not dh.get("Position") or not dh.get("Load"):
         return None, None
     try:

@@ -194,11 +194,16 @@ def _structural(well: str, d0: dict, make) -> Iterator[Variant]:
     yield make("geometry-null", _set(("equipmentData", "SurfaceUnit", "PumpingUnitGeometry"), None))
     yield make("rotation-unknown", _set(("equipmentData", "SurfaceUnit", "Rotation"), "sideways"))
     yield make("grade-null", _set(("equipmentData", "Rods", 0, "Grade"), None), note="Grade")
-    yield make("survey-one-station", lambda d: d.__setitem__("surveyData", d["surveyData"][:1]))
-    yield make("survey-empty", _set(("surveyData",), []))
+    yield make("survey-one-station", lambda d: d.__setitem__("surveyData", d["surveyData"][:1]), note="one station")
+    yield make("survey-empty", _set(("surveyData",), []), note="surveyData missing")
     yield make("survey-unsorted", lambda d: d.__setitem__("surveyData", d["surveyData"][::-1]))
-    yield make("survey-duplicate-md", lambda d: d.__setitem__("surveyData", d["surveyData"] + d["surveyData"][-1:]))
-    yield make("card-reversed", _reverse_card)
+    yield make("survey-duplicate-md", lambda d: d.__setitem__("surveyData", d["surveyData"] + d["surveyData"][-1:]),
+               note="" if well == "11708328" else "repeated station")
+    yield make("survey-md-disagrees", lambda d: d.__setitem__("surveyData", d["surveyData"] + [
+        dict(d["surveyData"][-1], Inclination=float(d["surveyData"][-1]["Inclination"] or 0) + 5.0)]),
+        field="MD")
+    yield make("survey-text", _set(("surveyData",), "abc"), field="surveyData")
+    yield make("card-reversed", _reverse_card, same=True)
     yield make("card-closing-point", _close_card)
     yield make("card-short", lambda d: [d["cardData"].__setitem__(k, d["cardData"][k][:5]) for k in ("Position", "Load")],
                field="cardData")
@@ -208,6 +213,7 @@ def _structural(well: str, d0: dict, make) -> Iterator[Variant]:
     yield make("card-flat", lambda d: d["cardData"].__setitem__("Position", [1.0] * len(d["cardData"]["Position"])),
                field="cardData")
     yield make("downhole-card-empty", _set(("downholeCard",), {"Position": [], "Load": []}))
+    yield make("downhole-card-text", _set(("downholeCard",), "abc"), note="downholeCard")
     yield make("downhole-card-short", lambda d: [d["downholeCard"].__setitem__(k, d["downholeCard"][k][:5])
                                                  for k in ("Position", "Load")], note="downholeCard")
     yield make("analysis-fields-null", lambda d: d.__setitem__("downholeCardAnalysis", {
