@@ -89,7 +89,6 @@ def rod_weight_lb_ft(diameter_in: float) -> tuple[float, str]:
     return STEEL_LB_FT_PER_IN2 * math.pi / 4 * diameter_in ** 2, "steel bar body (3.40 lb/ft per in^2)"
 
 
-STEEL_E_PSI = 30.5e6  # the declared default of a taper's ModulusOfElasticity (record_fields)
 NOT_STEEL = 0.6      # a taper lighter than this share of a steel bar of its diameter is not steel (fiberglass)
 
 
@@ -143,6 +142,7 @@ def _unit(su: dict, where: str, notes: list[str]) -> dict:
     from ..surface_unit.inline_unit import record_geometry, record_rotation_known
 
     if not su:
+        notes.append(f"{where} missing: no unit kinematics")
         return {}
     out = {k[-1] if k != "Radius" else "R": number(su, k, where) for k in UNIT_DIMENSIONS}
     out["geometry"] = raw(su, "PumpingUnitGeometry", where)
@@ -236,6 +236,20 @@ def _analysis(d: dict, notes: list[str]) -> dict:
     return out
 
 
+def _spm(d: dict, ip: dict, notes: list[str]) -> float:
+    """The record's stroke rate: ``InputParameters.StrokesPerMinute``, else the vendor analysis's own reading
+    (``downholeCardAnalysis.SPM``, two decimals), said; else one ConfigError."""
+    spm = number(ip, "StrokesPerMinute", "InputParameters")
+    if spm is not None:
+        return spm
+    spm = number(_section(d, "downholeCardAnalysis", "record", required=False), "SPM", "downholeCardAnalysis")
+    if spm is None:
+        raise ConfigError("InputParameters.StrokesPerMinute", "missing",
+                          FIELDS["InputParameters.StrokesPerMinute"].number.expected() + " (or downholeCardAnalysis.SPM)")
+    notes.append(f"InputParameters.StrokesPerMinute missing: downholeCardAnalysis.SPM = {spm:g} (the vendor's reading)")
+    return spm
+
+
 def read_dynacard_json(path: str | Path, reverse: bool = False, auto_orient: bool = False) -> FieldRecord:
     """A vendor dynacard export (``cardData``, ``equipmentData``, ``InputParameters``, ...). The layout stores
     cards in either time direction: with `auto_orient` a reversed card is turned forward (and the record says
@@ -248,7 +262,7 @@ def read_dynacard_json(path: str | Path, reverse: bool = False, auto_orient: boo
     eq = _equipment(d, notes)
     x, f, reverse = _card(d, str(path), reverse, auto_orient)
     ip = _section(d, "InputParameters", "record")
-    spm = number(ip, "StrokesPerMinute", "InputParameters")
+    spm = _spm(d, ip, notes)
     pump = _section(eq, "Pump", "equipmentData")
     tapers = _tapers(raw(eq, "Rods", "equipmentData"), "equipmentData.Rods", notes)
     wcut, rho = _fluid(d, eq, ip, notes)

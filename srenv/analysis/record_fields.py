@@ -39,7 +39,9 @@ def _f(path: str, unit: str, lo: float, hi: float, *, shown: str | None = None, 
 
 
 FIELDS: dict[str, RecordField] = dict([
-    _f("InputParameters.StrokesPerMinute", "-", 0.5, 20.0, shown="strokes/min", required=True),
+    _f("InputParameters.StrokesPerMinute", "-", 0.5, 20.0, shown="strokes/min",
+       absent="downholeCardAnalysis.SPM (the vendor's reading), else refused"),
+    _f("downholeCardAnalysis.SPM", "-", 0.5, 20.0, shown="strokes/min", absent="read only without a StrokesPerMinute"),
     _f("InputParameters.TubingPressure", "psi", 0.0, 5000.0, default=0.0, absent="0 psi (tubing open to the flowline)"),
     _f("InputParameters.FluidDensity", "kg/m^3", 500.0, 1500.0,
        absent="from the well test's water cut, the water's gravity and the oil's API gravity"),

@@ -59,8 +59,9 @@ def _name(path: tuple) -> str:
 
 # the list item a declared field is mutated at ('[]' in its declared path): a taper, a station below the surface
 ITEM = {"Rods": 0, "surveyData": 1}
-# fields read only in another's absence: their variants drop that one
-ONLY_WITHOUT = {"Count": "TotalLength", "IndividualLength": "TotalLength"}
+# fields read only in another's absence: their variants drop that one (a path from the list item's or block's parent)
+ONLY_WITHOUT = {"Count": ("TotalLength",), "IndividualLength": ("TotalLength",),
+                "SPM": ("..", "InputParameters", "StrokesPerMinute")}
 
 
 def declared_paths() -> dict[tuple, object]:
@@ -130,7 +131,8 @@ def variants(well: str) -> Iterator[Variant]:
     for path, decl in declared_paths().items():
         if not _has(d0, path):
             continue
-        first = [_drop((*path[:-1], ONLY_WITHOUT[path[-1]]))] if path[-1] in ONLY_WITHOUT else []
+        other = ONLY_WITHOUT.get(path[-1])
+        first = [] if other is None else [_drop(other[1:] if other[0] == ".." else (*path[:-1], *other))]
         for kind, mut, same in _field_variants(d0, path, decl):
             yield make(f"{_name(path)}-{kind}", *first, mut, field=_name(path), same=same and not first, kind=kind)
     for path in BLOCKS:
