@@ -20,7 +20,7 @@ from ..errors import ConfigError
 from ..input_files import read_json
 from ..surface_unit.card_checks import check_card, check_magnitude, loop_work
 from .record_extras import card_type, coefficients, ideal_card, pump_card
-from .record_fields import FIELDS, number, raw, series
+from .record_fields import FIELDS, number, raw, series, spelling_notes
 
 MAX_RECORD_BYTES = 20_000_000
 
@@ -259,31 +259,32 @@ def read_dynacard_json(path: str | Path, reverse: bool = False, auto_orient: boo
     if not isinstance(d, dict):
         raise ConfigError("RECORD", str(path), "a JSON object (the dynacard layout)")
     notes: list[str] = []
-    eq = _equipment(d, notes)
-    x, f, reverse = _card(d, str(path), reverse, auto_orient)
-    ip = _section(d, "InputParameters", "record")
-    spm = _spm(d, ip, notes)
-    pump = _section(eq, "Pump", "equipmentData")
-    tapers = _tapers(raw(eq, "Rods", "equipmentData"), "equipmentData.Rods", notes)
-    wcut, rho = _fluid(d, eq, ip, notes)
-    rec = FieldRecord(
-        notes=notes, source=str(path), time_reversed=reverse, t_s=np.arange(len(x)) * (60.0 / spm / len(x)),
-        position_m=x - x.min(), load_n=f, spm=spm, tapers=tapers,
-        pump_depth_m=number(pump, "Depth", "equipmentData.Pump"),
-        plunger_diameter_m=number(pump, "Diameter", "equipmentData.Pump"),
-        tubing_pressure_pa=number(ip, "TubingPressure", "InputParameters", notes),
-        fluid_density_kg_m3=rho, survey=_survey(raw(d, "surveyData", "record"), notes), water_cut=wcut,
-        **_analysis(d, notes),
-        damping_coefficients=coefficients(eq.get("DampingCoefficient") or _section(
-            d, "dynaoutputData", "record", required=False).get("DampingCoefficient")),
-        unit=_unit(_section(eq, "SurfaceUnit", "equipmentData", required=False), "equipmentData.SurfaceUnit", notes))
-    rec.notes += _depth_notes(rec)
-    rec.card_type = card_type(d.get("CardDetails"))
-    motor = eq.get("RodPumpMotor")
-    rec.motor = motor if isinstance(motor, dict) else {}
-    rec.reference_prediction = ideal_card(d.get("Performance"), float(np.ptp(rec.position_m)), notes)
-    rec.pump_position_m, rec.pump_load_n = pump_card(d.get("downholeCard"), notes)
-    return rec
+    with spelling_notes(notes):  # a key the record spells its own way is read, and said
+        eq = _equipment(d, notes)
+        x, f, reverse = _card(d, str(path), reverse, auto_orient)
+        ip = _section(d, "InputParameters", "record")
+        spm = _spm(d, ip, notes)
+        pump = _section(eq, "Pump", "equipmentData")
+        tapers = _tapers(raw(eq, "Rods", "equipmentData"), "equipmentData.Rods", notes)
+        wcut, rho = _fluid(d, eq, ip, notes)
+        rec = FieldRecord(
+            notes=notes, source=str(path), time_reversed=reverse, t_s=np.arange(len(x)) * (60.0 / spm / len(x)),
+            position_m=x - x.min(), load_n=f, spm=spm, tapers=tapers,
+            pump_depth_m=number(pump, "Depth", "equipmentData.Pump"),
+            plunger_diameter_m=number(pump, "Diameter", "equipmentData.Pump"),
+            tubing_pressure_pa=number(ip, "TubingPressure", "InputParameters", notes),
+            fluid_density_kg_m3=rho, survey=_survey(raw(d, "surveyData", "record"), notes), water_cut=wcut,
+            **_analysis(d, notes),
+            damping_coefficients=coefficients(eq.get("DampingCoefficient") or _section(
+                d, "dynaoutputData", "record", required=False).get("DampingCoefficient")),
+            unit=_unit(_section(eq, "SurfaceUnit", "equipmentData", required=False), "equipmentData.SurfaceUnit", notes))
+        rec.notes += _depth_notes(rec)
+        rec.card_type = card_type(d.get("CardDetails"))
+        motor = eq.get("RodPumpMotor")
+        rec.motor = motor if isinstance(motor, dict) else {}
+        rec.reference_prediction = ideal_card(d.get("Performance"), float(np.ptp(rec.position_m)), notes)
+        rec.pump_position_m, rec.pump_load_n = pump_card(d.get("downholeCard"), notes)
+        return rec
 
 
 def _survey(rows, notes: list[str]) -> list[dict]:

@@ -6,14 +6,18 @@ this one; tests/test_declared_record.py generates its refusal cases from it).
 A value may be a JSON number or a number written as text (the layout writes its analysis as strings: '239',
 '95.4%'); anything else - another text, a boolean, a list, NaN, infinity, or a number out of range - is one
 ``ConfigError`` naming the field, the value and what is expected. A key that is absent while a key spelt
-the same but for case, spaces or underscores is present is refused too (naming both): a default is never
-taken for a field the record holds under another spelling.
+the same but for case, spaces or underscores is present is read under that spelling (said in the notes): a
+default is never taken for a field the record holds under another spelling, and an export that spells its keys
+its own way still runs.
 """
 
 from __future__ import annotations
 
+import contextlib
 import math
 import re
+from collections.abc import Iterator
+from contextvars import ContextVar
 from dataclasses import dataclass
 
 import numpy as np
@@ -92,17 +96,33 @@ def misspelt(d: dict, key: str) -> str | None:
     return next((k for k in d if isinstance(k, str) and k != key and _spelling(k) == want), None)
 
 
+_SPELLING_NOTES: ContextVar[list[str] | None] = ContextVar("record_spelling_notes", default=None)
+
+
+@contextlib.contextmanager
+def spelling_notes(notes: list[str]) -> Iterator[None]:
+    """Within the block, every key read under another spelling (``raw``) is said in `notes` (the record's)."""
+    token = _SPELLING_NOTES.set(notes)
+    try:
+        yield
+    finally:
+        _SPELLING_NOTES.reset(token)
+
+
 def raw(d, key: str, where: str):
-    """The value of `key` in the record's object `d`, None when absent, null or an empty text; a key spelt
-    otherwise (``misspelt``) is one ConfigError."""
+    """The value of `key` in the record's object `d`, None when absent, null or an empty text; where `key` is
+    absent and the record spells it otherwise (``misspelt``), that key's value, said in the notes of the
+    enclosing ``spelling_notes`` block."""
     if not isinstance(d, dict):
         return None
     v = d.get(key)
     if key not in d:
         other = misspelt(d, key)
         if other is not None:
-            raise ConfigError(f"{where}.{key}", f"missing (the record has {other!r})",
-                              f"the key spelt {key!r} (keys are read as the layout spells them)")
+            v = d[other]
+            notes = _SPELLING_NOTES.get()
+            if notes is not None and (line := f"{where}.{key} read from the record's key {other!r}") not in notes:
+                notes.append(line)
     return None if v is None or (isinstance(v, str) and not v.strip()) else v
 
 
