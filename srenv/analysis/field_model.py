@@ -48,13 +48,15 @@ def _qp_solver() -> str:
 
 
 def tapers(rec: FieldRecord) -> list[dict]:
+    """The record's tapers as config tapers: a steel body plus couplings making up the record's weight; a taper
+    lighter than a steel bar of its diameter (fiberglass) is a body of its own density (weight / area)."""
     out = []
     for t in rec.tapers:
         area = math.pi / 4 * t["diameter_m"] ** 2
-        body = STEEL_DENSITY_KG_M3 * area
+        density = min(STEEL_DENSITY_KG_M3, t["weight_kg_m"] / area)
         out.append({"diameter_mm": 1e3 * t["diameter_m"], "length_m": t["length_m"],
-                    "youngs_modulus_pa": t["youngs_modulus_pa"], "density_kg_m3": STEEL_DENSITY_KG_M3,
-                    "coupling_mass_kg_per_m": max(t["weight_kg_m"] - body, 0.0),
+                    "youngs_modulus_pa": t["youngs_modulus_pa"], "density_kg_m3": density,
+                    "coupling_mass_kg_per_m": max(t["weight_kg_m"] - density * area, 0.0),
                     "grade": t["grade"] if t["grade"] in ("C", "K", "D") else "D"})
     return out
 

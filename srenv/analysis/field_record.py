@@ -19,6 +19,8 @@ from .. import field_units as fu
 from ..errors import ConfigError
 from ..input_files import read_json
 from ..surface_unit.card_checks import check_card, check_magnitude, loop_work
+from .record_extras import card_type, coefficients, ideal_card, pump_card
+from .record_fields import FIELDS, number, raw, series, spelling_notes
 
 MAX_RECORD_BYTES = 20_000_000
 
@@ -62,49 +64,14 @@ class FieldRecord:
         return float(sum(t["length_m"] for t in self.tapers))
 
 
-def _get(d: dict, key: str, where: str):
-    if not isinstance(d, dict) or key not in d or d[key] is None:
-        raise ConfigError(f"{where}.{key}", "missing", "a value in the record")
-    return d[key]
-
-
 def _section(d: dict, key: str, where: str, required: bool = True) -> dict:
     """A JSON object of the record ({} when optional and absent); anything else is one ConfigError."""
-    v = d.get(key) if isinstance(d, dict) else None
+    v = raw(d, key, where)
     if v is None and not required:
         return {}
     if not isinstance(v, dict):
         raise ConfigError(f"{where}.{key}", "missing" if v is None else type(v).__name__, "a JSON object")
     return v
-
-
-def _num(d: dict, key: str, where: str, lo: float, hi: float, unit: str, optional: bool = False):
-    """A number of the record in its field unit, checked in [lo, hi] (in that unit), returned in SI."""
-    if optional and (not isinstance(d, dict) or d.get(key) is None):
-        return None
-    v = _get(d, key, where)
-    if isinstance(v, str):
-        v = v.strip().rstrip("%")
-    if isinstance(v, bool):
-        raise ConfigError(f"{where}.{key}", v, f"a number in {unit}")
-    try:
-        x = float(v)
-    except (TypeError, ValueError):
-        raise ConfigError(f"{where}.{key}", v, f"a number in {unit}") from None
-    if not (math.isfinite(x) and lo <= x <= hi):
-        raise ConfigError(f"{where}.{key}", v, f"a finite number in {unit} within [{lo:g}, {hi:g}]")
-    return fu.to_si(x, unit, f"{where}.{key}")
-
-
-def _series(d: dict, key: str, where: str) -> np.ndarray:
-    v = _get(d, key, where)
-    try:
-        a = np.asarray(v, dtype=float)
-    except (TypeError, ValueError):
-        raise ConfigError(f"{where}.{key}", "a non-numeric list", "a list of numbers") from None
-    if a.ndim != 1:
-        raise ConfigError(f"{where}.{key}", f"shape {a.shape}", "a flat list of numbers")
-    return a
 
 
 # API RP 11L (5th ed., 1988), Table 4.1 "Rod and pump data", column w_r: steel sucker rods with their couplings,
@@ -122,26 +89,40 @@ def rod_weight_lb_ft(diameter_in: float) -> tuple[float, str]:
     return STEEL_LB_FT_PER_IN2 * math.pi / 4 * diameter_in ** 2, "steel bar body (3.40 lb/ft per in^2)"
 
 
+NOT_STEEL = 0.6      # a taper lighter than this share of a steel bar of its diameter is not steel (fiberglass)
+
+
+def _taper(r, w: str, notes: list[str]) -> dict:
+    if not isinstance(r, dict):
+        raise ConfigError(w, r, "a JSON object (Diameter, TotalLength, ModulusOfElasticity, Weight, Grade)")
+    d_m = number(r, "Diameter", w)
+    weight = number(r, "Weight", w)
+    if weight is None:
+        lb_ft, how = rod_weight_lb_ft(d_m / fu.factor("in"))
+        weight = fu.to_si(lb_ft, "lb/ft")
+        notes.append(f"{w}.Weight missing: {lb_ft:.3f} lb/ft from {how}")
+    length = number(r, "TotalLength", w)
+    if length is None:
+        count, each = number(r, "Count", w), number(r, "IndividualLength", w)
+        if count is None or each is None:
+            raise ConfigError(f"{w}.TotalLength", "missing", "a number in ft (or Count and IndividualLength)")
+        length = count * each
+        notes.append(f"{w}.TotalLength missing: Count x IndividualLength = {fu.from_si(length, 'ft'):g} ft")
+    steel_bar = fu.to_si(STEEL_LB_FT_PER_IN2 * math.pi / 4 * (d_m / fu.factor("in")) ** 2, "lb/ft")
+    if raw(r, "ModulusOfElasticity", w) is None and weight < NOT_STEEL * steel_bar:
+        raise ConfigError(f"{w}.ModulusOfElasticity", "missing", "a number in psi: the taper weighs "
+                          f"{fu.from_si(weight, 'lb/ft'):.3g} lb/ft, lighter than steel (fiberglass?), so no default")
+    grade = raw(r, "Grade", w)
+    if grade is None:
+        notes.append(f"{w}.Grade missing: D (its tensile strength enters the Goodman loading only)")
+    return {"diameter_m": d_m, "length_m": length, "youngs_modulus_pa": number(r, "ModulusOfElasticity", w, notes),
+            "weight_kg_m": weight, "grade": str(grade or "D")}
+
+
 def _tapers(rods: list, where: str, notes: list[str]) -> list[dict]:
     if not isinstance(rods, list) or not rods:
-        raise ConfigError(where, "missing", "a list of rod tapers (top-down)")
-    out = []
-    for i, r in enumerate(rods):
-        w = f"{where}[{i}]"
-        d_m = _num(r, "Diameter", w, 0.1, 4.0, "in")
-        weight = _num(r, "Weight", w, 0.05, 50.0, "lb/ft", optional=True)
-        if weight is None:
-            lb_ft, how = rod_weight_lb_ft(d_m / fu.factor("in"))
-            weight = fu.to_si(lb_ft, "lb/ft")
-            notes.append(f"{w}.Weight missing: {lb_ft:.3f} lb/ft from {how}")
-        out.append({
-            "diameter_m": d_m,
-            "length_m": _num(r, "TotalLength", w, 1.0, 40000.0, "ft"),
-            "youngs_modulus_pa": _num(r, "ModulusOfElasticity", w, 1e5, 1e8, "psi"),
-            "weight_kg_m": weight,
-            "grade": str(r.get("Grade") or "D"),
-        })
-    return out
+        raise ConfigError(where, "missing" if not rods else type(rods).__name__, "a list of rod tapers (top-down)")
+    return [_taper(r, f"{where}[{i}]", notes) for i, r in enumerate(rods)]
 
 
 def _depth_notes(rec: FieldRecord) -> list[str]:
@@ -154,22 +135,35 @@ def _depth_notes(rec: FieldRecord) -> list[str]:
     return []
 
 
-def _unit(su: dict, where: str) -> dict:
-    if not isinstance(su, dict):
+UNIT_DIMENSIONS = ("DimensionalA", "DimensionalC", "DimensionalI", "DimensionalK", "DimensionalP", "Radius")
+
+
+def _unit(su: dict, where: str, notes: list[str]) -> dict:
+    from ..surface_unit.inline_unit import record_geometry, record_rotation_known
+
+    if not su:
+        notes.append(f"{where} missing: no unit kinematics")
         return {}
-    out = {k: _num(su, f"Dimensional{k}", where, 1.0, 1000.0, "in", optional=True) for k in "ACIKP"}
-    out["R"] = _num(su, "Radius", where, 1.0, 500.0, "in", optional=True)
-    out["geometry"] = su.get("PumpingUnitGeometry")
-    out["rotation"] = su.get("Rotation")
-    out["structural_unbalance_n"] = _num(su, "StructuralImbalance", where, -1e5, 1e5, "lbf", optional=True)
+    out = {k[-1] if k != "Radius" else "R": number(su, k, where) for k in UNIT_DIMENSIONS}
+    out["geometry"] = raw(su, "PumpingUnitGeometry", where)
+    out["rotation"] = raw(su, "Rotation", where)
+    missing = [k for k in UNIT_DIMENSIONS if out[k[-1] if k != "Radius" else "R"] is None]
+    if record_geometry(out["geometry"]) is None:
+        notes.append(f"{where}.PumpingUnitGeometry = {out['geometry']!r}: not a known API geometry (C, M, A): "
+                     "no unit kinematics")
+    elif missing:
+        notes.append(f"{where}.{missing[0]} missing: no unit kinematics")
+    elif not record_rotation_known(out["rotation"]):
+        notes.append(f"{where}.Rotation = {out['rotation']!r}: not a known rotation: clockwise (the API default)")
+    out["structural_unbalance_n"] = number(su, "StructuralImbalance", where, notes)
     # the layout gives the gearbox rating and the counterbalance moment in thousands of in-lb, the phase angle
     # (a Mark II's crank offset) in degrees; srenv.surface_unit.inline_unit maps them onto surface.beam_unit
-    # wide ranges: these only feed the unit's report, and must not refuse a record the model does not need them for
-    rating = _num(su, "GearBoxRating", where, 0.0, 1e6, "-", optional=True)
-    moment = _num(su, "CounterbalanceMoment", where, -1e6, 1e6, "-", optional=True)
+    rating, moment = number(su, "GearBoxRating", where), number(su, "CounterbalanceMoment", where)
+    notes += [f"{where}.{k} missing: {FIELDS[f'{where}.{k}'].absent}" for k, v in
+              (("GearBoxRating", rating), ("CounterbalanceMoment", moment)) if v is None]
     out["torque_rating_nm"] = None if rating is None else fu.to_si(1e3 * rating, "in") * fu.to_si(1.0, "lbf")
     out["counterbalance_moment_nm"] = None if moment is None else fu.to_si(1e3 * moment, "in") * fu.to_si(1.0, "lbf")
-    out["phase_angle_deg"] = _num(su, "PhaseAngle", where, -360.0, 360.0, "-", optional=True)
+    out["phase_angle_deg"] = number(su, "PhaseAngle", where, notes)
     return out
 
 
@@ -181,119 +175,154 @@ def load_record_json(path: str | Path):
     return read_json(p, "RECORD", "record", MAX_RECORD_BYTES)
 
 
-def read_dynacard_json(path: str | Path, reverse: bool = False, auto_orient: bool = False) -> FieldRecord:
-    """A vendor dynacard export (``cardData``, ``equipmentData``, ``InputParameters``, ...). The layout stores
-    cards in either time direction: with `auto_orient` a reversed card is turned forward (and the record says
-    so, ``time_reversed``); otherwise it is refused unless `reverse`."""
-    d = load_record_json(path)
-    if not isinstance(d, dict):
-        raise ConfigError("RECORD", str(path), "a JSON object (the dynacard layout)")
-    eq = _section(d, "equipmentData", "record")
-    ip = _section(d, "InputParameters", "record")
+def _card(d: dict, source: str, reverse: bool, auto_orient: bool) -> tuple[np.ndarray, np.ndarray, bool]:
+    """The surface card (m, N) forward in time, checked (``card_checks``), and whether it was stored reversed."""
     cd = _section(d, "cardData", "record")
-    x_in, f_lbf = _series(cd, "Position", "cardData"), _series(cd, "Load", "cardData")
+    x_in, f_lbf = series(cd, "Position", "cardData"), series(cd, "Load", "cardData")
     for what, values in (("positions", x_in), ("loads", f_lbf)):  # as read: the unit conversion would overflow
-        check_magnitude(values, "cardData", str(path), what)
+        check_magnitude(values, "cardData", source, what)
     if len(x_in) != len(f_lbf):
         raise ConfigError("cardData", f"{len(x_in)} positions, {len(f_lbf)} loads", "one load per position")
     x_m, f_n = fu.to_si(x_in, "in"), fu.to_si(f_lbf, "lbf")
     if auto_orient and len(x_m) == len(f_n) and np.all(np.isfinite(x_m)) and np.all(np.isfinite(f_n)):
         reverse = reverse or loop_work(x_m, f_n) < 0
-    x, f = check_card(x_m, f_n, "cardData", str(path), reverse)
-    spm = _num(ip, "StrokesPerMinute", "InputParameters", 0.1, 60.0, "-")
-    t = np.arange(len(x)) * (60.0 / spm / len(x))
-    pump = _section(eq, "Pump", "equipmentData")
+    x, f = check_card(x_m, f_n, "cardData", source, reverse)
+    return x, f, reverse
+
+
+EQUIPMENT = ("Pump", "Rods", "SurfaceUnit", "WellBore", "RodPumpMotor")
+
+
+def _equipment(d: dict, notes: list[str]) -> dict:
+    """``equipmentData``; the layout's ``dynaoutputData`` copy where the record has no equipmentData (said), and a
+    copy that disagrees with it is said (equipmentData is read)."""
+    eq = raw(d, "equipmentData", "record")
+    dyn = _section(d, "dynaoutputData", "record", required=False)
+    if eq is None and any(k in dyn for k in EQUIPMENT):
+        notes.append("record.equipmentData missing: the equipment is read from dynaoutputData (the vendor's copy)")
+        return dyn
+    eq = _section(d, "equipmentData", "record")
+    notes += [f"dynaoutputData.{k} differs from equipmentData.{k}: equipmentData is read" for k in EQUIPMENT
+              if dyn.get(k) is not None and eq.get(k) is not None and dyn[k] != eq[k]]
+    return eq
+
+
+def _fluid(d: dict, eq: dict, ip: dict, notes: list[str]) -> tuple[float | None, float]:
+    """The well test's water cut (fraction, None without one) and the liquid's density (kg/m^3)."""
     wb = _section(eq, "WellBore", "equipmentData", required=False)
     wt = _section(d, "WellTestData", "record", required=False)
-    wcut = _num(wt, "WaterCut", "WellTestData", 0.0, 100.0, "%", optional=True)
-    api = _num(wb, "OilApi", "WellBore", 5.0, 80.0, "-", optional=True) or 35.0
-    sgw = _num(wb, "WaterGravity", "WellBore", 0.9, 1.4, "-", optional=True) or 1.0
-    rho = fu.liquid_density_kg_m3(wcut if wcut is not None else 0.0, sgw, api)
-    rho_given = _num(ip, "FluidDensity", "InputParameters", 100.0, 3000.0, "kg/m^3", optional=True)
+    wcut = number(wt, "WaterCut", "WellTestData")
+    if wcut is None:
+        notes.append("WellTestData.WaterCut missing: 0 % (all oil) for the liquid's density and compressibility")
+    rho_given = number(ip, "FluidDensity", "InputParameters")
+    where = "equipmentData.WellBore"
+    taken: list[str] = []  # the gravities' defaults, said where the density is made of them
+    api, sgw = number(wb, "OilApi", where, taken), number(wb, "WaterGravity", where, taken)
+    if rho_given is not None:
+        return wcut, rho_given
+    notes += taken
+    return wcut, fu.liquid_density_kg_m3(wcut if wcut is not None else 0.0, sgw, api)
+
+
+def _analysis(d: dict, notes: list[str]) -> dict:
+    """The vendor's diagnosis (intake pressure, fillage, fluid load; SI), where the record has one."""
     an = _section(d, "downholeCardAnalysis", "record", required=False)
+    where = "downholeCardAnalysis"
+    out = {"intake_pressure_pa": number(an, "Pump Intake Pressure", where),
+           "fillage": number(an, "Pump Fillage", where), "fluid_load_n": number(an, "Fluid Load", where)}
+    if out["intake_pressure_pa"] is not None:
+        notes += [f"{where}.{k} missing: {FIELDS[f'{where}.{k}'].absent}" for k, v in
+                  (("Pump Fillage", out["fillage"]), ("Fluid Load", out["fluid_load_n"])) if v is None]
+    return out
+
+
+def _spm(d: dict, ip: dict, notes: list[str]) -> float:
+    """The record's stroke rate: ``InputParameters.StrokesPerMinute``, else the vendor analysis's own reading
+    (``downholeCardAnalysis.SPM``, two decimals), said; else one ConfigError."""
+    spm = number(ip, "StrokesPerMinute", "InputParameters")
+    if spm is not None:
+        return spm
+    spm = number(_section(d, "downholeCardAnalysis", "record", required=False), "SPM", "downholeCardAnalysis")
+    if spm is None:
+        raise ConfigError("InputParameters.StrokesPerMinute", "missing",
+                          FIELDS["InputParameters.StrokesPerMinute"].number.expected() + " (or downholeCardAnalysis.SPM)")
+    notes.append(f"InputParameters.StrokesPerMinute missing: downholeCardAnalysis.SPM = {spm:g} (the vendor's reading)")
+    return spm
+
+
+def read_dynacard_json(path: str | Path, reverse: bool = False, auto_orient: bool = False) -> FieldRecord:
+    """A vendor dynacard export (``cardData``, ``equipmentData``, ``InputParameters``, ...). The layout stores
+    cards in either time direction: with `auto_orient` a reversed card is turned forward (and the record says
+    so, ``time_reversed``); otherwise it is refused unless `reverse`. The fields read, their bounds and the
+    defaults taken are declared once (``record_fields``); every default taken is said in ``notes``."""
+    d = load_record_json(path)
+    if not isinstance(d, dict):
+        raise ConfigError("RECORD", str(path), "a JSON object (the dynacard layout)")
     notes: list[str] = []
-    rec = FieldRecord(notes=notes, 
-        source=str(path), time_reversed=reverse, t_s=t, position_m=x - x.min(), load_n=f, spm=spm,
-        tapers=_tapers(eq.get("Rods"), "equipmentData.Rods", notes),
-        pump_depth_m=_num(pump, "Depth", "equipmentData.Pump", 10.0, 40000.0, "ft"),
-        plunger_diameter_m=_num(pump, "Diameter", "equipmentData.Pump", 0.5, 8.0, "in"),
-        tubing_pressure_pa=_num(ip, "TubingPressure", "InputParameters", 0.0, 10000.0, "psi", optional=True) or 0.0,
-        fluid_density_kg_m3=rho if rho_given is None else rho_given,
-        survey=_survey(d.get("surveyData")), water_cut=wcut,
-        intake_pressure_pa=_num(an, "Pump Intake Pressure", "downholeCardAnalysis", 0.0, 20000.0, "psi", True),
-        fillage=_num(an, "Pump Fillage", "downholeCardAnalysis", 0.0, 100.0, "%", optional=True),
-        fluid_load_n=_num(an, "Fluid Load", "downholeCardAnalysis", -1e6, 1e6, "lbf", optional=True),
-        damping_coefficients=_coefficients(eq.get("DampingCoefficient") or _section(
-            d, "dynaoutputData", "record", required=False).get("DampingCoefficient")),
-        unit=_unit(eq.get("SurfaceUnit"), "equipmentData.SurfaceUnit"))
-    rec.notes += _depth_notes(rec)
-    rec.card_type = _card_type(d.get("CardDetails"))
-    motor = eq.get("RodPumpMotor")
-    rec.motor = motor if isinstance(motor, dict) else {}
-    rec.reference_prediction = _ideal_card(d.get("Performance"), float(np.ptp(rec.position_m)), notes)
-    dh = d.get("downholeCard")
-    if isinstance(dh, dict) and dh.get("Position") and dh.get("Load"):
-        xp, fp = _series(dh, "Position", "downholeCard"), _series(dh, "Load", "downholeCard")
-        if len(xp) == len(fp) and len(xp) >= 16 and np.all(np.isfinite(xp)) and np.all(np.isfinite(fp)):
-            # the vendor's pump card keeps its own time order (not always the surface card's): forward by its loop
-            back = loop_work(xp, fp) < 0
-            rec.pump_position_m = fu.to_si(xp[::-1] if back else xp, "in")
-            rec.pump_load_n = fu.to_si(fp[::-1] if back else fp, "lbf")
-    return rec
+    with spelling_notes(notes):  # a key the record spells its own way is read, and said
+        eq = _equipment(d, notes)
+        x, f, reverse = _card(d, str(path), reverse, auto_orient)
+        ip = _section(d, "InputParameters", "record")
+        spm = _spm(d, ip, notes)
+        pump = _section(eq, "Pump", "equipmentData")
+        tapers = _tapers(raw(eq, "Rods", "equipmentData"), "equipmentData.Rods", notes)
+        wcut, rho = _fluid(d, eq, ip, notes)
+        rec = FieldRecord(
+            notes=notes, source=str(path), time_reversed=reverse, t_s=np.arange(len(x)) * (60.0 / spm / len(x)),
+            position_m=x - x.min(), load_n=f, spm=spm, tapers=tapers,
+            pump_depth_m=number(pump, "Depth", "equipmentData.Pump"),
+            plunger_diameter_m=number(pump, "Diameter", "equipmentData.Pump"),
+            tubing_pressure_pa=number(ip, "TubingPressure", "InputParameters", notes),
+            fluid_density_kg_m3=rho, survey=_survey(raw(d, "surveyData", "record"), notes), water_cut=wcut,
+            **_analysis(d, notes),
+            damping_coefficients=coefficients(eq.get("DampingCoefficient") or _section(
+                d, "dynaoutputData", "record", required=False).get("DampingCoefficient")),
+            unit=_unit(_section(eq, "SurfaceUnit", "equipmentData", required=False), "equipmentData.SurfaceUnit", notes))
+        rec.notes += _depth_notes(rec)
+        rec.card_type = card_type(d.get("CardDetails"))
+        motor = eq.get("RodPumpMotor")
+        rec.motor = motor if isinstance(motor, dict) else {}
+        rec.reference_prediction = ideal_card(d.get("Performance"), float(np.ptp(rec.position_m)), notes)
+        rec.pump_position_m, rec.pump_load_n = pump_card(d.get("downholeCard"), notes)
+        return rec
 
 
-def _card_type(details) -> str | None:
-    """The vendor's card type (a short word: Startup, Shutdown, ...), or None."""
-    v = details.get("CardType") if isinstance(details, dict) else None
-    return v.strip() if isinstance(v, str) and 0 < len(v.strip()) <= 40 and v.strip().isprintable() else None
-
-
-IDEAL = "Performance.IdealCardSimulation_SurfaceCard_"
-
-
-def _ideal_card(perf, stroke_m: float, notes: list[str]) -> dict | None:
-    """The vendor's predicted full-pump surface card's extremes, where the record carries them. They are in SI
-    (N, m) unlike the record's cards; the unit is checked on the record itself: the ideal card's position
-    range must be the measured stroke (within 10 %), else the figures are left out and a note says why."""
-    if not isinstance(perf, dict):
-        return None
-    keys = ("Load_max", "Load_min", "Position_max", "Position_min")
-    vals = [perf.get("IdealCardSimulation_SurfaceCard_" + k) for k in keys]
-    if all(v is None for v in vals):
-        return None
-    try:
-        f_max, f_min, x_max, x_min = (float(v) for v in vals)
-    except (TypeError, ValueError):
-        notes.append(f"{IDEAL}*: not four numbers; the vendor's predicted card is left out")
-        return None
-    ok = all(math.isfinite(v) for v in (f_max, f_min, x_max, x_min)) and -1e7 < f_min < f_max < 1e7
-    if not ok or abs((x_max - x_min) - stroke_m) > 0.1 * stroke_m:
-        notes.append(f"{IDEAL}*: stroke {x_max - x_min:g} against the measured {stroke_m:.3f} m, or loads out of "
-                     "order; not read as SI, the vendor's predicted card is left out")
-        return None
-    return {"pprl_n": f_max, "mprl_n": f_min, "stroke_m": x_max - x_min}
-
-
-def _coefficients(v) -> list[float]:
-    """The vendor's damping coefficients as given (reported, not used by the model)."""
-    if not isinstance(v, list):
-        return []
-    return [float(c) for c in v if isinstance(c, (int, float)) and not isinstance(c, bool) and math.isfinite(c)]
-
-
-def _survey(rows) -> list[dict]:
-    if not isinstance(rows, list):
-        return []
-    out = []
-    for i, s in enumerate(rows):
+def _survey(rows, notes: list[str]) -> list[dict]:
+    """The record's stations (SI, sorted by MD); [] for a vertical well. No survey, an empty one or one station
+    is a vertical well, said; a station's missing inclination or azimuth is 0, said once per column; a station
+    repeated is dropped, said; two stations at one MD that disagree are refused."""
+    if rows is not None and not isinstance(rows, list):
+        raise ConfigError("surveyData", rows, "a list of stations (MD, Inclination, Azimuth, TVD)")
+    if not rows or len(rows) == 1:
+        notes.append(f"surveyData {'missing' if not rows else 'has one station'}: a vertical well")
+    out, taken = [], []
+    for i, s in enumerate(rows or []):
         w = f"surveyData[{i}]"
-        out.append({"md_m": _num(s, "MD", w, 0.0, 100000.0, "ft"),
-                    "inclination_deg": _num(s, "Inclination", w, 0.0, 180.0, "-", optional=True) or 0.0,
-                    "azimuth_deg": _num(s, "Azimuth", w, -360.0, 360.0, "-", optional=True) or 0.0,
+        if not isinstance(s, dict):
+            raise ConfigError(w, s, "a JSON object (MD, Inclination, Azimuth, TVD)")
+        out.append({"md_m": number(s, "MD", w), "inclination_deg": number(s, "Inclination", w, taken),
+                    "azimuth_deg": number(s, "Azimuth", w, taken),
                     # the record's own TVD column, read for `validate --survey-weight tvd` only (docs/realism.md)
-                    "tvd_m": _num(s, "TVD", w, 0.0, 100000.0, "ft", optional=True)})
+                    "tvd_m": number(s, "TVD", w), "row": i})
+    for key in ("Inclination", "Azimuth"):
+        n = sum(f".{key} missing" in t for t in taken)
+        if n:
+            notes.append(f"surveyData[].{key} missing at {n} of {len(rows)} stations: 0 deg")
     out.sort(key=lambda s: s["md_m"])
-    return out if any(s["inclination_deg"] > 0 for s in out) else []
+    kept = [s for k, s in enumerate(out) if k == 0 or s["md_m"] != out[k - 1]["md_m"] or _disagree(out[k - 1], s)]
+    if len(kept) < len(out):
+        notes.append(f"surveyData: {len(out) - len(kept)} repeated station(s) dropped")
+    for s in kept:
+        s.pop("row")
+    return kept if any(s["inclination_deg"] > 0 for s in kept) else []
+
+
+def _disagree(a: dict, b: dict) -> bool:
+    """Two stations at one MD: the same (a repeat, False) or one ConfigError naming the second."""
+    if (a["inclination_deg"], a["azimuth_deg"]) == (b["inclination_deg"], b["azimuth_deg"]):
+        return False
+    raise ConfigError(f"surveyData[{b['row']}].MD", fu.from_si(b["md_m"], "ft"), f"a depth of its own (surveyData["
+                      f"{a['row']}] is at the same MD with another inclination or azimuth)")
 
 
 def read_record_csv(path: str | Path, config: str, reverse: bool = False) -> FieldRecord:

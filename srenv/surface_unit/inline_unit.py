@@ -161,10 +161,21 @@ def record_geometry(code: Any) -> str | None:
     return _RECORD_GEOMETRIES.get(key)
 
 
+_CCW = ("c.clock", "counter", "ccw", "cclock")
+
+
+def _rotation_key(text: Any) -> str:
+    return str(text or "").lower().replace(" ", "").replace("-", "")
+
+
 def record_rotation(text: Any) -> str:
     """'C. Clockwise', 'CCW', 'Counterclockwise' -> counterclockwise; anything else clockwise (API default)."""
-    rot = str(text or "").lower().replace(" ", "").replace("-", "")
-    return "counterclockwise" if rot.startswith(("c.clock", "counter", "ccw", "cclock")) else "clockwise"
+    return "counterclockwise" if _rotation_key(text).startswith(_CCW) else "clockwise"
+
+
+def record_rotation_known(text: Any) -> bool:
+    """Whether a record's rotation names one (either way round); an unknown one is read clockwise, said so."""
+    return _rotation_key(text).startswith((*_CCW, "clock", "cw"))
 
 
 def record_unit_config(unit: dict) -> dict | None:

@@ -108,7 +108,8 @@ def pump_state(rec, work_dir: str, survey_weight: str = "inclination") -> dict:
     from ..analysis.field_model import MIN_INTAKE_PA, pump_drag_n, well_config
 
     if rec.intake_pressure_pa is not None:
-        p_in, fill, fluid, source = rec.intake_pressure_pa, rec.fillage or 1.0, rec.fluid_load_n, "record"
+        p_in, fluid, source = rec.intake_pressure_pa, rec.fluid_load_n, "record"
+        fill = 1.0 if rec.fillage is None else rec.fillage  # a fillage of 0 is a pump that did not fill
         lines = None
     else:
         # srenv's diagnosis of the measured card read as the field reads it: the load lines' fluid load at the
