@@ -31,6 +31,7 @@ FPI = {"setpoint": 0.95, "kp": 0.5, "ki": 0.2, "a_stroke": 0.0}
 ORACLE = {"horizon": 2, "replan_every": 2, "steps": [0.3], "policies": [["pump_off", PO], ["fillage_pi", FPI]]}
 CONFIG = REPO / "configs/benchmark/v2_oracle_distilled.yaml"
 MORE = REPO / "configs/benchmark/v2_oracle_distilled_more.yaml"  # the shipped students continued (issue 24, d24)
+POOLED = REPO / "configs/benchmark/v2_oracle_distilled_pooled.yaml"  # one pooled student (issue 24, e24)
 
 
 def test_label_inverts_compose_and_clips_out_of_reach():
@@ -213,7 +214,8 @@ def test_continued_design_starts_from_the_shipped_students_on_unused_seeds(monke
     assert len(ours) == 96 and not ours & before and not ours & (set(range(10)) | set(range(20000, 21000)))
 
 
-@pytest.mark.parametrize("config", [CONFIG, MORE], ids=["oracle_distilled", "oracle_distilled_more"])
+@pytest.mark.parametrize("config", [CONFIG, MORE, POOLED], ids=["oracle_distilled", "oracle_distilled_more",
+                                                    "oracle_distilled_pooled"])
 def test_design_config_keeps_v2s_splits_baselines_and_protocol(config, monkeypatch):
     monkeypatch.chdir(REPO)
     for quick in (False, True):
