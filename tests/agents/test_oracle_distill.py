@@ -172,7 +172,14 @@ def test_config_refuses_a_bad_oracle_teacher(tmp_path, monkeypatch, change, matc
     (CONFIG, lambda t: t["params"].update(horizon=-3), "teacher.params.horizon = -3"),
     (MORE, lambda t: t["init"].update(obs_norm="models/none_seed{seed}.npz"),
      "teacher.init.obs_norm = 'models/none_seed0.npz': expected an existing .npz"),
-], ids=["horizon", "init-missing-file"])
+    # the pooled student's block (agents/training/pooled_fit.py, issue 24, e24)
+    (POOLED, lambda t: t["pool"].update(folds=1), "teacher.pool.folds = 1: expected an integer in [2, 20]"),
+    (POOLED, lambda t: t["pool"].update(precheck_ratio=1.5), "teacher.pool.precheck_ratio = 1.5: expected a number"),
+    (POOLED, lambda t: t["pool"].update(precheck_seed_start=20000),
+     "teacher.pool.precheck_seed_start = 20000: its episodes share seeds [20000"),
+    (POOLED, lambda t: t["pool"].update(precheck_seed_start=56010),
+     "teacher.pool.precheck_seed_start = 56010: its episodes share seeds [56010"),
+], ids=["horizon", "init-missing-file", "pool-folds", "pool-ratio", "pool-validation-overlap", "pool-dagger-overlap"])
 def test_cli_names_the_bad_field_in_one_line(tmp_path, config, change, expected):
     raw = _raw(config)
     change(raw["agents"]["runs"]["oracle_distilled"]["teacher"])
