@@ -14,9 +14,11 @@ continuation labels, copied to runs/), every candidate's grouped K-fold held-out
 d24's students' MSE on the other seeds' labels, the chosen candidate fitted on P0 -> OUT/select.json,
 OUT/models/pool0.zip. ``--stage dagger``: the teacher block's training episodes with that student acting, labelled
 by the oracle (OUT/labels_dagger.npz); the ensemble = the chosen candidate fitted on P0 + them once per
-``pool.fit_seeds`` -> OUT/models/oracle_distilled_v2_seed{k}.zip. ``--stage precheck``: the pre-check's training
-episodes with the ensemble acting, THE PRE-CHECK against d24's students (``--reference``, default
+``pool.fit_seeds`` -> OUT/models/oracle_distilled_v2_seed{k}.zip. ``--stage precheck``: the pre-check's
+training episodes with the ensemble acting, THE PRE-CHECK against d24's students (``--reference``, default
 OUT/d24_models) -> OUT/precheck.json. ``--stage gate``: only after a passed pre-check; THE GATE -> OUT/gate.json.
+``--stage schedules`` (training labels only, after ``select``, chooses nothing): every candidate held out by d24
+file instead (the same wells, other schedules) -> OUT/schedules.json.
 """
 
 from __future__ import annotations
@@ -50,7 +52,7 @@ from agents.training.pooled_fit import (
 
 CONFIG = ROOT / "configs/benchmark/v2_oracle_distilled_pooled.yaml"
 GATE_SEEDS = list(range(21000, 21016))  # THE GATE's validation seeds (the config's history)
-STAGES = ("select", "dagger", "precheck", "gate")
+STAGES = ("select", "dagger", "precheck", "gate", "schedules")
 NAME = "oracle_distilled"
 
 
@@ -100,6 +102,22 @@ def select(out: Path, workers: int, ref: Path) -> dict[str, Any]:
            "chosen": best, "candidate": candidates(d["pool"])[best], "zero_correction_mse": float(np.mean(zero)),
            "zero_correction_mse_folds": zero, "d24_heldout": d24_heldout(ref, d)}
     write_json(out / "select.json", rec)
+    return rec
+
+
+def schedules(out: Path, workers: int) -> dict[str, Any]:
+    """Read after the selection, used for nothing: every candidate held out by d24 FILE (the same training wells
+    0..31, other schedules: what d24's held-out figures measured), against the pre-registered folds' held-out
+    wells (episode j of every file is training well j)."""
+    d = design()
+    pool = load_pool(pool_paths(d, out, False), d["pool"]["episode_steps"])
+    with Runner(workers) as runner:
+        rows = cv_table(runner, out / "pool0.npz", {**d["pool"], "folds": d["pool"]["files"]}, pool["file"], d["pk"],
+                        0, out / "cv_schedules")
+    zero = [float(np.mean(pool["label"][pool["file"] == f] ** 2)) for f in range(d["pool"]["files"])]
+    rec = {"stage": "schedules", "table": rows, "zero_correction_mse": float(np.mean(zero)),
+           "zero_correction_mse_folds": zero}
+    write_json(out / "schedules.json", rec)
     return rec
 
 
@@ -184,12 +202,12 @@ def main() -> None:
               "(regular files)", file=sys.stderr)
         sys.exit(2)
     a.out.mkdir(parents=True, exist_ok=True)
-    if a.stage == "select":
-        rec = select(a.out, a.workers, ref)
+    if a.stage in ("select", "schedules"):
+        rec = select(a.out, a.workers, ref) if a.stage == "select" else schedules(a.out, a.workers)
         for i, r in enumerate(rec["table"]):
             print(f"{i:2d} epochs {r['epochs']:4d} wd {r['weight_decay']:g} net {r['net_arch']}: held-out MSE "
-                  f"{r['heldout_mse']:.4f}" + ("  <- chosen" if i == rec["chosen"] else ""))
-        print(f"zero correction {rec['zero_correction_mse']:.4f}; d24 held-out mean {rec['d24_heldout']['mean']:.4f}")
+                  f"{r['heldout_mse']:.4f}" + ("  <- chosen" if i == rec.get("chosen") else ""))
+        print(f"zero correction {rec['zero_correction_mse']:.4f}")
     elif a.stage == "dagger":
         print(json.dumps(dagger(a.out, a.workers)))
     elif a.stage == "precheck":

@@ -89,11 +89,11 @@ def episode_keys(n_rows: int, steps: int) -> np.ndarray:
 
 
 def load_pool(paths: Sequence[Path], steps: int) -> dict[str, np.ndarray]:
-    """The pooled labels: x (raw inputs), label, ``group`` (a pool-wide episode id) and ``key`` (the episode's
-    index within its file, which sets its fold)."""
-    parts: dict[str, list[np.ndarray]] = {"x": [], "label": [], "group": [], "key": []}
+    """The pooled labels: x (raw inputs), label, ``group`` (a pool-wide episode id), ``key`` (the episode's
+    index within its file, which sets its fold) and ``file`` (the file's index)."""
+    parts: dict[str, list[np.ndarray]] = {"x": [], "label": [], "group": [], "key": [], "file": []}
     n_groups = 0
-    for p in paths:
+    for i, p in enumerate(paths):
         if p.is_symlink() or not p.is_file():
             raise ValueError(f"labels {str(p)[:160]!r}: expected an existing .npz file (not a symlink)")
         with np.load(p, allow_pickle=False) as z:
@@ -103,6 +103,7 @@ def load_pool(paths: Sequence[Path], steps: int) -> dict[str, np.ndarray]:
         parts["label"].append(y)
         parts["key"].append(key)
         parts["group"].append(key + n_groups)
+        parts["file"].append(np.full(len(key), i))
         n_groups += int(key.max()) + 1
     return {k: np.concatenate(v) for k, v in parts.items()}
 

@@ -33,7 +33,7 @@ def _labels(tmp_path: Path, files: int = 2, episodes: int = 5, steps: int = 6) -
 
 def test_grouped_folds_never_split_an_episode(tmp_path):
     pool = pf.load_pool(_labels(tmp_path), 6)
-    assert len(pool["x"]) == 60 and pool["group"].max() == 9
+    assert len(pool["x"]) == 60 and pool["group"].max() == 9 and np.array_equal(pool["file"], pool["group"] // 5)
     folds = pf.grouped_folds(pool["key"], 3)
     held = np.concatenate([te for _, te in folds])
     assert sorted(held) == list(range(60))  # every row held out exactly once
