@@ -48,12 +48,13 @@ REPORT = ROOT / "docs/v2/benchmark.json"
 SHIPPED = ROOT / "models"
 GATE_SEEDS = list(range(20800, 20816))  # THE GATE's validation seeds (the config's history)
 BASES = ("alarm_pump_off", "shipped_ensemble")
+SHIPPED_SEEDS = [0, 1, 2]  # the shipped ensemble's students
 STAGES = ("dagger", "gate", "fit")
 
 
-def setup() -> tuple[dict[str, Any], str, dict[str, Any], dict[str, Any], dict[str, Any]]:
+def setup(config: Path = CONFIG) -> tuple[dict[str, Any], str, dict[str, Any], dict[str, Any], dict[str, Any]]:
     """(config, run name, its run block, the tuned baselines {name: {params, score}}, the residual spec)."""
-    cfg = load_benchmark_config(str(CONFIG))
+    cfg = load_benchmark_config(str(config))
     (name, run), = cfg["agents"]["runs"].items()
     tuned = {k: {"params": v["params"], "score": v.get("score")} for k, v in load_report(REPORT)["tuned"].items()}
     return cfg, name, run, tuned, residual_spec(run, tuned)
@@ -83,33 +84,43 @@ def students(directory: Path, name: str, seeds: list[int], res: dict[str, Any]) 
              "obs_norm": str(directory / f"{name}_v2_seed{s}_obs_norm.npz")} for s in seeds]
 
 
-def gate(summ: dict[str, Any]) -> bool:
-    """THE GATE (the config's history): (continued - alarm_pump_off) paired 95 % CI lower bound > 0 AND the
-    continued ensemble's mean constraint cost <= alarm_pump_off's."""
-    row = summ["continued_ensemble"]
+def gate(summ: dict[str, Any], design: str = "continued_ensemble") -> bool:
+    """THE GATE (the design's config history): (design - alarm_pump_off) paired 95 % CI lower bound > 0 AND the
+    design's mean constraint cost <= alarm_pump_off's."""
+    row = summ[design]
     return row["vs_alarm_pump_off"]["ci95"][0] > 0 and row["cost"] <= summ["alarm_pump_off"]["cost"]
 
 
 def play_gate(out: Path, workers: int) -> dict[str, Any]:
     cfg, name, run, tuned, res = setup()
+    return play_design_gate(cfg, CONFIG, GATE_SEEDS, {"continued_ensemble": ensemble_spec(
+        students(out / "models", name, run["seeds"], res))}, tuned, res, out, workers)
+
+
+def play_design_gate(cfg: dict[str, Any], config: Path, seeds: list[int], design: dict[str, dict[str, Any]],
+                     tuned: dict[str, Any], res: dict[str, Any], out: Path, workers: int) -> dict[str, Any]:
+    """alarm_pump_off (the tuned parameters), the shipped ensemble and ``design`` ({name: its policy spec}) on the
+    validation ``seeds``, THE GATE on the design, written to OUT/gate.json (played once)."""
+    (dname, dspec), = design.items()
     specs = {"alarm_pump_off": {"kind": "baseline", "name": "alarm_pump_off",
                                 "params": tuned["alarm_pump_off"]["params"]},
-             "shipped_ensemble": ensemble_spec(students(SHIPPED, name, run["seeds"], res)),
-             "continued_ensemble": ensemble_spec(students(out / "models", name, run["seeds"], res))}
+             "shipped_ensemble": ensemble_spec(students(SHIPPED, "oracle_distilled", SHIPPED_SEEDS, res)),
+             dname: dspec}
     for spec in specs.values():
         for m in spec.get("members", []):
             if not Path(m["path"]).is_file():
-                print(f"oracle_distill_more: {m['path']}: no such student (run --stage dagger first)", file=sys.stderr)
+                print(f"{Path(sys.argv[0]).stem}: {m['path']}: no such student (run --stage dagger first)",
+                      file=sys.stderr)
                 sys.exit(2)
-    gcfg = {**copy.deepcopy(cfg), "validation": {"seeds": GATE_SEEDS}}
+    gcfg = {**copy.deepcopy(cfg), "validation": {"seeds": seeds}}
     eps = play_validation(gcfg, specs, out / "gate", workers)
     summ = summarise(eps, BASES)
     terms = {k: {t: float(np.mean([e[t] for e in v])) / INTERVALS for t in sorted(v[0])
                  if t.startswith(("reward_", "cost_"))} for k, v in eps.items()}
     point = {k: {t: float(np.mean([e[t] for e in v])) for t in sorted(v[0]) if t.startswith("mean_")}
              for k, v in eps.items()}
-    res_out = {"stage": "gate", "config": str(CONFIG.relative_to(ROOT)), "seeds": GATE_SEEDS, "specs": specs,
-               "summary": summ, "gate": gate(summ), "terms_usd_h": terms, "operating_point": point,
+    res_out = {"stage": "gate", "config": str(config.relative_to(ROOT)), "seeds": seeds, "specs": specs,
+               "summary": summ, "gate": gate(summ, dname), "terms_usd_h": terms, "operating_point": point,
                "well_id": [e["well_id"] for e in eps["alarm_pump_off"]],
                "per_episode_usd_h": {k: [round(e["reward"] / INTERVALS, 3) for e in v] for k, v in eps.items()},
                "per_episode_cost": {k: [round(e["cost"], 4) for e in v] for k, v in eps.items()}}

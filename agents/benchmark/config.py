@@ -325,6 +325,25 @@ def _check_oracle_teacher(key: str, run: dict[str, Any], t: dict[str, Any], held
         except ValueError as exc:
             raise BenchmarkConfigError(f"{key}.{str(exc).removeprefix('teacher.')}") from None
     _check_disjoint(key, run, t, held)
+    if t.get("pool") is not None:
+        _check_pool(key, run, t, held)
+
+
+def _check_pool(key: str, run: dict[str, Any], t: dict[str, Any], held: set[int]) -> None:
+    """``teacher.pool`` (agents/training/pooled_fit.py): its fields bounded, its pre-check episodes disjoint from
+    tuning, validation and the DAgger episodes."""
+    from ..training.pooled_fit import check_pool
+
+    try:
+        pool = check_pool(t["pool"], f"{key}.pool")
+    except ValueError as exc:
+        raise BenchmarkConfigError(str(exc)) from None
+    pre = set(range(pool["precheck_seed_start"], pool["precheck_seed_start"] + pool["precheck_episodes"]))
+    used = held | {s for seed in run["seeds"] for s in distill_seeds(t, seed)}
+    if pre & used:
+        raise BenchmarkConfigError(f"{key}.pool.precheck_seed_start = {pool['precheck_seed_start']!r}: its episodes "
+                                   f"share seeds {sorted(pre & used)[:5]} with tuning, validation or the DAgger "
+                                   "episodes: expected disjoint seeds")
 
 
 def _check_schedule(key: str, t: dict[str, Any]) -> None:

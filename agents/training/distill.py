@@ -27,7 +27,7 @@ import io
 import os
 import shutil
 import zipfile
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from pathlib import Path
 from typing import Any
 
@@ -69,16 +69,19 @@ def rollout_labels(env: Any, teacher: Any, student: Any, residual: dict[str, Any
     return np.asarray(xs, np.float32), np.asarray(ys, np.float32), float(np.mean(returns))
 
 
-def fit_actor(policy: Any, x: np.ndarray, y: np.ndarray, seed: int, epochs: int = EPOCHS) -> float:
-    """Fit ``policy``'s Gaussian mean to ``y`` (MSE, Adam); the final epoch's mean loss."""
+def fit_actor(policy: Any, x: np.ndarray, y: np.ndarray, seed: int, epochs: int = EPOCHS, weight_decay: float = 0.0,
+              on_epoch: Callable[[int], None] | None = None) -> float:
+    """Fit ``policy``'s Gaussian mean to ``y`` (MSE, Adam with ``weight_decay``, 0 = plain Adam); the final epoch's
+    mean loss. ``on_epoch(e)`` is called after epoch ``e`` (1-based): a fit of N epochs seen at its epoch e is the
+    fit of e epochs (the same seeded draws), so one fit scores several epoch counts."""
     import torch
 
     torch.manual_seed(seed)
     xt, yt = torch.as_tensor(x), torch.as_tensor(y)
     params = list(policy.mlp_extractor.policy_net.parameters()) + list(policy.action_net.parameters())
-    opt = torch.optim.Adam(params, lr=LR)
+    opt = torch.optim.Adam(params, lr=LR, weight_decay=float(weight_decay))
     n, loss_sum = len(xt), 0.0
-    for _ in range(epochs):
+    for epoch in range(1, epochs + 1):
         perm, loss_sum = torch.randperm(n), 0.0
         for i in range(0, n, BATCH):
             idx = perm[i:i + BATCH]
@@ -87,6 +90,8 @@ def fit_actor(policy: Any, x: np.ndarray, y: np.ndarray, seed: int, epochs: int 
             loss.backward()
             opt.step()
             loss_sum += float(loss.detach()) * len(idx)
+        if on_epoch is not None:
+            on_epoch(epoch)
     return loss_sum / max(n, 1)
 
 

@@ -39,7 +39,7 @@ from ..policies.residual import _Base, augment, compose
 from .tuning import refuse_test_split
 
 ORACLE_KIND = "causal_oracle"
-ORACLE_TEACHER_KEYS = {"kind", "params", "iterations", "episodes", "seed_start", "beta0", "init"}
+ORACLE_TEACHER_KEYS = {"kind", "params", "iterations", "episodes", "seed_start", "beta0", "init", "pool"}
 INIT_FILES = (("path", ".zip"), ("obs_norm", ".npz"))  # teacher.init: the student to continue, its statistics
 MAX_PATH = 4096
 ORACLE_PARAM_KEYS = {"horizon", "replan_every", "steps"}
@@ -59,11 +59,17 @@ def label_of(a_oracle: np.ndarray, base: np.ndarray, scale: float, idle_scale: f
 
 
 def _student(job: dict[str, Any]) -> Any:
+    """The acting student: one model ``{path, obs_norm}``, an ensemble ``{members: [...]}`` (the mean of its
+    members' corrections, as :mod:`agents.policies.ensemble`), or None (a fresh student: the base)."""
     if not job.get("student"):
         return None
     from ..evaluation.agent import AgentPolicy
+    from ..policies.ensemble import EnsemblePolicy
 
-    return AgentPolicy(job["student"]["path"], job["student"].get("obs_norm"))
+    spec = job["student"]
+    if "members" in spec:
+        return EnsemblePolicy([AgentPolicy(m["path"], m.get("obs_norm")) for m in spec["members"]])
+    return AgentPolicy(spec["path"], spec.get("obs_norm"))
 
 
 def oracle_episode_job(job: dict[str, Any]) -> dict[str, Any]:
@@ -196,6 +202,9 @@ def distill_oracle(runner: Any, teacher: dict[str, Any], oracle: dict[str, Any],
     from .distill import fit_actor, write_student
 
     refuse_test_split(env_kwargs.get("scenario", "train"), "train")
+    if teacher.get("pool") is not None:
+        raise ValueError("teacher.pool: a pooled student is fitted by scripts/oracle_distill_pooled.py, not by the "
+                         "benchmark's per-seed DAgger")
     k_hist = check_history(teacher.get("history", 1))
     hist_key = {"history": k_hist} if k_hist != 1 else {}  # K = 1: today's spec, key for key
     t0 = time.perf_counter()

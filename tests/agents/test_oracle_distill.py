@@ -31,6 +31,7 @@ FPI = {"setpoint": 0.95, "kp": 0.5, "ki": 0.2, "a_stroke": 0.0}
 ORACLE = {"horizon": 2, "replan_every": 2, "steps": [0.3], "policies": [["pump_off", PO], ["fillage_pi", FPI]]}
 CONFIG = REPO / "configs/benchmark/v2_oracle_distilled.yaml"
 MORE = REPO / "configs/benchmark/v2_oracle_distilled_more.yaml"  # the shipped students continued (issue 24, d24)
+POOLED = REPO / "configs/benchmark/v2_oracle_distilled_pooled.yaml"  # one pooled student (issue 24, e24)
 
 
 def test_label_inverts_compose_and_clips_out_of_reach():
@@ -171,7 +172,14 @@ def test_config_refuses_a_bad_oracle_teacher(tmp_path, monkeypatch, change, matc
     (CONFIG, lambda t: t["params"].update(horizon=-3), "teacher.params.horizon = -3"),
     (MORE, lambda t: t["init"].update(obs_norm="models/none_seed{seed}.npz"),
      "teacher.init.obs_norm = 'models/none_seed0.npz': expected an existing .npz"),
-], ids=["horizon", "init-missing-file"])
+    # the pooled student's block (agents/training/pooled_fit.py, issue 24, e24)
+    (POOLED, lambda t: t["pool"].update(folds=1), "teacher.pool.folds = 1: expected an integer in [2, 20]"),
+    (POOLED, lambda t: t["pool"].update(precheck_ratio=1.5), "teacher.pool.precheck_ratio = 1.5: expected a number"),
+    (POOLED, lambda t: t["pool"].update(precheck_seed_start=20000),
+     "teacher.pool.precheck_seed_start = 20000: its episodes share seeds [20000"),
+    (POOLED, lambda t: t["pool"].update(precheck_seed_start=56010),
+     "teacher.pool.precheck_seed_start = 56010: its episodes share seeds [56010"),
+], ids=["horizon", "init-missing-file", "pool-folds", "pool-ratio", "pool-validation-overlap", "pool-dagger-overlap"])
 def test_cli_names_the_bad_field_in_one_line(tmp_path, config, change, expected):
     raw = _raw(config)
     change(raw["agents"]["runs"]["oracle_distilled"]["teacher"])
@@ -213,7 +221,8 @@ def test_continued_design_starts_from_the_shipped_students_on_unused_seeds(monke
     assert len(ours) == 96 and not ours & before and not ours & (set(range(10)) | set(range(20000, 21000)))
 
 
-@pytest.mark.parametrize("config", [CONFIG, MORE], ids=["oracle_distilled", "oracle_distilled_more"])
+@pytest.mark.parametrize("config", [CONFIG, MORE, POOLED], ids=["oracle_distilled", "oracle_distilled_more",
+                                                    "oracle_distilled_pooled"])
 def test_design_config_keeps_v2s_splits_baselines_and_protocol(config, monkeypatch):
     monkeypatch.chdir(REPO)
     for quick in (False, True):
