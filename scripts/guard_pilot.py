@@ -105,9 +105,10 @@ def summarise(eps: dict[str, list[dict[str, Any]]], bases: tuple[str, ...] = BAS
 
 def play_validation(cfg: dict[str, Any], specs: dict[str, dict[str, Any]], out: Path,
                     workers: int) -> dict[str, list[dict[str, Any]]]:
-    """Every spec on the config's validation episodes (training wells, the validation seeds), cached by name in
-    ``out/episodes.json``: a later call plays only the names not there yet. The pilots' one player."""
-    kw = {**cfg["env_kwargs"], "scenario": "train"}  # the validation split: training wells, its own seeds
+    """Every spec on the config's validation episodes (the validation seeds on the training wells, or on v2's
+    validation split with ``validation.scenario: validation``), cached by name in ``out/episodes.json``: a later
+    call plays only the names not there yet. The pilots' one player."""
+    kw = {**cfg["env_kwargs"], "scenario": cfg["validation"].get("scenario", "train")}
     out.mkdir(parents=True, exist_ok=True)
     cache = out / "episodes.json"
     eps: dict[str, Any] = json.loads(cache.read_text()) if cache.exists() else {}

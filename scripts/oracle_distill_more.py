@@ -98,9 +98,11 @@ def play_gate(out: Path, workers: int) -> dict[str, Any]:
 
 
 def play_design_gate(cfg: dict[str, Any], config: Path, seeds: list[int], design: dict[str, dict[str, Any]],
-                     tuned: dict[str, Any], res: dict[str, Any], out: Path, workers: int) -> dict[str, Any]:
+                     tuned: dict[str, Any], res: dict[str, Any], out: Path, workers: int,
+                     scenario: str = "train") -> dict[str, Any]:
     """alarm_pump_off (the tuned parameters), the shipped ensemble and ``design`` ({name: its policy spec}) on the
-    validation ``seeds``, THE GATE on the design, written to OUT/gate.json (played once)."""
+    validation ``seeds`` of ``scenario`` (the training wells, as every gate so far, or v2's ``validation`` split),
+    THE GATE on the design, written to OUT/gate.json (played once)."""
     (dname, dspec), = design.items()
     specs = {"alarm_pump_off": {"kind": "baseline", "name": "alarm_pump_off",
                                 "params": tuned["alarm_pump_off"]["params"]},
@@ -112,14 +114,14 @@ def play_design_gate(cfg: dict[str, Any], config: Path, seeds: list[int], design
                 print(f"{Path(sys.argv[0]).stem}: {m['path']}: no such student (run --stage dagger first)",
                       file=sys.stderr)
                 sys.exit(2)
-    gcfg = {**copy.deepcopy(cfg), "validation": {"seeds": seeds}}
+    gcfg = {**copy.deepcopy(cfg), "validation": {"seeds": seeds, "scenario": scenario}}
     eps = play_validation(gcfg, specs, out / "gate", workers)
     summ = summarise(eps, BASES)
     terms = {k: {t: float(np.mean([e[t] for e in v])) / INTERVALS for t in sorted(v[0])
                  if t.startswith(("reward_", "cost_"))} for k, v in eps.items()}
     point = {k: {t: float(np.mean([e[t] for e in v])) for t in sorted(v[0]) if t.startswith("mean_")}
              for k, v in eps.items()}
-    res_out = {"stage": "gate", "config": str(config.relative_to(ROOT)), "seeds": seeds, "specs": specs,
+    res_out = {"stage": "gate", "config": str(config.relative_to(ROOT)), "seeds": seeds, "scenario": scenario, "specs": specs,
                "summary": summ, "gate": gate(summ, dname), "terms_usd_h": terms, "operating_point": point,
                "well_id": [e["well_id"] for e in eps["alarm_pump_off"]],
                "per_episode_usd_h": {k: [round(e["reward"] / INTERVALS, 3) for e in v] for k, v in eps.items()},

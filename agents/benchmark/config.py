@@ -167,6 +167,16 @@ def _check_guarded(g: Any, bl: dict[str, Any], runs: dict[str, Any]) -> None:
 
 
 TEST_SCENARIOS = ("test", "validation")
+# the wells the validation stage (model selection) plays: the training wells on seeds of their own (every config
+# before this key), or v2's validation split - wells no tuning or training ever drew, which is what predicts how a
+# selected design does on the test and fresh wells (docs/agents.md, "Which wells a validation gate plays")
+VALIDATION_SCENARIOS = ("train", "validation")
+
+
+def has_validation_split(env_id: str) -> bool:
+    """v2 and later have a validation split of their own wells (srenv.task.well_family.V2_SPLITS)."""
+    version = str(env_id).rsplit("-v", 1)[-1]
+    return version.isdigit() and int(version) >= 2
 
 
 def _check_splits(cfg: dict[str, Any]) -> dict[str, set[int]]:
@@ -186,6 +196,13 @@ def _check_splits(cfg: dict[str, Any]) -> dict[str, set[int]]:
                                    f"{', '.join(TEST_SCENARIOS)}")
     val = cfg.setdefault("validation", {"seeds": []})
     val["seeds"] = _seeds(val["seeds"], "validation.seeds") if val.get("seeds") else []
+    val.setdefault("scenario", "train")
+    if val["scenario"] not in VALIDATION_SCENARIOS:
+        raise BenchmarkConfigError(f"benchmark config: validation.scenario: {short_repr(val['scenario'], 40)}: "
+                                   f"expected one of {', '.join(VALIDATION_SCENARIOS)}")
+    if val["scenario"] == "validation" and not has_validation_split(cfg.get("env_id", "")):
+        raise BenchmarkConfigError(f"benchmark config: validation.scenario: 'validation': expected 'train' for "
+                                   f"{cfg.get('env_id')} (only v2 and later have a validation split)")
     sets = {"tuning": set(cfg["tuning"]["seeds"]), "validation": set(val["seeds"]), "test": set(cfg["test"]["seeds"])}
     for a, b in (("tuning", "test"), ("validation", "test"), ("tuning", "validation")):
         if sets[a] & sets[b]:

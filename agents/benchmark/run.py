@@ -93,7 +93,8 @@ def run_benchmark(cfg: dict[str, Any], out_dir: str | Path, quick: bool = False,
     traces = figure_traces(policies, agent_specs, by_entry, val_scores, fig_seed,
                            _interval_s(cfg["env_id"], test_kwargs, fig_seed))
     splits = {"tuning": tuning_split,
-              "validation": {"scenario": "train", "seeds": cfg["validation"]["seeds"], "well_ids": val_wells},
+              "validation": {"scenario": cfg["validation"].get("scenario", "train"), "seeds": cfg["validation"]["seeds"],
+                             "well_ids": val_wells},
               "test": {"scenario": test_kwargs["scenario"], "seeds": test_seeds,
                        "well_ids": sorted({e["well_id"] for e in policies["installed"]["episodes"]})}}
     wall["total"] = time.perf_counter() - t_start

@@ -167,15 +167,15 @@ def design_guarded(cfg: dict[str, Any], tuned: dict[str, Any], ens: dict[str, An
 
 def validate(cfg: dict[str, Any], runner: Runner,
              agent_specs: dict[str, list[dict[str, Any]]]) -> tuple[dict[str, list[float]], list[str]]:
-    """Each model's mean return on the validation episodes (training wells), for the seed choice; and the
-    wells those episodes drew."""
+    """Each model's mean return on the validation episodes (the training wells, or v2's validation split with
+    ``validation.scenario: validation``), for the seed choice; and the wells those episodes drew."""
     val_seeds = cfg["validation"]["seeds"]
     val_scores: dict[str, list[float]] = {}
     if not (val_seeds and agent_specs):
         return val_scores, []
-    train_kwargs = {**cfg["env_kwargs"], "scenario": "train"}
+    val_kwargs = {**cfg["env_kwargs"], "scenario": cfg["validation"].get("scenario", "train")}
     vjobs = [j for a, specs in agent_specs.items() for sp in specs
-             for j in episode_jobs(cfg["env_id"], train_kwargs, _policy_part(sp), val_seeds)]
+             for j in episode_jobs(cfg["env_id"], val_kwargs, _policy_part(sp), val_seeds)]
     recs = _mapped(runner, vjobs, "validation")
     i = 0
     for a, specs in agent_specs.items():

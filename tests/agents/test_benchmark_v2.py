@@ -337,3 +337,38 @@ def test_env_tag_names_the_version():
     assert env_tag("srenv/SuckerRod-v1") == "v1" and env_tag("srenv/SuckerRod-v2") == "v2"
     with pytest.raises(ValueError, match="env_id"):
         env_tag("srenv/SuckerRod")
+
+
+@pytest.mark.parametrize("env_id, scenario, error", [
+    ("srenv/SuckerRod-v2", None, None), ("srenv/SuckerRod-v2", "validation", None),
+    ("srenv/SuckerRod-v1", "validation", "only v2 and later"), ("srenv/SuckerRod-v2", "test", "expected one of"),
+    ("srenv/SuckerRod-v2", "family:7", "expected one of")])
+def test_the_validation_stage_plays_the_wells_its_config_names(env_id, scenario, error, tmp_path, monkeypatch):
+    """Model selection on the training wells (every config so far) or on v2's validation split (wells no tuning or
+    training drew: what predicts the test and fresh wells); the stage plays what the config says, a v1 config or
+    another split is refused in one line before any work."""
+    import yaml
+
+    import agents.benchmark.stages as stages
+    from agents.benchmark.config import BenchmarkConfigError
+
+    raw = yaml.safe_load((REPO / "configs/benchmark/v2_quick.yaml").read_text())
+    raw["env_id"] = env_id
+    raw["validation"] = {"seeds": {"start": 20000, "count": 2}, **({"scenario": scenario} if scenario else {})}
+    path = tmp_path / "c.yaml"
+    path.write_text(yaml.safe_dump(raw))
+    if error:
+        with pytest.raises(BenchmarkConfigError, match=error):
+            load_benchmark_config(path)
+        return
+    cfg = load_benchmark_config(path)
+    assert cfg["validation"]["scenario"] == (scenario or "train")
+    seen = []
+
+    def jobs(env, kwargs, spec, seeds):
+        seen.append(kwargs["scenario"])
+        return [{"seed": s} for s in seeds]
+    monkeypatch.setattr(stages, "episode_jobs", jobs)
+    monkeypatch.setattr(stages, "_mapped", lambda runner, js, what: [{"reward": 1.0, "well_id": "w"} for _ in js])
+    scores, _ = stages.validate(cfg, None, {"ppo": [{"kind": "agent", "path": "m.zip"}]})
+    assert seen == [scenario or "train"] and scores == {"ppo": [1.0]}
