@@ -67,6 +67,10 @@ TOP_KEYS: Declared = {
     "work_dir": ((str, _NULL), "a directory path (the runs' temporary files)"),
 }
 QUICK_KEYS = {k: v for k, v in TOP_KEYS.items() if k != "quick"}
+# the three splits' blocks: a misspelt key (``scenaro: validation``) would silently play the default wells
+SPLIT_KEYS: Declared = {"seeds": ((dict, list), "{start: S, count: N} or a list of seeds"),
+                        "scenario": ((str,), ("the split's scenario (tuning: train; validation: train or "
+                                              "validation; test: test or validation)"))}
 AGENTS_KEYS: Declared = {"selection": ((str,), "mean or best_on_validation"), "runs": ((dict,), "a mapping algo -> run")}
 EVALUATE_ONLY_KEYS: Declared = {
     "agents": ((list,), "a list of the shipped report's agent names"),
@@ -100,7 +104,8 @@ def load_benchmark_config(path: str | Path, quick: bool = False) -> dict[str, An
         raise FileNotFoundError(f"benchmark config {path}: no such file")
     raw = load_yaml_file(p, "benchmark config")  # bounded: alias bombs, duplicate keys, syntax in one line
     _check_keys(raw, f"benchmark config {path}", TOP_KEYS)
-    for name, declared in (("quick", QUICK_KEYS), ("agents", AGENTS_KEYS), ("evaluate_only", EVALUATE_ONLY_KEYS)):
+    for name, declared in (("quick", QUICK_KEYS), ("agents", AGENTS_KEYS), ("evaluate_only", EVALUATE_ONLY_KEYS),
+                           ("tuning", SPLIT_KEYS), ("validation", SPLIT_KEYS), ("test", SPLIT_KEYS)):
         if raw.get(name) is not None:
             _check_keys(raw[name], f"benchmark config {path}: {name}", declared)
         if name != "quick" and (raw.get("quick") or {}).get(name) is not None:

@@ -349,7 +349,7 @@ def test_the_validation_stage_plays_the_wells_its_config_names(env_id, scenario,
     another split is refused in one line before any work."""
     import yaml
 
-    import agents.benchmark.stages as stages
+    from agents.benchmark import stages
     from agents.benchmark.config import BenchmarkConfigError
 
     raw = yaml.safe_load((REPO / "configs/benchmark/v2_quick.yaml").read_text())
@@ -372,3 +372,19 @@ def test_the_validation_stage_plays_the_wells_its_config_names(env_id, scenario,
     monkeypatch.setattr(stages, "_mapped", lambda runner, js, what: [{"reward": 1.0, "well_id": "w"} for _ in js])
     scores, _ = stages.validate(cfg, None, {"ppo": [{"kind": "agent", "path": "m.zip"}]})
     assert seen == [scenario or "train"] and scores == {"ppo": [1.0]}
+
+
+@pytest.mark.parametrize("block", ["tuning", "validation", "test"])
+def test_a_misspelt_key_in_a_split_block_is_refused_not_defaulted(block, tmp_path):
+    """``scenaro: validation`` would otherwise play the default wells silently (a pre-registered gate on the wrong
+    split); the splits' keys are declared once (SPLIT_KEYS)."""
+    import yaml
+
+    from agents.benchmark.config import BenchmarkConfigError
+
+    raw = yaml.safe_load((REPO / "configs/benchmark/v2_quick.yaml").read_text())
+    raw.setdefault(block, {"seeds": {"start": 20000, "count": 2}})["scenaro"] = "validation"
+    path = tmp_path / "c.yaml"
+    path.write_text(yaml.safe_dump(raw))
+    with pytest.raises(BenchmarkConfigError, match=f"{block}: unknown key.*scenaro"):
+        load_benchmark_config(path)
