@@ -20,12 +20,10 @@ from ..inputs import FIELDS, seeds
 from ..policies.factory import BASELINE_NAMES, OPTIONAL_BASELINES, SEARCHED_BASELINES
 from ..policies.residual import RESIDUAL_BASES, check_scales
 from ..training.tuning import refuse_test_split
+from .config_error import BenchmarkConfigError, Declared
+from .splits import SPLIT_KEYS, check_splits
 
 Z95 = 1.959963984540054
-
-
-class BenchmarkConfigError(ValueError):
-    """A benchmark YAML that cannot be used; the message names the key, the value and what is expected."""
 
 
 # -------------------------------------------------------------------------------------------- config
@@ -48,7 +46,6 @@ def _seeds(value: Any, key: str) -> list[int]:
 # The top-level keys of a benchmark YAML, the one declaration (anything else is refused by name, before the
 # blocks are checked), each with the YAML types it takes and what that is: the env, the splits, the contenders,
 # and the pipeline's settings. Each block's contents are checked below.
-Declared = dict[str, tuple[tuple[type, ...], str]]  # key -> (the YAML types it takes, what that is)
 _NULL = type(None)
 TOP_KEYS: Declared = {
     "env_id": ((str,), "an srenv env id (srenv/SuckerRod-v1 or srenv/SuckerRod-v2)"),
@@ -67,10 +64,6 @@ TOP_KEYS: Declared = {
     "work_dir": ((str, _NULL), "a directory path (the runs' temporary files)"),
 }
 QUICK_KEYS = {k: v for k, v in TOP_KEYS.items() if k != "quick"}
-# the three splits' blocks: a misspelt key (``scenaro: validation``) would silently play the default wells
-SPLIT_KEYS: Declared = {"seeds": ((dict, list), "{start: S, count: N} or a list of seeds"),
-                        "scenario": ((str,), ("the split's scenario (tuning: train; validation: train or "
-                                              "validation; test: test or validation)"))}
 AGENTS_KEYS: Declared = {"selection": ((str,), "mean or best_on_validation"), "runs": ((dict,), "a mapping algo -> run")}
 EVALUATE_ONLY_KEYS: Declared = {
     "agents": ((list,), "a list of the shipped report's agent names"),
@@ -123,7 +116,7 @@ def load_benchmark_config(path: str | Path, quick: bool = False) -> dict[str, An
         raise BenchmarkConfigError(f"benchmark config: history = {str(hist)[:120]!r}: expected a list of strings "
                                    "(one line per earlier test evaluation)")
     cfg["workers"] = FIELDS["benchmark"]["workers"].check(cfg.setdefault("workers", 2))
-    sets = _check_splits(cfg)
+    sets = check_splits(cfg)
     bl = cfg.setdefault("baselines", {})
     for name in bl:
         if name not in (*BASELINE_NAMES, *OPTIONAL_BASELINES):
@@ -169,51 +162,6 @@ def _check_guarded(g: Any, bl: dict[str, Any], runs: dict[str, Any]) -> None:
                      g.get("scale"))
     except ValueError as exc:
         raise BenchmarkConfigError(f"benchmark config: guarded.{str(exc).removeprefix('guarded.')}") from None
-
-
-TEST_SCENARIOS = ("test", "validation")
-# the wells the validation stage (model selection) plays: the training wells on seeds of their own (every config
-# before this key), or v2's validation split - wells no tuning or training ever drew, which is what predicts how a
-# selected design does on the test and fresh wells (docs/agents.md, "Which wells a validation gate plays")
-VALIDATION_SCENARIOS = ("train", "validation")
-
-
-def has_validation_split(env_id: str) -> bool:
-    """v2 and later have a validation split of their own wells (srenv.task.well_family.V2_SPLITS)."""
-    version = str(env_id).rsplit("-v", 1)[-1]
-    return version.isdigit() and int(version) >= 2
-
-
-def _check_splits(cfg: dict[str, Any]) -> dict[str, set[int]]:
-    """The tuning, validation and test seeds, resolved in ``cfg`` and checked disjoint; their sets."""
-    for part in ("tuning", "test"):
-        if not isinstance(cfg.get(part), dict) or "seeds" not in cfg[part]:
-            found = "missing" if part not in cfg else f"= {short_repr(cfg[part], 80)} ({yaml_kind(cfg[part])})"
-            raise BenchmarkConfigError(f"benchmark config: {part} {found}: expected a mapping with seeds")
-        cfg[part]["seeds"] = _seeds(cfg[part]["seeds"], f"{part}.seeds")
-    cfg["tuning"].setdefault("scenario", "train")
-    refuse_test_split(cfg["tuning"]["scenario"], "tune")
-    # the scenario the test stage plays: the held-out test split, or (the quick pipeline check, which must not
-    # spend a look at the test split) v2's validation split
-    cfg["test"].setdefault("scenario", "test")
-    if cfg["test"]["scenario"] not in TEST_SCENARIOS:
-        raise BenchmarkConfigError(f"benchmark config: test.scenario: {cfg['test']['scenario']!r}: expected one of "
-                                   f"{', '.join(TEST_SCENARIOS)}")
-    val = cfg.setdefault("validation", {"seeds": []})
-    val["seeds"] = _seeds(val["seeds"], "validation.seeds") if val.get("seeds") else []
-    val.setdefault("scenario", "train")
-    if val["scenario"] not in VALIDATION_SCENARIOS:
-        raise BenchmarkConfigError(f"benchmark config: validation.scenario: {short_repr(val['scenario'], 40)}: "
-                                   f"expected one of {', '.join(VALIDATION_SCENARIOS)}")
-    if val["scenario"] == "validation" and not has_validation_split(cfg.get("env_id", "")):
-        raise BenchmarkConfigError(f"benchmark config: validation.scenario: 'validation': expected 'train' for "
-                                   f"{cfg.get('env_id')} (only v2 and later have a validation split)")
-    sets = {"tuning": set(cfg["tuning"]["seeds"]), "validation": set(val["seeds"]), "test": set(cfg["test"]["seeds"])}
-    for a, b in (("tuning", "test"), ("validation", "test"), ("tuning", "validation")):
-        if sets[a] & sets[b]:
-            raise BenchmarkConfigError(f"benchmark config: {a}.seeds and {b}.seeds share "
-                                       f"{sorted(sets[a] & sets[b])[:5]}: expected disjoint seed sets")
-    return sets
 
 
 def _check_inits(bl: dict[str, Any]) -> None:
