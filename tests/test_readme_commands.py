@@ -1,0 +1,158 @@
+"""The README and docs/*.md walked as a user walks them (issue u40): every command they show names a subcommand,
+module or script that exists and only flags its parser declares; the README's worked examples parse whole,
+its Python snippets run, the files its commands name exist, and the quick start keeps its two commands.
+
+A documented flag that is renamed or removed, or a script that goes, fails here; what the commands print is
+checked by their own tests (tests/srenv/tools/test_cli.py, tests/agents/...). Fast: parsing, one env step each.
+"""
+
+from __future__ import annotations
+
+import argparse
+import re
+import runpy
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from agents.cli import build_parser as agents_parser
+from srenv.tools.cli import build_parser as srenv_parser
+
+ROOT = Path(__file__).resolve().parents[1]
+README = (ROOT / "README.md").read_text()
+DOCS = [ROOT / "README.md", *sorted((ROOT / "docs").glob("**/*.md"))]
+FLAG = re.compile(r"(?<![\w-])(--[a-z][a-z0-9-]*)")
+UNTIL_NEXT = r"((?:(?!\bsrenv |\bpython3? ).)*)"  # a command's words, up to the next command on the line
+INSTALL = 'python3 -m venv .venv && . .venv/bin/activate && pip install torch==2.13.0 && pip install -e ".[{}]"'
+QUICK_START = (INSTALL.format("rl") + " && python -m agents quickstart", INSTALL.format("dev") + " && pytest -q -n 2")
+
+
+def _subcommand_flags(parser: argparse.ArgumentParser) -> dict[str, set[str]]:
+    sub = next(a for a in parser._actions if isinstance(a, argparse._SubParsersAction))
+    return {name: set(p._option_string_actions) for name, p in sub.choices.items()}
+
+
+SRENV, AGENTS = _subcommand_flags(srenv_parser()), _subcommand_flags(agents_parser())
+
+
+def fenced_blocks(text: str, lang: str = r"[a-z]*") -> list[str]:
+    return re.findall(rf"^ *```{lang}\n(.*?)^ *```", text, re.DOTALL | re.MULTILINE)
+
+
+def commands(text: str) -> list[str]:
+    """Every command a user would copy: a fenced block's lines (indented continuation lines joined, comments
+    cut), and every inline code span that starts with ``srenv``/``python`` (or ``nice``/``VAR=`` before them)."""
+    start = re.compile(r"(\S+=\S+ )?(nice -n \d+ )?(srenv|python3?) ")
+    out: list[str] = []
+    for block in fenced_blocks(text):
+        cur = None
+        for line in block.splitlines():
+            body = re.split(r"\s#\s|^\s*#", line)[0]
+            if start.match(body):
+                out += [cur] if cur else []
+                cur = body
+            elif cur is not None and line.startswith(" ") and body.strip():
+                cur += " " + body.strip()
+            else:
+                out += [cur] if cur else []
+                cur = None
+        out += [cur] if cur else []
+    prose = re.sub(r"^ *```.*?^ *```", "", text, flags=re.DOTALL | re.MULTILINE)
+    return out + [s for s in re.findall(r"`([^`\n]+)`", prose) if start.match(s)]
+
+
+def documented() -> list[tuple[str, str]]:
+    return [(f.relative_to(ROOT).as_posix(), c) for f in DOCS for c in commands(f.read_text())]
+
+
+def unknown_flags(doc: str, cmd: str) -> list[str]:
+    """What in one documented command does not exist: a subcommand, module, script or one of their flags."""
+    bad = []
+    for tool, table, pattern in (("srenv", SRENV, r"(?:^|[\s;(&])srenv "), ("agents", AGENTS, r"python3? -m agents ")):
+        for m in re.finditer(pattern + r"([a-z][a-z-]*)" + UNTIL_NEXT, cmd):
+            # "a | b --x | c": the synopsis' alternatives, each a subcommand of its own
+            for alt in re.split(r"\s\|\s(?=[a-z][a-z-]* )", m.group(1) + m.group(2)):
+                sub, _, rest = alt.partition(" ")
+                if sub not in table:
+                    bad.append(f"{tool} {sub}: no such subcommand")
+                bad += [f"{tool} {sub} {f}" for f in FLAG.findall(rest) if sub in table and f not in table[sub]]
+    for m in re.finditer(r"python3? (?:-W \S+ )?(?:-m ((?:srenv|agents)\.[\w.]+)|(scripts/\w+\.py))" + UNTIL_NEXT, cmd):
+        module, script, rest = m.groups()
+        path = ROOT / (script or module.replace(".", "/") + ".py")
+        if not path.exists():
+            bad.append(f"{path.relative_to(ROOT)}: no such file")
+            continue
+        source = path.read_text()  # a script's parser is built in its main(): its flags are its literals
+        bad += [f"{path.name} {f}" for f in FLAG.findall(rest) if f'"{f}"' not in source]
+    return [f"{doc}: {b}   <- {cmd.strip()[:100]}" for b in bad]
+
+
+def test_the_walk_finds_the_commands():
+    """The extraction itself: the README's synopsis, examples and RLlib block, and the docs' inline commands."""
+    found = documented()
+    readme = [c for d, c in found if d == "README.md"]
+    assert len(readme) >= 25 and len(found) >= 150
+    for needle in ("srenv simulate CONFIG", "srenv sweep paper_fig7_pullout", "python -m agents replay",
+                   "python -m rl_zoo3.train", "python scripts/reward_sweep.py"):
+        assert any(c.startswith(needle) for c in readme), needle
+    assert unknown_flags("x", "srenv sweep C --executor ray") == ["x: srenv sweep --executor   <- srenv sweep C --executor ray"]
+    assert unknown_flags("x", "python scripts/no.py --a") == ["x: scripts/no.py: no such file   <- python scripts/no.py --a"]
+
+
+def test_every_documented_command_and_flag_exists():
+    bad = [b for doc, cmd in documented() for b in unknown_flags(doc, cmd)]
+    assert not bad, "\n".join(bad)
+
+
+def test_quick_start_keeps_its_two_commands():
+    blocks = [b.strip() for b in fenced_blocks(README, "bash")]
+    assert blocks[0] == QUICK_START[0] and blocks[1] == QUICK_START[1]
+
+
+def _examples() -> list[str]:
+    block = next(b for b in fenced_blocks(README, "bash") if "srenv sweep paper_fig7_pullout" in b)
+    return [c for c in commands(f"```bash\n{block}```\n")]
+
+
+@pytest.mark.parametrize("cmd", [c for c in _examples() if c.startswith("srenv ")])
+def test_readme_srenv_examples_parse(cmd: str):
+    args = srenv_parser().parse_args(cmd.replace("\\", " ").split()[1:])
+    assert args.command == cmd.split()[1]
+
+
+def test_readme_files_named_in_commands_exist():
+    names = {n for _, c in documented() for n in re.findall(r"(?<![\w/.])((?:configs|docs|models)/[\w./-]+\.\w+)", c)
+             if "*" not in n}
+    names |= set(re.findall(r"\]\(((?:docs|srenv)/[\w./-]+\.(?:md|py))", README))
+    missing = sorted(n for n in names if not (ROOT / n).exists() and not n.startswith("docs/figures/"))
+    assert not missing, missing
+
+
+@pytest.mark.parametrize("snippet", [b for b in fenced_blocks(README, "python")], ids=["v1", "v0"])
+def test_readme_python_snippets_run(snippet: str, tmp_path: Path):
+    code = tmp_path / "snippet.py"
+    code.write_text(snippet)
+    scope = runpy.run_path(str(code))  # the README's own code: one reset and one step
+    env, obs, info, reward = scope["env"], scope["obs"], scope["info"], scope["reward"]
+    assert env.observation_space.contains(obs) and np.isfinite(reward)
+    if "SuckerRod-v1" in snippet:  # "info['well_id'] == 'train-000'" after reset; the constraint cost in info
+        assert env.unwrapped.well.well_id == "train-000" and info["cost"] >= 0.0
+    else:  # "Observation (72 float32)", the reward terms "summing to the reward"
+        terms = ("reward_production", "reward_stick_slip", "reward_peak_load", "reward_failure")
+        assert obs.shape == (72,) and sum(info[k] for k in terms) == pytest.approx(reward, abs=1e-9)
+    env.close()
+
+
+def test_readme_one_liner_and_script_help():
+    cmd = next(c for c in _examples() if c.startswith("python -c"))
+    code = re.search(r'-c "(.*)"', cmd).group(1)
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120, cwd=ROOT,
+                         check=False)
+    assert out.returncode == 0 and out.stdout.strip() == "train-000", out.stderr[-2000:]
+    script = next(c for c in _examples() if c.startswith("python scripts/")).split()[1]
+    out = subprocess.run([sys.executable, script, "--help"], capture_output=True, text=True, timeout=120, cwd=ROOT,
+                         check=False)
+    assert out.returncode == 0 and out.stdout.startswith("usage:"), out.stderr[-2000:]
