@@ -132,13 +132,16 @@ def build_parser() -> argparse.ArgumentParser:
     r.add_argument("--policy", action="append", help="a policy of the report; repeat (default: all but the oracle)")
     r.add_argument("--episodes", type=_flag("replay", "--episodes"), default=3,
                    help="the first N test episodes (default 3)")
+    r.add_argument("--tol", type=_flag("replay", "--tol"), default=1e-9,
+                   help="relative difference a return may have (default 1e-9: exact; a trained agent on another "
+                   "CPU kind: torch's round-off, 0.05 covers it)")
     return p
 
 
 def cmd_replay(args: argparse.Namespace) -> dict:
     from .evaluation.replay import replay
 
-    return replay(args.report, args.policy, args.episodes)
+    return replay(args.report, args.policy, args.episodes, args.tol)
 
 
 def cmd_train(args: argparse.Namespace) -> dict:
