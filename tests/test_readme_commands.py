@@ -156,3 +156,20 @@ def test_readme_one_liner_and_script_help():
     out = subprocess.run([sys.executable, script, "--help"], capture_output=True, text=True, timeout=120, cwd=ROOT,
                          check=False)
     assert out.returncode == 0 and out.stdout.startswith("usage:"), out.stderr[-2000:]
+
+
+def _table_numbers(text: str) -> list[list[float]]:
+    rows = [r for r in text.splitlines() if r.startswith("| paper_")]
+    return [[float(x) for x in re.findall(r"[-+]?\d+\.\d+", r)] for r in rows]
+
+
+def test_convergence_doc_table_is_what_its_command_prints():
+    """docs/convergence.md's table, reproduced by the command it names (a few seconds), to its last digit."""
+    doc = (ROOT / "docs" / "convergence.md").read_text()
+    assert "Reproduce: `python scripts/convergence.py`" in doc
+    out = subprocess.run([sys.executable, "scripts/convergence.py"], capture_output=True, text=True, timeout=300,
+                         cwd=ROOT, check=False)
+    assert out.returncode == 0, out.stderr[-2000:]
+    printed, documented_rows = _table_numbers(out.stdout), _table_numbers(doc)
+    assert len(printed) == len(documented_rows) == 8
+    assert np.allclose(printed, documented_rows, rtol=0, atol=0.011), (printed, documented_rows)
