@@ -124,7 +124,7 @@ def test_readme_srenv_examples_parse(cmd: str):
 
 
 def test_readme_files_named_in_commands_exist():
-    names = {n for _, c in documented() for n in re.findall(r"(?<![\w/.])((?:configs|docs|models)/[\w./-]+\.\w+)", c)
+    names = {n for _, c in documented() for n in re.findall(r"(?<![\w/.])((?:configs|docs|models|tests/data)/[\w./-]+\.\w+)", c)
              if "*" not in n}
     names |= set(re.findall(r"\]\(((?:docs|srenv)/[\w./-]+\.(?:md|py))", README))
     missing = sorted(n for n in names if not (ROOT / n).exists() and not n.startswith("docs/figures/"))
