@@ -173,3 +173,43 @@ def test_convergence_doc_table_is_what_its_command_prints():
     printed, documented_rows = _table_numbers(out.stdout), _table_numbers(doc)
     assert len(printed) == len(documented_rows) == 8
     assert np.allclose(printed, documented_rows, rtol=0, atol=0.011), (printed, documented_rows)
+
+
+def _numbers(text: str) -> list[float]:
+    """The numbers of a text, not the digits of a name (f1, zeta1, m3/d)."""
+    return [float(x) for x in re.findall(r"(?<![A-Za-z\d.])[-+]?\d+(?:\.\d+)?", text.replace("−", "-"))]
+
+
+def _task_table(header: str) -> dict[str, list[float]]:
+    lines = (ROOT / "docs" / "task.md").read_text().splitlines()
+    i = next(k for k, line in enumerate(lines) if line.startswith(header))
+    rows = {}
+    for line in lines[i + 2:]:
+        if not line.startswith("| train-"):
+            break
+        well, *cells = [c.strip() for c in line.strip("|").split("|")]
+        rows[well] = _numbers(" ".join(cells))
+    return rows
+
+
+def _printed(*args: str) -> dict[str, list[float]]:
+    out = subprocess.run([sys.executable, "scripts/v2_physics_figures.py", *args], capture_output=True, text=True,
+                         timeout=300, cwd=ROOT, check=False)
+    assert out.returncode == 0, out.stderr[-2000:]
+    return {line.split()[0]: _numbers(line.split(maxsplit=1)[1]) for line in out.stdout.splitlines()}
+
+
+def test_task_doc_v2_physics_tables_are_what_their_commands_print():
+    """docs/task.md's two v2-physics tables against the commands they name, to one unit of their last digit."""
+    text = (ROOT / "docs" / "task.md").read_text()
+    damping, episodes = (re.search(rf"`python scripts/v2_physics_figures.py ({m} [\d ]+)`", text).group(1).split()
+                         for m in ("damping", "episodes"))
+    doc, out = _task_table("| well | depth | f₁ |"), _printed(*damping)
+    assert list(doc) == list(out)
+    for w, (depth, f1, _tau, _fixed, zeta, p, m, s, _fixed_again, fp, fm, fs) in out.items():
+        assert zeta > 0 and doc[w][:2] == [round(depth), f1], w
+        assert np.allclose(doc[w][2:], [p, fp, m, fm, s, fs], rtol=0, atol=0.051), (w, doc[w], out[w])
+    doc, out = _task_table("| well | unit | production |"), _printed(*episodes)
+    assert list(doc) == list(out)
+    for w, (_prod, p1, p2, _pprl, l1, l2, r0, r1, r2, g) in out.items():
+        assert np.allclose(doc[w], [p1, p2, l1, l2, r0, r1, r2, g], rtol=0, atol=0.11), (w, doc[w], out[w])
