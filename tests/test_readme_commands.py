@@ -86,7 +86,7 @@ def unknown_flags(doc: str, cmd: str) -> list[str]:
             bad.append(f"{path.relative_to(ROOT)}: no such file")
             continue
         source = path.read_text()  # a script's parser is built in its main(): its flags are its literals
-        bad += [f"{path.name} {f}" for f in FLAG.findall(rest) if f'"{f}"' not in source]
+        bad += [f"{path.name} {f}" for f in FLAG.findall(rest) if f'"{f}"' not in source and f != "--help"]
     return [f"{doc}: {b}   <- {cmd.strip()[:100]}" for b in bad]
 
 
