@@ -24,6 +24,10 @@ from srenv.shipped import shipped_dir
 QUICK_BENCHMARK = shipped_dir("benchmark") / "v1_quick.yaml"  # the checkout's configs/, or the wheel's
 
 
+# the usage names the command that runs this copy: a checkout's package `agents`, the wheel's `srenv_agents`
+PROG = "python -m agents" if __name__.split(".")[0] == "agents" else "srenv-agents"
+
+
 def _flag(command: str, flag: str) -> Any:
     """The argparse type of a declared flag (agents/inputs.py: type, unit, range)."""
     from .inputs import FLAGS
@@ -63,7 +67,7 @@ def _print_json(obj: dict) -> None:
 
 
 def build_parser() -> argparse.ArgumentParser:
-    p, sub = command_parser("agents", "python -m agents", "Baselines, SB3 training and evaluation for srenv.")
+    p, sub = command_parser("agents", PROG, "Baselines, SB3 training and evaluation for srenv.")
 
     t = sub.add_parser("train", help="train PPO/SAC from a hyperparameter YAML (SB3, or RLlib with backend: rllib)")
     t.add_argument("config", help="training YAML, e.g. configs/train/ppo_default.yaml")

@@ -9,6 +9,7 @@ checked by their own tests (tests/srenv/tools/test_cli.py, tests/agents/...). Fa
 from __future__ import annotations
 
 import argparse
+import importlib.util
 import re
 import runpy
 import subprocess
@@ -213,3 +214,14 @@ def test_task_doc_v2_physics_tables_are_what_their_commands_print():
     assert list(doc) == list(out)
     for w, (_prod, p1, p2, _pprl, l1, l2, r0, r1, r2, g) in out.items():
         assert np.allclose(doc[w], [p1, p2, l1, l2, r0, r1, r2, g], rtol=0, atol=0.11), (w, doc[w], out[w])
+
+
+def test_agents_usage_names_the_command_that_runs_it():
+    """A checkout's usage says `python -m agents`; the installed copy (`srenv_agents`, command `srenv-agents`, which
+    has no `agents` package to run with -m) says `srenv-agents`."""
+    assert agents_parser().prog == "python -m agents"
+    if importlib.util.find_spec("srenv_agents") is None:  # a bare PYTHONPATH checkout: nothing installed
+        pytest.skip("srenv_agents is not installed")
+    out = subprocess.run([sys.executable, "-c", "import srenv_agents.cli as c; print(c.build_parser().prog)"],
+                         capture_output=True, text=True, timeout=120, cwd=ROOT.parent, check=False)
+    assert out.returncode == 0 and out.stdout.strip() == "srenv-agents", out.stderr[-2000:]
