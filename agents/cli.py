@@ -24,6 +24,10 @@ from srenv.shipped import shipped_dir
 QUICK_BENCHMARK = shipped_dir("benchmark") / "v1_quick.yaml"  # the checkout's configs/, or the wheel's
 
 
+# the usage names the command that runs this copy: a checkout's package `agents`, the wheel's `srenv_agents`
+PROG = "python -m agents" if __name__.split(".")[0] == "agents" else "srenv-agents"
+
+
 def _flag(command: str, flag: str) -> Any:
     """The argparse type of a declared flag (agents/inputs.py: type, unit, range)."""
     from .inputs import FLAGS
@@ -63,7 +67,7 @@ def _print_json(obj: dict) -> None:
 
 
 def build_parser() -> argparse.ArgumentParser:
-    p, sub = command_parser("agents", "python -m agents", "Baselines, SB3 training and evaluation for srenv.")
+    p, sub = command_parser("agents", PROG, "Baselines, SB3 training and evaluation for srenv.")
 
     t = sub.add_parser("train", help="train PPO/SAC from a hyperparameter YAML (SB3, or RLlib with backend: rllib)")
     t.add_argument("config", help="training YAML, e.g. configs/train/ppo_default.yaml")
@@ -111,7 +115,8 @@ def build_parser() -> argparse.ArgumentParser:
                    help="number of test episodes (default 3; --train: the config's)")
     q.add_argument("--seed", type=_flag("quickstart", "--seed"), help="--train: first test seed (S..S+N-1)")
 
-    b = sub.add_parser("benchmark", help="tune baselines, train PPO/SAC, test all on unseen wells (v1)")
+    b = sub.add_parser("benchmark", help="tune baselines, train PPO/SAC, test all on unseen wells (v1 or v2: "
+                       "the YAML's env)")
     b.add_argument("config", help="benchmark YAML, e.g. configs/benchmark/v1.yaml")
     b.add_argument("--quick", action="store_true", help="apply the config's quick: block (minutes, for CI)")
     b.add_argument("--out-dir", help="output directory (default: the env version's shipped report folder, docs for v1 and docs/v2 for v2, with the models in models/; runs/benchmark_quick with --quick)")
@@ -125,19 +130,22 @@ def build_parser() -> argparse.ArgumentParser:
     b.add_argument("--report", help="--evaluate-only: the benchmark report whose tuned baselines and agents are "
                    "evaluated, models read next to it (default: the shipped v1 report, models/MANIFEST.json)")
 
-    r = sub.add_parser("replay", help="re-run a benchmark report's test episodes from its own record (v1); "
+    r = sub.add_parser("replay", help="re-run a benchmark report's test episodes from its own record (v1 or v2); "
                        "exit 1 if a return differs")
     r.add_argument("report", help="benchmark JSON, e.g. docs/benchmark.json (models are read next to it)")
     r.add_argument("--policy", action="append", help="a policy of the report; repeat (default: all but the oracle)")
     r.add_argument("--episodes", type=_flag("replay", "--episodes"), default=3,
                    help="the first N test episodes (default 3)")
+    r.add_argument("--tol", type=_flag("replay", "--tol"), default=1e-9,
+                   help="relative difference a return may have (default 1e-9: exact; a trained agent on another "
+                   "CPU kind: torch's round-off, 0.05 covers it)")
     return p
 
 
 def cmd_replay(args: argparse.Namespace) -> dict:
     from .evaluation.replay import replay
 
-    return replay(args.report, args.policy, args.episodes)
+    return replay(args.report, args.policy, args.episodes, args.tol)
 
 
 def cmd_train(args: argparse.Namespace) -> dict:

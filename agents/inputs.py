@@ -46,7 +46,8 @@ FLAGS: dict[str, dict[str, Number]] = {
     "benchmark": {"--fresh-seed": Number("--fresh-seed", int, lo=0, hi=MAX_SEED, lo_open=False),
                   "--episodes": Number("--episodes", int, hi=MAX_EPISODES, why="wall time"),
                   "--workers": Number("--workers", int, hi=MAX_WORKERS, why="processes")},
-    "replay": {"--episodes": Number("--episodes", int, hi=MAX_EPISODES, why="wall time")},
+    "replay": {"--episodes": Number("--episodes", int, hi=MAX_EPISODES, why="wall time"),
+               "--tol": Number("--tol", float, lo=0.0, hi=1.0, lo_open=False, why="a relative difference")},
 }
 
 FIELDS: dict[str, dict[str, Number]] = {

@@ -133,8 +133,9 @@ def output_and_json_cases(c: Cases) -> None:
     c.case("agents evaluate --plot onto a symlink", [*AGENTS, "evaluate", "--policy", "rocking", "--episodes", "1",
                                                      "--plot", "{d}/link.png"], setup=_sym)
     c.case("diagnose --plot onto a directory", [*DG, "--plot", "{d}/dir.png"], setup=lambda d: (d / "dir.png").mkdir())
-    c.case("SIGINT during simulate --plot (all or nothing)", [*SRENV, "simulate", FIG3, "--strokes", "200", "--out",
-                                                              "{d}/s.csv", "--plot", "{d}/s.png"], code=130,
+    # --always-qp: ~0.5 s a stroke, so the interrupt lands mid-run on any machine (200 default strokes now end in ~2 s)
+    c.case("SIGINT during simulate --plot (all or nothing)", [*SRENV, "simulate", FIG3, "--strokes", "100", "--always-qp",
+                                                              "--out", "{d}/s.csv", "--plot", "{d}/s.png"], code=130,
            sigint_after=8.0)
     c.case("SIGINT in agents replay", [*AGENTS, "replay", "docs/benchmark.json", "--policy", "pump_off", "--episodes",
                                        "50"], code=130, sigint_after=8.0)

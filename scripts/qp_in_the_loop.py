@@ -12,9 +12,9 @@ Prints one JSON document.
 
 from __future__ import annotations
 
+import argparse
 import json
 import statistics
-import sys
 import time
 
 import gymnasium as gym
@@ -73,6 +73,9 @@ def env_figures(name: str) -> dict:
 
 
 if __name__ == "__main__":
-    names = sys.argv[1:] or ["default", "paper_fig4_deviated"]
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("configs", nargs="*", metavar="CONFIG", help="well YAML or shipped name "
+                    "(default: default paper_fig4_deviated)")
+    names = ap.parse_args().configs or ["default", "paper_fig4_deviated"]
     print(json.dumps({"simulator": {n: simulator_figures(n) for n in names}, "env": env_figures(names[0])},
                      indent=1))

@@ -9,6 +9,7 @@ readings (`--survey-weight inclination|tvd`). Nothing is fitted.
 
 from __future__ import annotations
 
+import argparse
 import json
 import os
 import tempfile
@@ -123,4 +124,5 @@ def main() -> None:
 
 
 if __name__ == "__main__":
+    argparse.ArgumentParser(description=__doc__.splitlines()[0]).parse_args()  # no options: --help only
     main()

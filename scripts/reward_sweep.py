@@ -3,7 +3,7 @@ three training wells, with the reward terms. Run: python scripts/reward_sweep.py
 
 from __future__ import annotations
 
-import sys
+import argparse
 
 import matplotlib
 
@@ -35,4 +35,6 @@ def main(path: str) -> None:
 
 
 if __name__ == "__main__":
-    main(sys.argv[1] if len(sys.argv) > 1 else "docs/figures/v1_reward_sweep.png")
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("out", nargs="?", default="docs/figures/v1_reward_sweep.png", help="PNG to write")
+    main(ap.parse_args().out)

@@ -6,7 +6,7 @@
 Arguments after the mode are train-well indices.
 """
 
-import sys
+import argparse
 
 import gymnasium as gym
 import numpy as np
@@ -73,6 +73,9 @@ def episodes(k: int) -> None:
 
 
 if __name__ == "__main__":
-    mode, wells = sys.argv[1], [int(x) for x in sys.argv[2:]]
-    for k in wells:
-        (damping if mode == "damping" else episodes)(k)
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("mode", choices=("damping", "episodes"))
+    ap.add_argument("wells", nargs="+", type=int, metavar="WELL", help="train-well indices")
+    args = ap.parse_args()
+    for k in args.wells:
+        (damping if args.mode == "damping" else episodes)(k)

@@ -113,8 +113,14 @@ class ProcessShards:
     def _gather(self) -> list:
         out = []
         errors = []
-        for c in self.conns:  # every worker answers before an error is raised: the pipes stay in step
-            status, payload = c.recv()
+        for c, block in zip(self.conns, self.blocks):  # every worker answers before an error is raised
+            try:
+                status, payload = c.recv()
+            except EOFError:  # it died before answering: most often a script without a main guard
+                status, payload = "error", (f"the worker of envs {block[0]}..{block[-1]} exited before it built "
+                                            f"its envs (a script that makes processes= envs keeps its top level "
+                                            f"under `if __name__ == \"__main__\":`, as forkserver imports it "
+                                            f"again in the worker)")
             (out if status == "ok" else errors).append(payload)
         if errors:
             raise RuntimeError(errors[0])

@@ -1,4 +1,4 @@
-"""Command line: ``srenv simulate | bench | sweep | config-doc``.
+"""Command line: ``srenv simulate | sweep | diagnose | fit | validate | cards | classify | bench | config-doc``.
 
 Bad input (config or flags) prints one line naming the field, the value and the expected unit, exits with
 status 2, and leaves no output file behind (outputs are written to a temporary file and renamed).

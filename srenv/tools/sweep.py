@@ -1,4 +1,4 @@
-"""``srenv sweep``: a parameter study (e.g. slip amplitude vs pulling velocity, paper Fig. 9) run on Ray.
+"""``srenv sweep``: a parameter study (e.g. slip amplitude vs pulling velocity, paper Fig. 9) in parallel.
 
 ::
 
@@ -213,8 +213,8 @@ def cmd_sweep(args: argparse.Namespace) -> int:
 def add_parser(subparsers: argparse._SubParsersAction) -> None:
     from ..declarations import add_number
 
-    s = subparsers.add_parser("sweep", help="parameter study in parallel on Ray (e.g. slip amplitude vs "
-                              "pulling velocity)", description=__doc__.splitlines()[0])
+    s = subparsers.add_parser("sweep", help="parameter study in parallel: local processes, or Ray with --address (e.g. "
+                              "slip amplitude vs pulling velocity)", description=__doc__.splitlines()[0])
     s.add_argument("config", help="well YAML path or shipped name")
     s.add_argument("--param", required=True, metavar="KEY.PATH", help="swept config field, e.g. "
                    "surface.pull_velocity_m_s")

@@ -206,3 +206,19 @@ def test_a_failing_block_is_raised_after_every_block_answered() -> None:
         assert np.array_equal(res[3][0], SuckerRodV1Env(**SHORT).reset(seed=10)[0])
     finally:
         shards.close()
+
+
+def test_a_script_without_a_main_guard_gets_one_clear_error(tmp_path) -> None:
+    """processes=P from a script with no `if __name__ == "__main__":` (forkserver imports it again in the worker,
+    which dies starting processes of its own): the parent raises one RuntimeError that says so, not an EOFError."""
+    import subprocess
+    import sys
+
+    script = tmp_path / "no_guard.py"
+    script.write_text("import gymnasium as gym, srenv\n"
+                      "gym.make_vec('srenv/SuckerRod-v1', num_envs=2, vectorization_mode='vector_entry_point', "
+                      "processes=2, episode_hours=0.25)\n")
+    out = subprocess.run([sys.executable, str(script)], capture_output=True, text=True, timeout=300, check=False)
+    last = out.stderr.strip().splitlines()[-1]
+    assert out.returncode == 1 and last.startswith("RuntimeError: the worker of envs 1..1 exited before"), last
+    assert 'if __name__ == "__main__":' in last
