@@ -105,3 +105,25 @@ def test_bad_arguments_refused_in_one_line(tmp_path):
     r = _run(["--stage", "select", "--workers", "3"], tmp_path / "o")
     assert r.returncode == 2 and "Traceback" not in r.stderr
     assert "--workers 3" in r.stderr.strip().splitlines()[-1] and not (tmp_path / "o").exists()
+
+
+@pytest.mark.parametrize("shipped", [True, False])
+def test_the_gate_plays_the_shipped_ensemble_only_when_asked(capped, tmp_path, monkeypatch, shipped):
+    more = sys.modules["oracle_distill_more"]
+    played = {}
+
+    def fake_play(cfg, specs, out, workers):
+        played.update(specs)
+        ep = {"reward": 144.0, "cost": 1.0, "cost_pound": 1.0, "reward_revenue": 144.0, "mean_avg_spm": 5.0,
+              "well_id": "validation-000"}
+        return {k: [dict(ep, reward=144.0 * (i + 1)) for _ in range(3)] for i, k in enumerate(specs)}
+
+    monkeypatch.setattr(more, "play_validation", fake_play)
+    cfg, _, _, tuned, res = more.setup(capped.CONFIG)
+    sp = capped.specs_of(REPO, {"pooled_ensemble": None, "s1_spm0": capped.CANDIDATES["s1_spm0"]})  # models/: shipped
+    rec = more.play_design_gate(cfg, capped.CONFIG, capped.GATE_SEEDS, {"capped_s1_spm0": sp["s1_spm0"]}, tuned, res,
+                                tmp_path, 1, scenario="validation", also={"pooled_ensemble": sp["pooled_ensemble"]},
+                                shipped=shipped)
+    names = ["alarm_pump_off", *(["shipped_ensemble"] if shipped else []), "pooled_ensemble", "capped_s1_spm0"]
+    assert list(played) == names and list(rec["summary"]) == names and rec["scenario"] == "validation"
+    assert played["capped_s1_spm0"]["residual"]["cap"] == {"spm_cap": 0.0} and rec["gate"] is True
