@@ -99,15 +99,18 @@ def play_gate(out: Path, workers: int) -> dict[str, Any]:
 
 def play_design_gate(cfg: dict[str, Any], config: Path, seeds: list[int], design: dict[str, dict[str, Any]],
                      tuned: dict[str, Any], res: dict[str, Any], out: Path, workers: int,
-                     scenario: str = "train") -> dict[str, Any]:
-    """alarm_pump_off (the tuned parameters), the shipped ensemble and ``design`` ({name: its policy spec}) on the
-    validation ``seeds`` of ``scenario`` (the training wells, as every gate so far, or v2's ``validation`` split),
-    THE GATE on the design, written to OUT/gate.json (played once)."""
+                     scenario: str = "train", also: dict[str, dict[str, Any]] | None = None,
+                     shipped: bool = True) -> dict[str, Any]:
+    """alarm_pump_off (the tuned parameters), the shipped ensemble (unless not ``shipped``), ``also`` (reported, not
+    judged) and ``design`` ({name: its policy spec}) on the validation ``seeds`` of ``scenario`` (the training wells,
+    as every gate so far, or v2's ``validation`` split), THE GATE on the design, written to OUT/gate.json (played
+    once)."""
     (dname, dspec), = design.items()
     specs = {"alarm_pump_off": {"kind": "baseline", "name": "alarm_pump_off",
-                                "params": tuned["alarm_pump_off"]["params"]},
-             "shipped_ensemble": ensemble_spec(students(SHIPPED, "oracle_distilled", SHIPPED_SEEDS, res)),
-             dname: dspec}
+                                "params": tuned["alarm_pump_off"]["params"]}}
+    if shipped:
+        specs["shipped_ensemble"] = ensemble_spec(students(SHIPPED, "oracle_distilled", SHIPPED_SEEDS, res))
+    specs.update({**(also or {}), dname: dspec})
     for spec in specs.values():
         for m in spec.get("members", []):
             if not Path(m["path"]).is_file():

@@ -4,7 +4,7 @@ run in worker processes that build their own env and policy:
 - ``{"kind": "baseline", "name": "pump_off", "params": {...}}`` (:mod:`agents.policies.factory`),
 - ``{"kind": "agent", "path": "x.zip", "obs_norm": "x_obs_norm.npz" | None}`` (an SB3 model and the
   observation normalisation it was trained with, stored as npz; both are read as data, nothing is unpickled),
-  optionally with ``"residual": {"base", "params", "scale"[, "idle_scale"]}`` (:mod:`agents.policies.residual`)
+  optionally with ``"residual": {"base", "params", "scale"[, "idle_scale"][, "cap"]}`` (:mod:`agents.policies.residual`)
   and, for a residual student that sees the last K observations, ``"history": K`` (:mod:`agents.policies.history`),
 - ``{"kind": "ensemble", "members": [{"path", "obs_norm"}, ...], "residual": ... | None}``: the mean of the
   members' actions (:mod:`agents.policies.ensemble`);
@@ -86,7 +86,7 @@ def build_policy(spec: dict[str, Any], env: Any) -> Any:
             agent = EnsemblePolicy([AgentPolicy(m["path"], m.get("obs_norm")) for m in spec["members"]])
         if res:
             return ResidualAgentPolicy(agent, res["base"], res["params"], res["scale"], res.get("idle_scale"),
-                                       spec.get("history", 1))
+                                       spec.get("history", 1), res.get("cap"))
         return agent
     raise ValueError(f"policy spec kind = {spec.get('kind')!r}: expected baseline, agent, ensemble or guarded")
 

@@ -9,6 +9,11 @@ continuous pumping, while ``r0 <= 0`` still idles. With
 on it. Training uses :class:`agents.training.residual_env.ResidualEnv`; evaluation drives the plain env with
 :class:`ResidualAgentPolicy`, which composes the same two parts (:func:`compose`, :func:`augment`) in the
 same order.
+
+A residual's correction may be bounded (``cap``, issue 24 f24: a correction chosen at no higher constraint cost):
+``{"correction_scale": s, "spm_cap": c}`` multiplies the model's output by ``s`` and then caps its rate entry
+at ``c`` (0: the correction may slow the pump or stop it, never speed it up); each key optional, no cap = the
+model's output as it is (:func:`bound_correction`).
 """
 
 from __future__ import annotations
@@ -30,6 +35,34 @@ def check_scales(scale: Any, idle_scale: Any = None) -> None:
     for name, v in (("scale", scale), ("idle_scale", idle_scale)):
         if v is not None and (isinstance(v, bool) or not isinstance(v, (int, float)) or not 0.0 < v <= 2.0):
             raise ValueError(f"residual.{name} = {v!r}: expected a number in (0, 2] (a fraction of the action box)")
+
+
+# the correction bound's fields, declared once: (lower, upper, lower bound included)
+CAP_FIELDS = {"correction_scale": (0.0, 1.0, False), "spm_cap": (-1.0, 1.0, True)}
+
+
+def check_cap(cap: Any) -> None:
+    """The one bound on a residual's ``cap`` (evaluation policy, pilots, tests): a dict of :data:`CAP_FIELDS`."""
+    if cap is None:
+        return
+    if not isinstance(cap, dict) or not cap or set(cap) - set(CAP_FIELDS):
+        raise ValueError(f"residual.cap = {cap!r}: expected a mapping of {', '.join(CAP_FIELDS)}")
+    for k, v in cap.items():
+        lo, hi, closed = CAP_FIELDS[k]
+        if (isinstance(v, bool) or not isinstance(v, (int, float)) or not (lo <= v if closed else lo < v)
+                or not v <= hi):
+            raise ValueError(f"residual.cap.{k} = {v!r}: expected a number in {'[' if closed else '('}{lo:g}, {hi:g}]")
+
+
+def bound_correction(residual: np.ndarray, cap: dict[str, float] | None) -> np.ndarray:
+    """The model's correction ``residual`` times ``cap['correction_scale']``, its rate entry at most
+    ``cap['spm_cap']``; ``cap`` None: ``residual`` itself (the same array)."""
+    if cap is None:
+        return residual
+    r = np.asarray(residual, np.float32) * np.float32(cap.get("correction_scale", 1.0))
+    if "spm_cap" in cap:
+        r[..., 0] = np.minimum(r[..., 0], np.float32(cap["spm_cap"]))
+    return r.astype(np.float32)
 
 
 def compose(base_action: np.ndarray, residual: np.ndarray, scale: float,
@@ -69,10 +102,11 @@ class ResidualAgentPolicy:
     """Evaluation twin of :class:`agents.training.residual_env.ResidualEnv`: baseline action + scale x the model's, on the plain env."""
 
     def __init__(self, model_policy: Any, base: str, base_params: dict[str, Any], scale: float,
-                 idle_scale: float | None = None, history: int = 1) -> None:
+                 idle_scale: float | None = None, history: int = 1, cap: dict[str, float] | None = None) -> None:
         check_scales(scale, idle_scale)
+        check_cap(cap)
         self.model, self.base_name, self.base_params, self.scale = model_policy, base, base_params, float(scale)
-        self.idle_scale = idle_scale
+        self.idle_scale, self.cap = idle_scale, cap
         self.history = History(history)  # the model sees the last K observations; the base the current one
         self.base: _Base | None = None
 
@@ -91,4 +125,5 @@ class ResidualAgentPolicy:
         b = self.base.act(obs)
         r, state = self.model.predict(augment(self.history.push(obs), b), state=state, episode_start=episode_start,
                                       deterministic=deterministic)
-        return compose(b, np.asarray(r).reshape(b.shape), self.scale, self.idle_scale), state
+        r = bound_correction(np.asarray(r).reshape(b.shape), self.cap)
+        return compose(b, r, self.scale, self.idle_scale), state
