@@ -33,7 +33,7 @@ from ..envs import ENV_ID_V1, ENV_ID_V2, make_env
 from ..inputs import baseline_params, report_env_kwargs, report_episodes
 from ..policies.ensemble import ensemble_spec
 from ..policies.guarded import guarded_spec
-from ..policies.residual import RESIDUAL_BASES, check_scales
+from ..policies.residual import RESIDUAL_BASES, check_cap, check_scales
 from .manifest import MODELS_HOME
 from .rollout import run_episode
 from .v1_view import build_policy_any
@@ -109,6 +109,12 @@ def _residual(res: Any, name: str) -> dict[str, Any] | None:
     out = {"base": res["base"], "params": res["params"], "scale": float(scale)}
     if idle is not None:
         out["idle_scale"] = float(idle)
+    if res.get("cap") is not None:  # a capped correction replays capped (f24's residual.cap), never silently not
+        try:
+            check_cap(res["cap"])
+        except ValueError as exc:
+            raise ReplayError(f"policies.{name}.residual_on: {exc}") from None
+        out["cap"] = dict(res["cap"])
     return out
 
 

@@ -83,3 +83,22 @@ def test_bounds_accepted():
     for k, (lo, hi, closed) in CAP_FIELDS.items():
         check_cap({k: hi})
         check_cap({k: lo} if closed else {k: lo + 1e-6})
+
+
+def test_a_reports_capped_residual_replays_capped_and_a_bad_cap_is_refused() -> None:
+    """replay reads ``residual_on.cap`` (a capped design's report would otherwise replay uncapped, silently)."""
+    import copy
+    from pathlib import Path
+
+    from agents.evaluation.replay import ReplayError, load_report, policy_specs
+
+    report = Path(__file__).resolve().parents[2] / "docs/v2/benchmark.json"
+    rep = load_report(report)
+    assert "cap" not in policy_specs(rep, "oracle_distilled_ensemble", report.parent)[0]["residual"]
+    capped = copy.deepcopy(rep)
+    capped["policies"]["oracle_distilled_ensemble"]["residual_on"]["cap"] = {"spm_cap": 0.0}
+    spec = policy_specs(capped, "oracle_distilled_ensemble", report.parent)[0]
+    assert spec["residual"]["cap"] == {"spm_cap": 0.0}
+    capped["policies"]["oracle_distilled_ensemble"]["residual_on"]["cap"] = {"spm_cap": 7.0}
+    with pytest.raises(ReplayError, match="spm_cap"):
+        policy_specs(capped, "oracle_distilled_ensemble", report.parent)
