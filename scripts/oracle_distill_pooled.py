@@ -56,8 +56,8 @@ STAGES = ("select", "dagger", "precheck", "gate", "schedules")
 NAME = "oracle_distilled"
 
 
-def design() -> dict[str, Any]:
-    cfg, _, run, tuned, res = setup(CONFIG)
+def design(config: Path = CONFIG) -> dict[str, Any]:
+    cfg, _, run, tuned, res = setup(config)
     t = run["teacher"]
     return {"cfg": cfg, "run": run, "tuned": tuned, "res": res, "teacher": t, "pool": t["pool"],
             "pk": load_train_config(run["config"], run.get("overrides")).policy_kwargs,

@@ -1,0 +1,112 @@
+"""The many-wells pooled student's design (scripts/oracle_distill_wells.py, configs/benchmark/v2_oracle_distilled_wells.yaml,
+issue 24, helper g40): the config keeps f24's splits, baselines, protocol and agents, its labelled episodes are one per
+training well 32..199 on unused seeds and its gate seeds v2's validation split, every row of the pool carries its
+training well (so a fold holds every episode of a well), and no gate is played without a passed pre-check."""
+
+from __future__ import annotations
+
+import importlib
+import json
+import os
+import re
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from agents.benchmark.config import distill_seeds, load_benchmark_config
+from agents.training.pooled_fit import grouped_folds
+
+REPO = Path(__file__).resolve().parents[2]
+SCRIPT = REPO / "scripts" / "oracle_distill_wells.py"
+WELLS = REPO / "configs/benchmark/v2_oracle_distilled_wells.yaml"
+CAPPED = REPO / "configs/benchmark/v2_oracle_distilled_capped.yaml"
+
+
+@pytest.fixture(scope="module")
+def wells():
+    sys.path.insert(0, str(SCRIPT.parent))  # the script and the pilots it imports, as when it runs
+    return importlib.import_module(SCRIPT.stem)
+
+
+def test_config_is_f24s_but_its_history(monkeypatch):
+    monkeypatch.chdir(REPO)
+    a, b = load_benchmark_config(WELLS), load_benchmark_config(CAPPED)
+    assert {k: v for k, v in a.items() if k not in ("history", "source")} == {k: v for k, v in b.items()
+                                                                     if k not in ("history", "source")}
+
+
+def test_seeds_are_unused_and_cover_wells_32_to_199(wells, monkeypatch):
+    monkeypatch.chdir(REPO)
+    cfg = load_benchmark_config(WELLS)
+    run = cfg["agents"]["runs"]["oracle_distilled"]
+    p = run["teacher"]["pool"]
+    used = (set(distill_seeds(run["teacher"], 0)) | set(range(p["precheck_seed_start"], p["precheck_seed_start"] + 16))
+            | set(range(50000, 56000)) | set(range(58000, 58200)) | set(range(10)) | set(range(20000, 21400))
+            | set(range(100000, 100100)))
+    labelled, gate = set(wells.SEEDS), set(wells.GATE_SEEDS)
+    assert not (labelled | gate) & used and not labelled & gate
+    assert sorted(s % wells.WELLS for s in wells.SEEDS) == list(range(32, 200))
+    assert [s for c in wells.chunks() for s in c] == wells.SEEDS
+    assert (min(gate), len(gate)) == (21400, 16)
+    others = " ".join(f.read_text() for f in (REPO / "configs").rglob("*.yaml") if f != WELLS)
+    assert not re.search(r"\b(59[01]\d\d|214\d\d)\b", others)
+    hist = " ".join(cfg["history"])
+    assert all(s in hist for s in ("59032..59199", "21400..21415", "scenario validation", "<= 0.45",
+                                   "spm_cap: 0", "WELL-grouped"))
+    assert wells.PRECHECK_MAX == 0.45 and wells.CAP == {"spm_cap": 0.0}
+
+
+def test_the_candidate_is_e24s_choice(wells):
+    hist = " ".join(load_benchmark_config(REPO / "configs/benchmark/v2_oracle_distilled_pooled.yaml")["history"])
+    assert "30 epochs, weight decay 0, 128x128" in hist
+    assert wells.CANDIDATE == {"epochs": 30, "weight_decay": 0.0, "net_arch": [128, 128]}
+
+
+def test_every_row_carries_its_well_and_a_fold_holds_whole_wells(wells, tmp_path):
+    steps = 3
+    d = {"pool": {"labels": str(tmp_path / "p1_{k}.npz"), "files": 2, "episode_steps": steps}}
+
+    def save(path: Path, n_eps: int, tag: float) -> None:
+        x = np.full((n_eps * steps, 2), tag, np.float32)
+        x[:, 1] = np.repeat(np.arange(n_eps), steps)
+        np.savez(path, x=x, label=np.zeros((n_eps * steps, 2), np.float32))
+
+    for k in range(2):
+        save(tmp_path / f"p1_{k}.npz", 32, k)  # P1: episode j = well j
+    save(tmp_path / "labels_dagger.npz", 32, 2)
+    save(tmp_path / "labels_wells_0.npz", wells.CHUNK, 3)  # the first chunk: wells 32 .. 32 + CHUNK - 1
+    save(tmp_path / "labels_wells_2.npz", wells.CHUNK, 4)  # chunk 1 missing (a stopped run): chunk 2's wells
+    pool, well = wells.wells_pool(tmp_path, d)
+    ep = pool["x"][:, 1].astype(int)
+    tag = pool["x"][:, 0]
+    assert np.array_equal(well[tag < 3], ep[tag < 3])
+    assert np.array_equal(well[tag == 3], 32 + ep[tag == 3])
+    assert np.array_equal(well[tag == 4], 32 + 2 * wells.CHUNK + ep[tag == 4])
+    for tr, te in grouped_folds(well, 4):
+        assert not set(well[tr]) & set(well[te])
+
+
+def _run(args: list[str], out: Path) -> subprocess.CompletedProcess:
+    env = dict(os.environ, PYTHONPATH=str(REPO))
+    return subprocess.run([sys.executable, str(SCRIPT), *args, "--out", str(out)], check=False, capture_output=True,
+                          text=True, cwd=REPO, timeout=120, env=env)
+
+
+@pytest.mark.parametrize("pre", [None, {"precheck": False}, {"precheck": "yes"}])
+def test_no_gate_without_a_passed_precheck(tmp_path, pre):
+    out = tmp_path / "o"
+    out.mkdir()
+    if pre is not None:
+        (out / "precheck.json").write_text(json.dumps(pre))
+    r = _run(["--stage", "gate"], out)
+    assert r.returncode == 2 and "Traceback" not in r.stderr
+    assert "no passed pre-check" in r.stderr.strip().splitlines()[-1] and not (out / "gate").exists()
+
+
+def test_bad_arguments_refused_in_one_line(tmp_path):
+    r = _run(["--stage", "label", "--workers", "3"], tmp_path / "o")
+    assert r.returncode == 2 and "Traceback" not in r.stderr
+    assert "--workers 3" in r.stderr.strip().splitlines()[-1] and not (tmp_path / "o").exists()
