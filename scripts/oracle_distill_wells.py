@@ -32,8 +32,16 @@ import numpy as np
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from estimated_mpc_pilot import arguments
 from oracle_distill_capped import capped
-from oracle_distill_more import ROOT, play_design_gate, students, table, write_json
-from oracle_distill_pooled import NAME, design, label_episodes, model_mse, pool_paths
+from oracle_distill_more import ROOT, play_design_gate, students, write_json
+from oracle_distill_pooled import (
+    NAME,
+    design,
+    label_episodes,
+    model_mse,
+    pool_paths,
+    print_outcome,
+    require_precheck,
+)
 
 from agents.evaluation.agent import AgentPolicy
 from agents.evaluation.rollout import Runner
@@ -109,11 +117,7 @@ def precheck(out: Path, workers: int) -> dict[str, Any]:
 
 
 def gate(out: Path, workers: int) -> dict[str, Any]:
-    pre = out / "precheck.json"
-    if not pre.is_file() or json.loads(pre.read_text()).get("precheck") is not True:
-        print(f"oracle_distill_wells: {pre}: no passed pre-check: expected --stage precheck to pass before any "
-              "validation episode", file=sys.stderr)
-        sys.exit(2)
+    require_precheck(out)
     d = design(CONFIG)
     ens = capped(ensemble_spec(students(out / "design", NAME, d["pool"]["fit_seeds"], d["res"])), CAP)
     return play_design_gate(d["cfg"], CONFIG, GATE_SEEDS, {"wells_capped": ens}, d["tuned"], d["res"], out, workers,
@@ -125,15 +129,8 @@ def main() -> None:
     a.out.mkdir(parents=True, exist_ok=True)
     if a.stage == "label":
         print(json.dumps(label(a.out, a.workers)))
-    elif a.stage == "precheck":
-        rec = precheck(a.out, a.workers)
-        print(json.dumps(rec))
-        print("PRE-CHECK:", "passed" if rec["precheck"] else "failed")
     else:
-        res = gate(a.out, a.workers)
-        print("\n".join(table(res["summary"])))
-        print("GATE:", "passed" if res["gate"] else "failed")
-
+        print_outcome(a.stage, precheck(a.out, a.workers) if a.stage == "precheck" else gate(a.out, a.workers))
 
 if __name__ == "__main__":
     main()

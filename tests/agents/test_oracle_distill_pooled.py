@@ -75,13 +75,14 @@ def test_the_gate_rule_is_d24s_on_the_pooled_ensemble(pooled):
     assert not more.gate(summ, "pooled_ensemble")
 
 
-@pytest.mark.parametrize("precheck", [None, {"precheck": False}])
-def test_no_gate_without_a_passed_precheck(tmp_path, precheck):
+@pytest.mark.parametrize("script", [SCRIPT, SCRIPT.with_name("oracle_distill_wells.py")])  # g40's shares the check
+@pytest.mark.parametrize("precheck", [None, {"precheck": False}, {"precheck": "yes"}])
+def test_no_gate_without_a_passed_precheck(tmp_path, precheck, script):
     out = tmp_path / "o"
     out.mkdir()
     if precheck is not None:
         (out / "precheck.json").write_text(json.dumps(precheck))
-    r = subprocess.run([sys.executable, str(SCRIPT), "--stage", "gate", "--out", str(out)], check=False,
+    r = subprocess.run([sys.executable, str(script), "--stage", "gate", "--out", str(out)], check=False,
                        capture_output=True, text=True, cwd=REPO, timeout=120, env=_env())
     assert r.returncode == 2 and "Traceback" not in r.stderr
     assert "no passed pre-check" in r.stderr.strip().splitlines()[-1] and not (out / "gate").exists()
@@ -90,9 +91,11 @@ def test_no_gate_without_a_passed_precheck(tmp_path, precheck):
 @pytest.mark.parametrize("args, match", [
     (["--stage", "select", "--reference", "nowhere"], "--reference 'nowhere'"),
     (["--stage", "precheck", "--workers", "3"], "--workers 3"),
+    (["--stage", "label", "--workers", "3"], "--workers 3"),  # g40's oracle_distill_wells.py
 ])
 def test_bad_arguments_refused_in_one_line(tmp_path, args, match):
-    r = subprocess.run([sys.executable, str(SCRIPT), *args, "--out", str(tmp_path / "o")], check=False,
+    script = SCRIPT.with_name("oracle_distill_wells.py") if "label" in args else SCRIPT
+    r = subprocess.run([sys.executable, str(script), *args, "--out", str(tmp_path / "o")], check=False,
                        capture_output=True, text=True, cwd=REPO, timeout=120, env=_env())
     assert r.returncode == 2 and "Traceback" not in r.stderr
     assert match in r.stderr.strip().splitlines()[-1] and not (tmp_path / "o").exists()
