@@ -119,9 +119,13 @@ def precheck(out: Path, workers: int) -> dict[str, Any]:
 def gate(out: Path, workers: int) -> dict[str, Any]:
     require_precheck(out)
     d = design(CONFIG)
-    ens = capped(ensemble_spec(students(out / "design", NAME, d["pool"]["fit_seeds"], d["res"])), CAP)
-    return play_design_gate(d["cfg"], CONFIG, GATE_SEEDS, {"wells_capped": ens}, d["tuned"], d["res"], out, workers,
-                            scenario="validation", shipped=False)
+    return play_design_gate(d["cfg"], CONFIG, GATE_SEEDS, {"wells_capped": design_spec(out, d)}, d["tuned"], d["res"],
+                            out, workers, scenario="validation", shipped=False)
+
+
+def design_spec(out: Path, d: dict[str, Any]) -> dict[str, Any]:
+    """THE DESIGN: the mean correction of the pre-check's 3 fits on the whole pool (OUT/design), capped."""
+    return capped(ensemble_spec(students(out / "design", NAME, d["pool"]["fit_seeds"], d["res"])), CAP)
 
 
 def main() -> None:

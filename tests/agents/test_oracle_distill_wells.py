@@ -75,3 +75,12 @@ def test_every_row_carries_its_well_and_a_fold_holds_whole_wells(wells, tmp_path
     assert np.array_equal(well[tag == 4], 32 + 2 * wells.CHUNK + ep[tag == 4])
     for tr, te in grouped_folds(well, 4):
         assert not set(well[tr]) & set(well[te])
+
+
+def test_the_design_is_the_pools_three_fits_capped(wells, tmp_path, monkeypatch):
+    monkeypatch.chdir(REPO)
+    spec = wells.design_spec(tmp_path, wells.design(wells.CONFIG))
+    assert spec["kind"] == "ensemble" and [m["path"] for m in spec["members"]] == [
+        str(tmp_path / "design" / f"oracle_distilled_v2_seed{k}.zip") for k in (0, 1, 2)]
+    assert spec["residual"] == {"base": "pump_off", "params": spec["residual"]["params"], "scale": 0.5,
+                                "cap": {"spm_cap": 0.0}}
