@@ -56,8 +56,8 @@ STAGES = ("select", "dagger", "precheck", "gate", "schedules")
 NAME = "oracle_distilled"
 
 
-def design() -> dict[str, Any]:
-    cfg, _, run, tuned, res = setup(CONFIG)
+def design(config: Path = CONFIG) -> dict[str, Any]:
+    cfg, _, run, tuned, res = setup(config)
     t = run["teacher"]
     return {"cfg": cfg, "run": run, "tuned": tuned, "res": res, "teacher": t, "pool": t["pool"],
             "pk": load_train_config(run["config"], run.get("overrides")).policy_kwargs,
@@ -179,16 +179,31 @@ def precheck(out: Path, workers: int, ref: Path) -> dict[str, Any]:
     return rec
 
 
-def gate(out: Path, workers: int) -> dict[str, Any]:
+def require_precheck(out: Path) -> None:
+    """Exit 2 in one line unless OUT/precheck.json records a passed pre-check (before any validation episode)."""
     pre = out / "precheck.json"
     if not pre.is_file() or json.loads(pre.read_text()).get("precheck") is not True:
-        print(f"oracle_distill_pooled: {pre}: no passed pre-check: expected --stage precheck to pass before any "
+        print(f"{Path(sys.argv[0]).stem}: {pre}: no passed pre-check: expected --stage precheck to pass before any "
               "validation episode", file=sys.stderr)
         sys.exit(2)
+
+
+def gate(out: Path, workers: int) -> dict[str, Any]:
+    require_precheck(out)
     d = design()
     ens = ensemble_spec(students(out / "models", NAME, d["pool"]["fit_seeds"], d["res"]))
     return play_design_gate(d["cfg"], CONFIG, GATE_SEEDS, {"pooled_ensemble": ens}, d["tuned"], d["res"], out,
                             workers)
+
+
+def print_outcome(stage: str, rec: dict[str, Any]) -> None:
+    """The pre-check's record (but its rollout) or the gate's table, then the verdict, as the stage prints them."""
+    if stage == "precheck":
+        print(json.dumps({k: v for k, v in rec.items() if k != "rollout"}))
+        print("PRE-CHECK:", "passed" if rec["precheck"] else "failed")
+    else:
+        print("\n".join(table(rec["summary"])))
+        print("GATE:", "passed" if rec["gate"] else "failed")
 
 
 def main() -> None:
@@ -210,14 +225,8 @@ def main() -> None:
         print(f"zero correction {rec['zero_correction_mse']:.4f}")
     elif a.stage == "dagger":
         print(json.dumps(dagger(a.out, a.workers)))
-    elif a.stage == "precheck":
-        rec = precheck(a.out, a.workers, ref)
-        print(json.dumps({k: v for k, v in rec.items() if k != "rollout"}))
-        print("PRE-CHECK:", "passed" if rec["precheck"] else "failed")
     else:
-        res = gate(a.out, a.workers)
-        print("\n".join(table(res["summary"])))
-        print("GATE:", "passed" if res["gate"] else "failed")
+        print_outcome(a.stage, precheck(a.out, a.workers, ref) if a.stage == "precheck" else gate(a.out, a.workers))
 
 
 if __name__ == "__main__":

@@ -22,6 +22,7 @@ REPO = Path(__file__).resolve().parents[2]
 SCRIPT = REPO / "scripts" / "oracle_distill_capped.py"
 CAPPED = REPO / "configs/benchmark/v2_oracle_distilled_capped.yaml"
 POOLED = REPO / "configs/benchmark/v2_oracle_distilled_pooled.yaml"
+LATER = REPO / "configs/benchmark/v2_oracle_distilled_wells.yaml"  # g40's: it names the earlier seeds as used
 
 
 @pytest.fixture(scope="module")
@@ -30,9 +31,10 @@ def capped():
     return importlib.import_module(SCRIPT.stem)
 
 
-def test_config_is_e24s_but_its_history(monkeypatch):
+@pytest.mark.parametrize("config, source", [(CAPPED, POOLED), (LATER, CAPPED)])  # g40's config is f24's copied
+def test_config_is_e24s_but_its_history(monkeypatch, config, source):
     monkeypatch.chdir(REPO)
-    a, b = load_benchmark_config(CAPPED), load_benchmark_config(POOLED)
+    a, b = load_benchmark_config(config), load_benchmark_config(source)
     assert {k: v for k, v in a.items() if k not in ("history", "source")} == {k: v for k, v in b.items()
                                                                      if k not in ("history", "source")}
 
@@ -48,7 +50,7 @@ def test_seeds_are_unused(capped, monkeypatch):
     look, sel, gate = set(capped.LOOK_SEEDS), set(capped.SELECT_SEEDS), set(capped.GATE_SEEDS)
     assert not (look | sel | gate) & used and not look & sel and not (look | sel) & gate
     assert (min(sel), len(sel), min(gate), len(gate)) == (58000, len(capped.SELECT_SEEDS), 21200, 16)
-    others = " ".join(f.read_text() for f in (REPO / "configs").rglob("*.yaml") if f != CAPPED)
+    others = " ".join(f.read_text() for f in (REPO / "configs").rglob("*.yaml") if f not in (CAPPED, LATER))
     assert not re.search(r"\b(58[01]\d\d|212\d\d)\b", others)
     hist = " ".join(cfg["history"])
     assert all(s in hist for s in ("58100..58107", "58000..58011", "21200..21215", "scenario validation"))

@@ -24,6 +24,7 @@ REPO = Path(__file__).resolve().parents[2]
 SCRIPT = REPO / "scripts" / "oracle_distill_pooled.py"
 POOLED = REPO / "configs/benchmark/v2_oracle_distilled_pooled.yaml"
 CAPPED = REPO / "configs/benchmark/v2_oracle_distilled_capped.yaml"  # f24: e24's agents block, copied
+WELLS = REPO / "configs/benchmark/v2_oracle_distilled_wells.yaml"  # g40: f24's config, copied
 
 
 @pytest.fixture(scope="module")
@@ -49,7 +50,7 @@ def test_seeds_are_unused_training_seeds(pooled, monkeypatch):
     earlier = set(range(20000, 20248)) | set(range(20400, 20416)) | set(range(20600, 20616)) | set(range(20800, 20816))
     assert not (dagger | pre) & (d24 | set(range(10)) | set(range(20000, 21000)) | set(range(50000, 53000)))
     assert not set(pooled.GATE_SEEDS) & (earlier | set(range(100000, 100100)))
-    others = " ".join(f.read_text() for f in (REPO / "configs").rglob("*.yaml") if f not in (POOLED, CAPPED))
+    others = " ".join(f.read_text() for f in (REPO / "configs").rglob("*.yaml") if f not in (POOLED, CAPPED, WELLS))
     assert not re.search(r"\b(560\d\d|570\d\d|210\d\d)\b", others)
     hist = " ".join(cfg["history"])
     assert all(s in hist for s in ("56000..56031", "57000..57015", "21000..21015", "0.6 x M_d24"))
@@ -74,13 +75,14 @@ def test_the_gate_rule_is_d24s_on_the_pooled_ensemble(pooled):
     assert not more.gate(summ, "pooled_ensemble")
 
 
-@pytest.mark.parametrize("precheck", [None, {"precheck": False}])
-def test_no_gate_without_a_passed_precheck(tmp_path, precheck):
+@pytest.mark.parametrize("script", [SCRIPT, SCRIPT.with_name("oracle_distill_wells.py")])  # g40's shares the check
+@pytest.mark.parametrize("precheck", [None, {"precheck": False}, {"precheck": "yes"}])
+def test_no_gate_without_a_passed_precheck(tmp_path, precheck, script):
     out = tmp_path / "o"
     out.mkdir()
     if precheck is not None:
         (out / "precheck.json").write_text(json.dumps(precheck))
-    r = subprocess.run([sys.executable, str(SCRIPT), "--stage", "gate", "--out", str(out)], check=False,
+    r = subprocess.run([sys.executable, str(script), "--stage", "gate", "--out", str(out)], check=False,
                        capture_output=True, text=True, cwd=REPO, timeout=120, env=_env())
     assert r.returncode == 2 and "Traceback" not in r.stderr
     assert "no passed pre-check" in r.stderr.strip().splitlines()[-1] and not (out / "gate").exists()
@@ -89,9 +91,11 @@ def test_no_gate_without_a_passed_precheck(tmp_path, precheck):
 @pytest.mark.parametrize("args, match", [
     (["--stage", "select", "--reference", "nowhere"], "--reference 'nowhere'"),
     (["--stage", "precheck", "--workers", "3"], "--workers 3"),
+    (["--stage", "label", "--workers", "3"], "--workers 3"),  # g40's oracle_distill_wells.py
 ])
 def test_bad_arguments_refused_in_one_line(tmp_path, args, match):
-    r = subprocess.run([sys.executable, str(SCRIPT), *args, "--out", str(tmp_path / "o")], check=False,
+    script = SCRIPT.with_name("oracle_distill_wells.py") if "label" in args else SCRIPT
+    r = subprocess.run([sys.executable, str(script), *args, "--out", str(tmp_path / "o")], check=False,
                        capture_output=True, text=True, cwd=REPO, timeout=120, env=_env())
     assert r.returncode == 2 and "Traceback" not in r.stderr
     assert match in r.stderr.strip().splitlines()[-1] and not (tmp_path / "o").exists()
