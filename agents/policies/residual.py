@@ -62,7 +62,7 @@ def bound_correction(residual: np.ndarray, cap: dict[str, float] | None) -> np.n
     r = np.asarray(residual, np.float32) * np.float32(cap.get("correction_scale", 1.0))
     if "spm_cap" in cap:
         r[..., 0] = np.minimum(r[..., 0], np.float32(cap["spm_cap"]))
-    return r.astype(np.float32)
+    return r
 
 
 def compose(base_action: np.ndarray, residual: np.ndarray, scale: float,

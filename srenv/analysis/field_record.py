@@ -20,7 +20,7 @@ from ..errors import ConfigError
 from ..input_files import read_json
 from ..surface_unit.card_checks import check_card, check_magnitude, loop_work
 from .record_extras import card_type, coefficients, ideal_card, pump_card
-from .record_fields import FIELDS, number, raw, series, spelling_notes
+from .record_fields import FIELDS, absent_notes, number, raw, series, spelling_notes
 
 MAX_RECORD_BYTES = 20_000_000
 
@@ -136,6 +136,7 @@ def _depth_notes(rec: FieldRecord) -> list[str]:
 
 
 UNIT_DIMENSIONS = ("DimensionalA", "DimensionalC", "DimensionalI", "DimensionalK", "DimensionalP", "Radius")
+UNIT_KEYS = {k: k[-1] if k != "Radius" else "R" for k in UNIT_DIMENSIONS}  # the record's key -> API letter
 
 
 def _unit(su: dict, where: str, notes: list[str]) -> dict:
@@ -144,10 +145,10 @@ def _unit(su: dict, where: str, notes: list[str]) -> dict:
     if not su:
         notes.append(f"{where} missing: no unit kinematics")
         return {}
-    out = {k[-1] if k != "Radius" else "R": number(su, k, where) for k in UNIT_DIMENSIONS}
+    out = {letter: number(su, k, where) for k, letter in UNIT_KEYS.items()}
     out["geometry"] = raw(su, "PumpingUnitGeometry", where)
     out["rotation"] = raw(su, "Rotation", where)
-    missing = [k for k in UNIT_DIMENSIONS if out[k[-1] if k != "Radius" else "R"] is None]
+    missing = [k for k, letter in UNIT_KEYS.items() if out[letter] is None]
     if record_geometry(out["geometry"]) is None:
         notes.append(f"{where}.PumpingUnitGeometry = {out['geometry']!r}: not a known API geometry (C, M, A): "
                      "no unit kinematics")
@@ -159,8 +160,7 @@ def _unit(su: dict, where: str, notes: list[str]) -> dict:
     # the layout gives the gearbox rating and the counterbalance moment in thousands of in-lb, the phase angle
     # (a Mark II's crank offset) in degrees; srenv.surface_unit.inline_unit maps them onto surface.beam_unit
     rating, moment = number(su, "GearBoxRating", where), number(su, "CounterbalanceMoment", where)
-    notes += [f"{where}.{k} missing: {FIELDS[f'{where}.{k}'].absent}" for k, v in
-              (("GearBoxRating", rating), ("CounterbalanceMoment", moment)) if v is None]
+    notes += absent_notes(where, {"GearBoxRating": rating, "CounterbalanceMoment": moment})
     out["torque_rating_nm"] = None if rating is None else fu.to_si(1e3 * rating, "in") * fu.to_si(1.0, "lbf")
     out["counterbalance_moment_nm"] = None if moment is None else fu.to_si(1e3 * moment, "in") * fu.to_si(1.0, "lbf")
     out["phase_angle_deg"] = number(su, "PhaseAngle", where, notes)
@@ -231,8 +231,7 @@ def _analysis(d: dict, notes: list[str]) -> dict:
     out = {"intake_pressure_pa": number(an, "Pump Intake Pressure", where),
            "fillage": number(an, "Pump Fillage", where), "fluid_load_n": number(an, "Fluid Load", where)}
     if out["intake_pressure_pa"] is not None:
-        notes += [f"{where}.{k} missing: {FIELDS[f'{where}.{k}'].absent}" for k, v in
-                  (("Pump Fillage", out["fillage"]), ("Fluid Load", out["fluid_load_n"])) if v is None]
+        notes += absent_notes(where, {"Pump Fillage": out["fillage"], "Fluid Load": out["fluid_load_n"]})
     return out
 
 

@@ -154,6 +154,12 @@ def number(d, key: str, where: str, notes: list[str] | None = None):
     return fu.to_si(float(x), decl.unit, name)
 
 
+def absent_notes(where: str, values: dict) -> list[str]:
+    """The notes of the declared fields of `where` read as None (absent, no default): what the reader does without
+    each (the declaration's ``absent``)."""
+    return [f"{where}.{k} missing: {FIELDS[declared_path(where, k)].absent}" for k, v in values.items() if v is None]
+
+
 def series(d: dict, key: str, where: str) -> np.ndarray:
     """A list of numbers of the record (numbers written as text are read), flat; one ConfigError otherwise."""
     v = raw(d, key, where)

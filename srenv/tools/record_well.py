@@ -67,13 +67,10 @@ def is_dynacard(path) -> bool:
 @contextmanager
 def described_well(rec, survey_weight: str = "inclination") -> Iterator[DescribedWell]:
     """The record's described well, valid inside the ``with`` block (its motion CSV is removed after it)."""
-    from ..analysis.field_model import well_config
-    from .validate import card_motion, pump_state, write_motion_csv
+    from .validate import card_motion, described_config, write_motion_csv
 
     with tempfile.TemporaryDirectory(prefix="srenv-record-") as work:
         csv, motion = os.path.join(work, "motion.csv"), card_motion(rec)
         write_motion_csv(motion, csv)
-        state = pump_state(rec, work, survey_weight)
-        yield DescribedWell(rec, well_config(rec, csv, state["intake_pressure_pa"], FILLAGE,
-                                             state["plunger_friction_n"], survey_weight=survey_weight), state,
-                            tuple(motion.notes))
+        state, cfg = described_config(rec, csv, work, survey_weight, FILLAGE)
+        yield DescribedWell(rec, cfg, state, tuple(motion.notes))

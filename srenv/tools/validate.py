@@ -265,6 +265,19 @@ def compare(rec, sim, result, pump_card, convention: str) -> dict:
     return out
 
 
+def described_config(rec, motion_csv: str, work_dir: str, survey_weight: str = "inclination",
+                     fillage: float | None = None) -> tuple[dict, dict]:
+    """(the pump state read off the record, :func:`pump_state`; the well the record describes, driven by the
+    motion in `motion_csv`, ``field_model.well_config``), with the state's fillage unless `fillage` is given:
+    ``validate`` and the record commands (``record_well``) build it here alike."""
+    from ..analysis.field_model import well_config
+
+    state = pump_state(rec, work_dir, survey_weight)
+    fill = state["fillage"] if fillage is None else fillage
+    return state, well_config(rec, motion_csv, state["intake_pressure_pa"], fill, state["plunger_friction_n"],
+                              survey_weight=survey_weight)
+
+
 def validate(rec, params: list[str], strokes: int, convention: str, overrides: dict | None = None,
              motor: dict | None = None, survey_weight: str = "inclination",
              damping: str | None = None) -> tuple[dict, object]:
@@ -276,7 +289,6 @@ def validate(rec, params: list[str], strokes: int, convention: str, overrides: d
     default, DEFAULT_DAMPING where it applies)."""
     from dataclasses import replace
 
-    from ..analysis.field_model import well_config
     from ..config import apply_overrides
 
     card = card_motion(rec)  # the record whose positions drive the model and place the measured loads
@@ -292,10 +304,8 @@ def validate(rec, params: list[str], strokes: int, convention: str, overrides: d
             cfg = apply_overrides(rec.config, {"surface.motion": "measured", "surface.measured_card_csv": csv,
                                                "surface.measured_spm": rec.spm, **dict(overrides or {})})
         else:
-            state = pump_state(rec, work, survey_weight)
-            cfg = apply_overrides(well_config(rec, csv, state["intake_pressure_pa"], state["fillage"],
-                                              state["plunger_friction_n"], survey_weight=survey_weight),
-                                  dict(overrides or {}))
+            state, cfg = described_config(rec, csv, work, survey_weight)
+            cfg = apply_overrides(cfg, dict(overrides or {}))
         cfg, rule_entry = _damping_rule(cfg, rec, state, damping)
         fitted = None
         if params:
