@@ -99,8 +99,10 @@ import json, time, warnings
 warnings.filterwarnings("ignore")
 import numpy as np, gymnasium as gym
 import srenv  # noqa: F401  (registers the envs)
+from srenv.envs import sucker_rod_v1
 out = {}
 for env_id in ("srenv/SuckerRod-v2", "srenv/SuckerRod-v1"):
+    sucker_rod_v1._spec.cache_clear()  # each env builds its own family wells (v2 no longer fills v1's cache)
     env = gym.make(env_id, scenario="train"); env.reset(seed=3); env.step(np.array([1.0, 1.0], np.float32))
     t0 = time.process_time()
     for seed in range(11, 41):

@@ -197,7 +197,11 @@ class SuckerRodV1Env(CardWindow, gym.Env):
             return self._fixed
         n = wf.split_size(self.split)
         index = seed % n if seed is not None else int(rng.integers(n))
-        return self._apply(_spec(self.split, int(index)))
+        return self._split_well(int(index))
+
+    def _split_well(self, index: int) -> wf.WellSpec:
+        """Well number ``index`` of the split, with the env's overrides."""
+        return self._apply(_spec(self.split, index))
 
     def inflow_multiplier(self, t_s: float) -> float:
         """The reservoir's deliverability relative to the well's IPR at well time t_s since the episode start."""

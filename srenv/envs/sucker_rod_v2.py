@@ -104,10 +104,12 @@ from typing import Any
 import numpy as np
 from gymnasium import spaces
 
+from ..config import apply_overrides, config_from_dict
 from ..task import events as ev
 from ..task import v2_physics
 from ..task import well_family as wf
 from ..task.interval import IntervalResult, IntervalRunner
+from .env_kwargs import restates
 from .sucker_rod_v1 import FIELD_OBS_NAMES as V1_FIELD
 from .sucker_rod_v1 import OBS_BOUND, SuckerRodV1Env
 from .sucker_rod_v1 import PRIVILEGED_OBS_NAMES as V1_PRIVILEGED
@@ -209,6 +211,25 @@ class SuckerRodV2Env(SuckerRodV1Env):
     def _interval_runner(self) -> IntervalRunner:
         # fast stepping (the default): earlier intervals' strokes reused, carried to the intake pressure
         return IntervalRunner(self.sim, reuse_periodic=self.fast_stepping, carry=self.fast_stepping, draw_at_top=True)
+
+    def _split_well(self, index: int) -> wf.WellSpec:
+        """A split's well with v2's per-well physics. Not seen before and with overrides that only restate task
+        fields (the registered ``episode_hours`` and ``interval_s``: the physics never touches the task section),
+        its config is parsed once, the physics applied to the family's mapping (v1's way parses the family's
+        config, then that config with the physics: the same config, tests/srenv/envs/test_v2_one_parse.py)."""
+        cache = self.__dict__.setdefault("_physics_specs", {})
+        well_id = wf.well_name(self.split, index)
+        if well_id in cache:
+            return cache[well_id]
+        if not all(k.startswith("task.") for k in self.overrides):
+            return super()._split_well(index)
+        pre = wf.build_spec(self.split, index, parse=False)
+        over = v2_physics.yield_to(physics_overrides(pre), self.overrides)
+        cfg = config_from_dict(apply_overrides(pre.raw, over, owned=True))  # pre is this call's own
+        if not all(restates(cfg, k, v) for k, v in self.overrides.items()):
+            return super()._split_well(index)  # the env's overrides change the well: v1's way applies them first
+        cache[well_id] = wf.WellSpec(well_id, pre.params, cfg, pre.nominal_rate_m3_day, pre.design)
+        return cache[well_id]
 
     def _with_physics(self, spec: wf.WellSpec) -> wf.WellSpec:
         """The well with v2's per-well physics (the caller's overrides win), built once per well: a well's unit

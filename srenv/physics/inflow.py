@@ -37,6 +37,11 @@ class Annulus:
         self.area_m2 = math.pi / 4 * (d_c * d_c - d_t * d_t)
         self._full_m3 = self.area_m2 * pump_md_m  # the annulus filled to the pump
         self.rate_multiplier = 1.0  # the reservoir's deliverability over time (v1's inflow schedule)
+        # the inputs of the intake pressure and the IPR, read from cfg / fluid once (the env fast-forwards
+        # ~60 strokes a step, each asking for them twice; the configs are frozen and never replaced here)
+        self._casing_pa, self._rho_f = cfg.casing_pressure_pa, fluid.density_kg_m3
+        self._p_r, self._linear = cfg.reservoir_pressure_pa, cfg.model == "linear"
+        self._pi, self._q_max = cfg.productivity_index_m3_day_pa, cfg.max_rate_m3_day
         self.reset(cfg.initial_fluid_level_m)
 
     def reset(self, level_m: float) -> None:
@@ -49,17 +54,24 @@ class Annulus:
         return self.volume_m3 / self.area_m2
 
     def intake_pressure_pa(self, level_m: float | None = None) -> float:
-        h = min(self.level_m if level_m is None else max(level_m, 0.0), self.pump_md_m)
-        return level_intake_pressure_pa(self.cfg.casing_pressure_pa, self.fluid.density_kg_m3, self._pump_tvd,
-                                        self._tvd(self.pump_md_m - h))
+        # min(level, pump depth) as a comparison (the same float; builtin min/max calls were a third of an
+        # accumulation's time, so the hot path here and below spells them out: hence the noqa)
+        h = self.volume_m3 / self.area_m2 if level_m is None else max(level_m, 0.0)
+        pump_md = self.pump_md_m
+        if pump_md < h:  # noqa: PLR1730
+            h = pump_md
+        return level_intake_pressure_pa(self._casing_pa, self._rho_f, self._pump_tvd, self._tvd(pump_md - h))
 
     def _rate_m3_day(self, p_wf: float) -> float:
         """The IPR at the reservoir's nominal deliverability (multiplier 1)."""
-        p_r = self.cfg.reservoir_pressure_pa
-        if self.cfg.model == "linear":
-            return self.cfg.productivity_index_m3_day_pa * max(p_r - p_wf, 0.0)
-        r = min(max(p_wf / p_r, 0.0), 1.0)
-        return self.cfg.max_rate_m3_day * (1 - 0.2 * r - 0.8 * r * r)
+        p_r = self._p_r
+        if self._linear:
+            drawdown = p_r - p_wf
+            return self._pi * (0.0 if 0.0 > drawdown else drawdown)  # noqa: FURB136 (max(p_r - p_wf, 0.0))
+        r = p_wf / p_r
+        r = 0.0 if 0.0 > r else r  # noqa: FURB136 (min(max(r, 0), 1))
+        r = 1.0 if 1.0 < r else r  # noqa: FURB136
+        return self._q_max * (1 - 0.2 * r - 0.8 * r * r)
 
     def inflow_m3_s(self) -> float:
         return self.rate_multiplier * self._rate_m3_day(self.intake_pressure_pa()) / SECONDS_PER_DAY
@@ -69,8 +81,10 @@ class Annulus:
         return self._rate_m3_day(self.intake_pressure_pa(level_m)) / SECONDS_PER_DAY
 
     def accumulate(self, time_s: float) -> None:
-        dt = max(time_s - self.last_time_s, 0.0)
-        self.volume_m3 = min(self.volume_m3 + self.inflow_m3_s() * dt, self._full_m3)
+        dt = time_s - self.last_time_s
+        volume = self.volume_m3 + self.inflow_m3_s() * (0.0 if 0.0 > dt else dt)  # noqa: FURB136 (max(dt, 0))
+        full = self._full_m3
+        self.volume_m3 = full if full < volume else volume  # noqa: FURB136 (min(volume, full))
         self.last_time_s = time_s
 
     def take(self, displaced_m3: float, time_s: float) -> float:
@@ -83,8 +97,9 @@ class Annulus:
         self.accumulate(time_s)
         if displaced_m3 <= 0:
             return 0.0
-        taken = min(displaced_m3, self.volume_m3)
-        self.volume_m3 -= taken
+        volume = self.volume_m3
+        taken = volume if volume < displaced_m3 else displaced_m3  # noqa: FURB136 (min(displaced_m3, volume))
+        self.volume_m3 = volume - taken
         return taken
 
     def give_back(self, volume_m3: float) -> None:

@@ -19,6 +19,7 @@ zeta_1 = :data:`KV_ZETA_1`: every well's mode k gets the damping ratio (2k - 1) 
 
 from __future__ import annotations
 
+import functools
 import math
 from typing import Any
 
@@ -61,9 +62,24 @@ def draw_geometry(params: wf.WellParams) -> str:
     return names[int(rng.choice(len(names), p=shares))]
 
 
-def _rod_loads_n(spec: wf.WellSpec) -> tuple[float, float, float]:
+@functools.cache
+def reference_stroke_m(geometry: str) -> float:
+    """The longest stroke of ``geometry``'s reference nameplate (a constant: computed once, not per well)."""
+    return inline_unit(BeamUnitConfig(geometry=geometry, torque_rating_nm=1.0, **REFERENCE_UNITS[geometry])).stroke_m
+
+
+def installed_point(spec: wf.WellSpec) -> tuple[float, float, float]:
+    """(fluid density kg/m^3, installed stroke m, installed SPM) of the well's config, or of its mapping when it is
+    not parsed yet (``spec.cfg`` None: the same numbers, which the parse takes as they are)."""
+    if spec.cfg is not None:
+        cfg = spec.cfg
+        return cfg.fluid.density_kg_m3, cfg.surface.stroke_length_m, cfg.surface.spm
+    raw = spec.raw
+    return raw["fluid"]["density_kg_m3"], raw["surface"]["stroke_length_m"], raw["surface"]["spm"]
+
+
+def _rod_loads_n(spec: wf.WellSpec, rho_f: float) -> tuple[float, float, float]:
     """(rod weight in air, buoyed rod weight, fluid load) of the well's design, N."""
-    rho_f = spec.cfg.fluid.density_kg_m3
     rod_w = sum(wf.STEEL_RHO * GRAVITY_M_S2 * math.pi / 4 * (d * 1e-3) ** 2 * length
                 for d, length in spec.design["tapers_bottom_up"])
     return rod_w, rod_w * (1.0 - rho_f / wf.STEEL_RHO), spec.design["fluid_load_n"]
@@ -72,16 +88,16 @@ def _rod_loads_n(spec: wf.WellSpec) -> tuple[float, float, float]:
 def unit_block(spec: wf.WellSpec, geometry: str) -> dict[str, Any]:
     """The ``surface.beam_unit`` block of ``geometry`` sized to the well (see the module docstring)."""
     ref = REFERENCE_UNITS[geometry]
-    ref_stroke = inline_unit(BeamUnitConfig(geometry=geometry, torque_rating_nm=1.0, **ref)).stroke_m
-    f = spec.params.unit_stroke_m / ref_stroke
+    f = spec.params.unit_stroke_m / reference_stroke_m(geometry)
     block: dict[str, Any] = {"geometry": geometry, "rotation": ref["rotation"],
                              **{k: round(ref[k] * f, 6) for k in LINKS}, "crank_follows_stroke": True}
     # counterbalance and gearbox at the installed point (the crew balances the unit where it runs), on the
     # classical rectangular card: Mills' PPRL on the upstroke, his MPRL on the downstroke
-    rod_w, rod_wb, fluid = _rod_loads_n(spec)
-    pprl, mprl = wf.mills_loads_n(rod_w, rod_wb, fluid, spec.cfg.surface.stroke_length_m, spec.cfg.surface.spm)
+    rho_f, stroke_m, spm = installed_point(spec)
+    rod_w, rod_wb, fluid = _rod_loads_n(spec, rho_f)
+    pprl, mprl = wf.mills_loads_n(rod_w, rod_wb, fluid, stroke_m, spm)
     offset = math.radians(ref["crank_offset_deg"]) * (-1.0 if geometry == "mark_ii" else 1.0)  # API lag: -lead
-    probe = unit_for_stroke(BeamUnitConfig(**{**block, "torque_rating_nm": 1.0}), spec.cfg.surface.stroke_length_m)
+    probe = unit_for_stroke(BeamUnitConfig(**{**block, "torque_rating_nm": 1.0}), stroke_m)
     theta = probe.theta_bottom + np.linspace(0.0, 2 * np.pi, 721)[:-1]
     card = np.where(np.asarray(probe.torque_factor_m(theta)) > 0.0, pprl, mprl)
     m = optimal_counterbalance_nm(probe, theta, card, offset)

@@ -105,6 +105,9 @@ class WellSpec:
     cfg: WellConfig
     nominal_rate_m3_day: float
     design: dict = field(default_factory=dict)
+    # the mapping ``cfg`` is parsed from; with ``cfg`` None a well not parsed yet (``spec_from_params(parse=False)``:
+    # v2 parses it once, with its per-well physics applied, srenv/envs/sucker_rod_v2.py)
+    raw: dict | None = field(default=None, compare=False, repr=False)
 
 
 def check_split(split: str, purpose: str) -> None:
@@ -254,12 +257,16 @@ def goodman_pct(smax: float, smin: float, tensile: float) -> float:
     return 100.0 * (smax - smin) / max(allow - smin, 1.0)
 
 
-def build_spec(split: str, index: int) -> WellSpec:
-    seed = well_seed(split, index)
-    return spec_from_params(draw_params(seed), f"{split}-{index:03d}")
+def build_spec(split: str, index: int, parse: bool = True) -> WellSpec:
+    return spec_from_params(draw_params(well_seed(split, index)), well_name(split, index), parse)
 
 
-def spec_from_params(p: WellParams, well_id: str) -> WellSpec:
+def well_name(split: str, index: int) -> str:
+    return f"{split}-{index:03d}"
+
+
+def spec_from_params(p: WellParams, well_id: str, parse: bool = True) -> WellSpec:
+    """The well of parameters ``p``; ``parse=False``: its config mapping in ``raw`` and ``cfg`` None (not parsed)."""
     rho_f = fluid_density(p.water_cut)
     a_pl = math.pi / 4 * (p.plunger_diameter_mm * 1e-3) ** 2
     stations = survey_stations(p)
@@ -325,10 +332,9 @@ def spec_from_params(p: WellParams, well_id: str) -> WellSpec:
         "economics": {"water_cut": p.water_cut, "pprl_rating_n": rating},
         "task": {"inflow_decline_per_day": p.decline_per_day},
     }
-    cfg = config_from_dict(raw)
     design = {"grade": grade, "tapers_bottom_up": tapers_bu, "n0_spm": n0_spm, "fluid_load_n": fluid_load,
               "mills_pprl_installed_n": pprl_inst, "static_level_m": p.static_level_fraction * tvd}
-    return WellSpec(well_id, p, cfg, nominal, design)
+    return WellSpec(well_id, p, config_from_dict(raw) if parse else None, nominal, design, raw)
 
 
 def fundamental_spm(depth_m: float) -> float:
