@@ -70,18 +70,25 @@ def env_rates(env_id: str, steps: int, seeds: tuple = (11, 12), **kwargs) -> dic
     return out
 
 
-def _vector_rate(env_id: str, n: int, steps: int, **kwargs) -> dict:
-    """One vector env at full speed: env steps/s over wall time (and per CPU second of this process: a process
-    backend's workers are not in it) over `steps` steps after a reset and one step."""
+def vector_actions(mode: str, n: int, steps: int) -> np.ndarray:
+    """(steps, n, 2) actions of a bench mode for n wells: its constant action, or uniform ones from a fixed seed."""
+    if mode == RANDOM_MODE:
+        return np.random.default_rng(RANDOM_ACTIONS_SEED).uniform(-1.0, 1.0, (steps, n, 2)).astype(np.float32)
+    return np.tile(np.float32(MODES[mode]), (steps, n, 1))
+
+
+def _vector_rate(env_id: str, n: int, steps: int, mode: str = "full_speed", **kwargs) -> dict:
+    """One vector env in a bench mode (default full speed): env steps/s over wall time (and per CPU second of
+    this process: a process backend's workers are not in it) over `steps` steps after a reset and one step."""
     import gymnasium as gym
 
     venv = gym.make_vec(env_id, num_envs=n, vectorization_mode="vector_entry_point", **kwargs)
     try:
-        a = np.tile(np.float32(MODES["full_speed"]), (n, 1))
+        acts = vector_actions(mode, n, steps + 1)
         venv.reset(seed=0)
-        venv.step(a)
+        venv.step(acts[0])
         t, c = time.perf_counter(), time.process_time()
-        for _ in range(steps):
+        for a in acts[1:]:
             venv.step(a)
         wall, cpu = time.perf_counter() - t, time.process_time() - c
     finally:
@@ -91,8 +98,8 @@ def _vector_rate(env_id: str, n: int, steps: int, **kwargs) -> dict:
 
 
 def vector_rates(env_id: str, sizes: tuple = (1, 8, 32), steps: int = 2, speedup_sizes: tuple = (8,),
-                 **kwargs) -> dict:
-    """The native vector env at full speed on threads (N = `sizes`), and at each N of `speedup_sizes` its
+                 mode: str = "full_speed", **kwargs) -> dict:
+    """The native vector env in a bench mode (default full speed; `random_actions`: RL's case) on threads (N = `sizes`), and at each N of `speedup_sizes` its
     process backend on every core against the same N wells in one process on one thread, measured alternately
     (`process_speedup`: the ratio of wall rates, the issue's "2 cores against one core's rate"; `processes` keeps
     N = 8's figures under their first names). More wells per process balance the steps' bimodal cost (an
@@ -104,14 +111,14 @@ def vector_rates(env_id: str, sizes: tuple = (1, 8, 32), steps: int = 2, speedup
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         for n in sizes:
-            out[f"n{n}"] = _vector_rate(env_id, n, steps, **kwargs)
+            out[f"n{n}"] = _vector_rate(env_id, n, steps, mode, **kwargs)
         if cores > 1:
             by_n = {}
             for n in speedup_sizes:
                 one, many = [], []
                 for _ in range(2):  # alternated: the machine's load moves both alike
-                    one.append(_vector_rate(env_id, n, steps, threads=1, **kwargs)["env_steps_per_s"])
-                    many.append(_vector_rate(env_id, n, steps, processes=cores, **kwargs)["env_steps_per_s"])
+                    one.append(_vector_rate(env_id, n, steps, mode, threads=1, **kwargs)["env_steps_per_s"])
+                    many.append(_vector_rate(env_id, n, steps, mode, processes=cores, **kwargs)["env_steps_per_s"])
                 by_n[n] = {"processes": cores, f"n{n}_env_steps_per_s": max(many),
                            f"n{n}_one_core_env_steps_per_s": max(one), "process_speedup": max(many) / max(one)}
             if 8 in by_n:
@@ -168,4 +175,7 @@ def speed_figures(quick: bool) -> dict:
     if not quick:  # the newest version too, and the speedup where the blocks are large enough to balance
         for env_id in task_env_ids()[-1:]:
             out["vector_env"][env_id] = vector_rates(env_id, steps=6, speedup_sizes=(8, 32))
+            # RL's case: every well changes its action every step (most well-steps simulate exact strokes)
+            out["vector_env"][f"{env_id} {RANDOM_MODE}"] = vector_rates(env_id, sizes=(), steps=6, speedup_sizes=(8, 32),
+                                                                          mode=RANDOM_MODE)
     return out

@@ -6,7 +6,15 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from srenv.tools.bench_speed import MODES, RANDOM_MODE, env_rates, mode_actions, split_bound
+from srenv.tools.bench_speed import (
+    MODES,
+    RANDOM_MODE,
+    env_rates,
+    mode_actions,
+    split_bound,
+    vector_actions,
+    vector_rates,
+)
 
 
 def test_random_actions_mode_changes_the_action_every_step_from_a_fixed_seed() -> None:
@@ -37,3 +45,15 @@ def test_split_bound_lies_between_one_and_the_block_count() -> None:
         assert 1.0 <= out[key] <= 2.0 + 1e-9
     one = split_bound("srenv/SuckerRod-v2", 2, steps=1, blocks=1)
     assert one["contiguous_bound"] == pytest.approx(1.0) and one["hindsight_bound"] == pytest.approx(1.0)
+
+
+def test_vector_bench_modes_give_seeded_random_or_constant_actions() -> None:
+    r = vector_actions(RANDOM_MODE, 3, 4)
+    assert r.shape == (4, 3, 2) and r.dtype == np.float32 and np.all(np.abs(r) <= 1.0)
+    assert np.array_equal(r, vector_actions(RANDOM_MODE, 3, 4)) and len({x.tobytes() for x in r[:, 0]}) == 4
+    assert np.array_equal(vector_actions("idle", 2, 3), np.tile(np.float32(MODES["idle"]), (3, 2, 1)))
+    out = vector_rates("srenv/SuckerRod-v1", sizes=(2,), steps=1, speedup_sizes=(2,), mode=RANDOM_MODE,
+                       episode_hours=0.25)
+    assert out["n2"]["env_steps_per_s"] > 0
+    if out["threads"] > 1:  # a 1-core runner has no process figures
+        assert out["process_speedup_by_n"]["2"] > 0
