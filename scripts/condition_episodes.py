@@ -53,7 +53,7 @@ KEYS = {  # the JSON's keys per condition, and per policy (documented in docs/ag
                   "window_h", "policies", "lead_in_window_usd_h"),
     "policy": ("return", "reward_rate_usd_h", "cost", "steps", "failure", "window", "before", "prob"),
     "window": ("return", "reward_rate_usd_h", "cost", "mean_avg_spm", "mean_stroke_length_m", "mean_duty",
-               "mean_fillage", "intervals"),
+               "mean_fillage", "intervals", "terms"),
     "prob": ("hour_before_mean", "window_mean", "window_max", "first_above_half_h"),
 }
 
@@ -112,13 +112,14 @@ def play_traced(env: Any, policy: Any, seed: int, label: str) -> dict[str, Any]:
     info, steps = play(env, policy, seed)
     j = FIELD_OBS_NAMES.index(f"prob_{label}")
     keys = ("time_h", "avg_spm", "duty", "stroke_length_m", "fillage", "fillage_est", "cost", "condition_severity")
-    tr: dict[str, list] = {k: [] for k in (*keys, "reward", "condition", "prob", "card")}
+    tr: dict[str, list] = {k: [] for k in (*keys, "reward", "condition", "prob", "card", "terms")}
     failure = None
     for obs, reward, terminated, _, inf in steps:
         for k in keys:
             tr[k].append(float(inf.get(k, math.nan)))
         tr["reward"].append(float(reward))
         tr["condition"].append(str(inf.get("condition", "")))
+        tr["terms"].append({k: float(v) for k, v in inf.items() if k.startswith(("reward_", "cost_"))})
         o = np.asarray(obs, np.float64)
         tr["prob"].append(float(o[j]))
         tr["card"].append(o[:64].round(4).tolist())
@@ -136,8 +137,16 @@ def window_of(ep: dict[str, Any], onset_h: float, end_h: float, dt_h: float) -> 
     return i0, i1
 
 
+def window_terms(ep: dict[str, Any], i0: int, i1: int) -> dict[str, float]:
+    """The window's reward terms as mean rates (USD/h, as the reward) and its cost terms summed (as ``cost``)."""
+    rows = ep["trace"]["terms"][i0:i1]
+    keys = sorted({k for r in rows for k in r})
+    sums = {k: sum(r.get(k, 0.0) for r in rows) for k in keys}
+    return {k: v / len(rows) if k.startswith("reward_") else v for k, v in sums.items() if rows}
+
+
 def policy_summary(ep: dict[str, Any], i0: int, i1: int, dt_h: float) -> dict[str, Any]:
-    t = {k: np.asarray(v, float) for k, v in ep["trace"].items() if k not in ("condition", "card")}
+    t = {k: np.asarray(v, float) for k, v in ep["trace"].items() if k not in ("condition", "card", "terms")}
     n = len(t["reward"])
     w = slice(i0, i1)
     before = slice(max(0, i0 - round(1 / dt_h)), i0)
@@ -150,7 +159,7 @@ def policy_summary(ep: dict[str, Any], i0: int, i1: int, dt_h: float) -> dict[st
     win = {"return": float(t["reward"][w].sum()), "reward_rate_usd_h": mean("reward", w),
            "cost": float(t["cost"][w].sum()), "mean_avg_spm": mean("avg_spm", w),
            "mean_stroke_length_m": mean("stroke_length_m", w), "mean_duty": mean("duty", w),
-           "mean_fillage": mean("fillage", w), "intervals": i1 - i0}
+           "mean_fillage": mean("fillage", w), "intervals": i1 - i0, "terms": window_terms(ep, i0, i1)}
     return {"return": float(t["reward"].sum()), "reward_rate_usd_h": float(t["reward"].sum()) / max(n, 1),
             "cost": float(t["cost"].sum()), "steps": n, "failure": ep["failure"], "window": win,
             "before": {"mean_avg_spm": mean("avg_spm", before), "mean_stroke_length_m": mean("stroke_length_m", before),
