@@ -76,9 +76,9 @@ def test_every_declared_flag_refuses_bad_values_in_one_line(mod, capsys, tmp_pat
     assert not (tmp_path / "f").exists() and not (tmp_path / "target.json").exists()
     p = subprocess.run([sys.executable, str(SCRIPT), "--max-seeds", "0"], capture_output=True, text=True,
                        check=False, timeout=120, cwd=REPO, env={"PYTHONPATH": str(REPO), "PATH": ""})
-    assert p.returncode == 2 and p.stderr.strip().splitlines() == [
+    assert p.returncode == 2 and p.stderr.strip().splitlines() == [(
         "condition_episodes.py: error: argument --max-seeds: --max-seeds = '0': expected a positive integer at most "
-        "100000"]
+        "100000")]
 
 
 def test_a_tiny_run_writes_the_figure_and_the_documented_json(mod, tmp_path):
