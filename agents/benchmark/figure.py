@@ -30,6 +30,14 @@ def _condition_spans(ax: Any, hours: np.ndarray, conditions: list[str], dt_h: fl
             start = i
 
 
+def surface_card(ax: Any, card: Any, stroke_length_m: float, **plot: Any) -> None:
+    """One surface card of the observation (its first 64 values: 32 loads up, 32 down, / PPRL rating) over the
+    polished-rod position, the stroke length ``stroke_length_m`` long."""
+    c = np.asarray(card, dtype=float)
+    x = np.linspace(0, 1, len(c) // 2) * stroke_length_m
+    ax.plot(np.r_[x, x[::-1]], np.r_[c[: len(c) // 2], c[len(c) // 2:][::-1]], **{"lw": 1, **plot})
+
+
 def figure(report: dict[str, Any], traces: dict[str, dict[str, Any]], path: Path) -> None:
     """Top: mean return with its 95 % CI per policy. Below: on one test episode, the best agent beside
     the best tuned baseline - average SPM and duty over time, fluid level, and three surface cards."""
@@ -76,10 +84,7 @@ def figure(report: dict[str, Any], traces: dict[str, dict[str, Any]], path: Path
         pumped = np.flatnonzero(duty > 0)
         picks = sorted({int(pumped[0]), int(pumped[len(pumped) // 2]), int(pumped[-1])}) if len(pumped) else []
         for i in picks:
-            c = cards[i]
-            x = np.linspace(0, 1, len(c) // 2) * t["stroke_length_m"][i]
-            a2.plot(np.r_[x, x[::-1]], np.r_[c[: len(c) // 2], c[len(c) // 2:][::-1]], lw=1,
-                    label=f"t = {hours[i]:.1f} h")
+            surface_card(a2, cards[i], t["stroke_length_m"][i], label=f"t = {hours[i]:.1f} h")
         a2.set(xlabel="polished-rod position (m)", ylabel="load / PPRL rating (-)", title="surface cards")
         a2.legend(fontsize=7)
         a2.grid(alpha=0.3)
