@@ -225,6 +225,7 @@ def draw(summary: dict[str, Any], eps: dict[str, dict[str, Any]], dt_h: float) -
         if end is not None and end <= last:
             ax.axvline(end, color="k", lw=1, ls=":")
         ax.set_ylabel(ylabel, fontsize=8)
+        ax.ticklabel_format(axis="y", useOffset=False)  # a fillage of 0.99999 reads as itself, not an offset
         ax.grid(alpha=0.3)
     axes[0].legend(fontsize=7, loc="lower left")
     axes[0].set_title(f"{summary['event']} (severity {summary['severity']:.2f}) on {summary['well_id']} "
@@ -250,6 +251,12 @@ def draw(summary: dict[str, Any], eps: dict[str, dict[str, Any]], dt_h: float) -
 
 
 # ------------------------------------------------------------------------------------------ main
+def _shown(path: Path) -> str:
+    """The report's path as the command names it: relative to the working directory when it lies below it."""
+    p = Path(path).resolve()
+    return str(p.relative_to(Path.cwd())) if p.is_relative_to(Path.cwd()) else str(p)
+
+
 def main(argv: list[str] | None = None) -> int:
     args = parse(argv)
     from agents.envs import make_env
@@ -274,7 +281,7 @@ def main(argv: list[str] | None = None) -> int:
         kwargs["episode_hours"] = args.episode_hours
     env = make_env(rep["env_id"], **kwargs)
     out: dict[str, Any] = {"command": "PYTHONPATH=. nice -n 5 python scripts/condition_episodes.py"
-                           + (" " + " ".join(argv) if argv else ""), "report": str(path), "agent": AGENT,
+                           + (" " + " ".join(argv) if argv else ""), "report": _shown(path), "agent": AGENT,
                            "baselines": list(args.baseline), "scenario": "validation", "env_kwargs": kwargs,
                            "rule": f"the first validation seed from {args.first_seed} whose drawn schedule has the "
                                    "event starting in the episode's first half", "keys": KEYS, "conditions": {}}
