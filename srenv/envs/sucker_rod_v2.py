@@ -212,12 +212,17 @@ class SuckerRodV2Env(SuckerRodV1Env):
         # fast stepping (the default): earlier intervals' strokes reused, carried to the intake pressure
         return IntervalRunner(self.sim, reuse_periodic=self.fast_stepping, carry=self.fast_stepping, draw_at_top=True)
 
+    def _physics_cache(self) -> dict[str, wf.WellSpec]:
+        """Each well with v2's physics, by name, built once (filled by :meth:`_split_well` and
+        :meth:`_with_physics`; made on first use)."""
+        return self.__dict__.setdefault("_physics_specs", {})
+
     def _split_well(self, index: int) -> wf.WellSpec:
         """A split's well with v2's per-well physics. Not seen before and with overrides that only restate task
         fields (the registered ``episode_hours`` and ``interval_s``: the physics never touches the task section),
         its config is parsed once, the physics applied to the family's mapping (v1's way parses the family's
         config, then that config with the physics: the same config, tests/srenv/envs/test_v2_one_parse.py)."""
-        cache = self.__dict__.setdefault("_physics_specs", {})
+        cache = self._physics_cache()
         well_id = wf.well_name(self.split, index)
         if well_id in cache:
             return cache[well_id]
@@ -234,7 +239,7 @@ class SuckerRodV2Env(SuckerRodV1Env):
     def _with_physics(self, spec: wf.WellSpec) -> wf.WellSpec:
         """The well with v2's per-well physics (the caller's overrides win), built once per well: a well's unit
         and damping are its own, the same in every episode."""
-        cache = self.__dict__.setdefault("_physics_specs", {})
+        cache = self._physics_cache()
         if spec.well_id not in cache:
             over = v2_physics.yield_to(physics_overrides(spec), self.overrides)
             if over:

@@ -56,7 +56,7 @@ class Annulus:
     def intake_pressure_pa(self, level_m: float | None = None) -> float:
         # min(level, pump depth) as a comparison (the same float; builtin min/max calls were a third of an
         # accumulation's time, so the hot path here and below spells them out: hence the noqa)
-        h = self.volume_m3 / self.area_m2 if level_m is None else max(level_m, 0.0)
+        h = self.volume_m3 / self.area_m2 if level_m is None else max(level_m, 0.0)  # level_m, without its call
         pump_md = self.pump_md_m
         if pump_md < h:  # noqa: PLR1730
             h = pump_md

@@ -72,9 +72,8 @@ def env_rates(env_id: str, steps: int, seeds: tuple = (11, 12), **kwargs) -> dic
 
 def vector_actions(mode: str, n: int, steps: int) -> np.ndarray:
     """(steps, n, 2) actions of a bench mode for n wells: its constant action, or uniform ones from a fixed seed."""
-    if mode == RANDOM_MODE:
-        return np.random.default_rng(RANDOM_ACTIONS_SEED).uniform(-1.0, 1.0, (steps, n, 2)).astype(np.float32)
-    return np.tile(np.float32(MODES[mode]), (steps, n, 1))
+    actions = mode_actions(mode)  # one stream per mode: the wells of a step take its next n actions in turn
+    return np.array([next(actions) for _ in range(steps * n)], np.float32).reshape(steps, n, 2)
 
 
 def _vector_rate(env_id: str, n: int, steps: int, mode: str = "full_speed", **kwargs) -> dict:
@@ -99,11 +98,12 @@ def _vector_rate(env_id: str, n: int, steps: int, mode: str = "full_speed", **kw
 
 def vector_rates(env_id: str, sizes: tuple = (1, 8, 32), steps: int = 2, speedup_sizes: tuple = (8,),
                  mode: str = "full_speed", **kwargs) -> dict:
-    """The native vector env in a bench mode (default full speed; `random_actions`: RL's case) on threads (N = `sizes`), and at each N of `speedup_sizes` its
-    process backend on every core against the same N wells in one process on one thread, measured alternately
-    (`process_speedup`: the ratio of wall rates, the issue's "2 cores against one core's rate"; `processes` keeps
-    N = 8's figures under their first names). More wells per process balance the steps' bimodal cost (an
-    interval that needs exact strokes against one that reuses its stroke), which a vector step waits for."""
+    """The native vector env in a bench mode (default full speed; `random_actions`: RL's case) on threads
+    (N = `sizes`), and at each N of `speedup_sizes` its process backend on every core against the same N wells in
+    one process on one thread, measured alternately (`process_speedup`: the ratio of wall rates, the issue's "2
+    cores against one core's rate"; `processes` keeps N = 8's figures under their first names). More wells per
+    process balance the steps' bimodal cost (an interval that needs exact strokes against one that reuses its
+    stroke), which a vector step waits for."""
     from ..envs.vector import default_threads
 
     cores = default_threads()
@@ -176,6 +176,6 @@ def speed_figures(quick: bool) -> dict:
         for env_id in task_env_ids()[-1:]:
             out["vector_env"][env_id] = vector_rates(env_id, steps=6, speedup_sizes=(8, 32))
             # RL's case: every well changes its action every step (most well-steps simulate exact strokes)
-            out["vector_env"][f"{env_id} {RANDOM_MODE}"] = vector_rates(env_id, sizes=(), steps=6, speedup_sizes=(8, 32),
-                                                                          mode=RANDOM_MODE)
+            out["vector_env"][f"{env_id} {RANDOM_MODE}"] = vector_rates(env_id, sizes=(), steps=6,
+                                                                          speedup_sizes=(8, 32), mode=RANDOM_MODE)
     return out
