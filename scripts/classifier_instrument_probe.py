@@ -11,14 +11,17 @@ read.
 
 from __future__ import annotations
 
-import argparse
 from pathlib import Path
 
 import numpy as np
 
 from srenv.analysis.card_augment import spectral_lowpass
-from srenv.analysis.card_classifier import CardClassifier
-from srenv.task.card_set import load_cards
+from srenv.analysis.card_classifier import BadModel, CardClassifier
+from srenv.cli_types import OneLineParser
+from srenv.task.card_set import ARRAYS, load_cards
+
+TOOL = "classifier_instrument_probe.py"
+NEEDED = ("label", "label_names", *ARRAYS[:2])  # the columns read: the label and the surface card
 
 
 def _resampled(x: np.ndarray, y: np.ndarray, n: int = 200) -> tuple[np.ndarray, np.ndarray]:
@@ -36,12 +39,21 @@ PERTURBATIONS = {
 
 
 def main(argv: list[str] | None = None) -> int:
-    p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    p = OneLineParser(prog=TOOL, description=__doc__.split("\n\n")[0])
+    p.tool = TOOL
     p.add_argument("--cards", required=True, type=Path, help="a directory written by `srenv cards`")
     p.add_argument("--model", default=None, help="a classifier file (default: the shipped surface model)")
     args = p.parse_args(argv)
-    c = load_cards(str(args.cards / "cards.npz"))
-    clf = CardClassifier.load(args.model) if args.model else CardClassifier.load()
+    try:  # both inputs read, as data, before any card is classified
+        c = load_cards(str(args.cards / "cards.npz"))
+        missing = [k for k in NEEDED if k not in c]
+        if missing:
+            p.error(f"--cards {args.cards}: cards.npz lacks {', '.join(missing)} (expected a set `srenv cards` wrote)")
+        clf = CardClassifier.load(args.model) if args.model else CardClassifier.load()
+    except BadModel as exc:
+        p.error(f"--model {args.model}: {exc}")
+    except (OSError, ValueError) as exc:
+        p.error(f"--cards {args.cards}: not a card set `srenv cards` wrote ({type(exc).__name__}: {exc})")
     names = [str(s) for s in c["label_names"]]
     truth = np.array([names[i] for i in c["label"]])
     for tag, perturb in PERTURBATIONS.items():

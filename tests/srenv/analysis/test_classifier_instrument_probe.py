@@ -50,3 +50,17 @@ def test_a_small_set_prints_an_accuracy_line_per_perturbation(tmp_path: Path) ->
     for line in lines:
         acc = float(re.search(r"accuracy (\d\.\d+) \((\d+) / 24\)", line).group(1))
         assert 0.0 <= acc <= 1.0
+
+
+def test_a_missing_set_a_set_without_cards_and_a_model_that_is_not_data_are_one_line_exit_2(tmp_path: Path) -> None:
+    np.savez(tmp_path / "cards.npz", label=np.zeros(2, int))  # a set without its card columns
+    (tmp_path / "model.npz").write_text("import os  # code, not data\n")
+    for args in (["--cards", str(tmp_path / "nowhere")], ["--cards", str(tmp_path)]):
+        p = subprocess.run([sys.executable, str(SCRIPT), *args], check=False, capture_output=True, text=True, cwd=REPO)
+        assert p.returncode == 2 and p.stdout == "" and len(p.stderr.strip().splitlines()) == 1, p.stderr
+        assert "--cards" in p.stderr and "Traceback" not in p.stderr
+    subprocess.run([sys.executable, "-m", "srenv.tools.cli", "cards", "--n", "2", "--seed", "41", "--out",
+                    str(tmp_path / "set"), "--workers", "1", "--no-progress"], check=True, capture_output=True)
+    p = subprocess.run([sys.executable, str(SCRIPT), "--cards", str(tmp_path / "set"), "--model",
+                        str(tmp_path / "model.npz")], check=False, capture_output=True, text=True, cwd=REPO)
+    assert p.returncode == 2 and len(p.stderr.strip().splitlines()) == 1 and "--model" in p.stderr, p.stderr
