@@ -10,6 +10,7 @@ with an economics override; v1 random; v1 ``fast_stepping``). Run it in two tree
 
 from __future__ import annotations
 
+import argparse
 import hashlib
 import json
 import warnings
@@ -75,4 +76,5 @@ def main() -> None:
 
 
 if __name__ == "__main__":
+    argparse.ArgumentParser(description=__doc__.split("\n\n")[0]).parse_args()  # no options: --help, or run
     main()
