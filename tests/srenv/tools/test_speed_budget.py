@@ -63,7 +63,8 @@ def test_the_benchmark_count_on_a_fixed_config(mod):
 
 
 def _measured(kernel_ms_per_step: float, exact: float) -> dict:
-    return {"rates": {"v1@91adcce": [90.0, 100.0], "srenv/SuckerRod-v2": [250.0, 260.0]},
+    return {"rates": {"v1@91adcce": [90.0, 100.0], "srenv/SuckerRod-v2": [250.0, 260.0],
+                      "srenv/SuckerRod-v1 (this tree)": [140.0, 150.0]},
             "split": {"reset_ms_each": 6.0, "exact_strokes_per_step": exact, "steps_kernel_ms_per_step": kernel_ms_per_step,
                       "steps_python_ms_per_step": 0.7,
                       "kernel_ms_per_exact_stroke": kernel_ms_per_step / exact if exact else None},
@@ -79,12 +80,13 @@ def test_the_report_from_fixed_measurements(mod):
     assert s["budget_generous"]["max_exact_strokes_per_step"] == pytest.approx((1e3 / 900 - 0.5 / 24) / 0.25)
     assert s["frontier_at_floor"]["every stroke"]["over_v1_resets_today"] == pytest.approx(
         24e3 / (24 * 60 * 0.25 + 12.0) / 100.0)
-    assert s["new_over_v1_best"] == pytest.approx(2.6)
+    assert s["new_over_v1_best"] == pytest.approx(2.6) and s["v1_here_rate_best"] == 150.0
     none = mod.summarise("vsd_minimum", _measured(0.0, 0.0), "srenv/SuckerRod-v2")  # no exact stroke ran
     assert none["budget_kernel_today"] is None
     res = {"env_id": "srenv/SuckerRod-v2", "repeats": 2, "actions": {"full_speed": s, "vsd_minimum": none},
            "benchmark": {"env_steps": {"total": 1000, "training": 600}, "cores": 2, "goal_s": 1200.0,
-                         "v1_rates_per_core": {"full_speed": 100.0}, "lower_bound_s": 5.0}}
+                         "needed_rate_per_core": 0.42, "v1_rates_per_core": {"v1@91adcce": 100.0},
+                         "lower_bound_s": {"v1@91adcce": 5.0}}}
     lines = mod.report_lines(res)
     assert any("at most 2.00 exact strokes" in x for x in lines) and any("today's kernel nan" in x for x in lines)
     assert not any(math.isnan(v) for v in (s["budget"]["step_budget_ms"], s["new_exact_strokes_per_step"]))
