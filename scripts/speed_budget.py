@@ -42,7 +42,8 @@ FLAGS = {"--repeats": Number("--repeats", int, hi=20, why="wall time: ~1-2 min o
 ACTIONS = {"full_speed": 1.0, "vsd_minimum": -0.6}  # the acceptance's a0 of [a0, 1]
 SPEEDUP = 10.0  # the issue's goal over v1@91adcce
 PROTOCOL_STEPS, PROTOCOL_RESETS = 24, 2  # seeds 11 and 12, 12 steps each, in the acceptance's timed loop
-V1_HERE = "srenv/SuckerRod-v1 (this tree)"  # what `python -m agents benchmark configs/benchmark/v1.yaml` runs
+V1_ID = "srenv/SuckerRod-v1"
+V1_HERE = f"{V1_ID} (this tree)"  # what `python -m agents benchmark configs/benchmark/v1.yaml` runs
 CORES = 2  # the benchmark's machine (configs/benchmark/v1.yaml: workers 2)
 # docs/speed.md §2g (helper a25): worst of production, PPRL and every reward term against every stroke exact, test
 # wells 0-7, 2-h episodes; median / largest over the 8 wells, %; and the exact strokes it took a step (all policies).
@@ -199,27 +200,34 @@ def floor_us_per_step(floor, repeats: int = 5) -> float:
 
 
 def measure(old: Path, env_id: str, a0: float, repeats: int) -> dict:
-    """Rates of both trees alternating (the order swapped every round), the newest env's CPU split each round,
-    then the floor's cost of the protocol's exact strokes."""
+    """Rates of the trees alternating (the order reversed every other round), the CPU split of the newest env and of
+    this tree's v1 each round, then the floor's cost of each one's protocol strokes."""
     rates: dict[str, list[float]] = {"v1@91adcce": [], env_id: [], V1_HERE: []}
-    splits = []
+    splits: dict[str, list[dict]] = {env_id: [], V1_ID: []}
     for r in range(repeats):
         sides = [("v1@91adcce", old, "v1"), (env_id, REPO, "newest"), (V1_HERE, REPO, "v1")]
         for name, tree, which in sides[::(-1 if r % 2 else 1)]:
             rates[name].append(_child(["-c", RATE_CODE, which, str(a0)], tree)["rate"])
-        splits.append(_child(["scripts/step_profile.py", "--env", env_id, "--action", str(a0)], REPO))
-    code = f"import sys; sys.path.insert(0, 'scripts'); import speed_budget as m, json; " \
-           f"print(json.dumps(m.floor_costs({env_id!r}, {a0!r})))"
-    floor = _child(["-c", code], REPO)
-    med = {k: statistics.median(s[k] for s in splits) for k in
+        for e, rounds in splits.items():
+            rounds.append(_child(["scripts/step_profile.py", "--env", e, "--action", str(a0)], REPO))
+    floor = "import sys, json; sys.path.insert(0, 'scripts'); import speed_budget as m; " \
+            "print(json.dumps(m.floor_costs(sys.argv[1], float(sys.argv[2]))))"
+    both = {e: {"split": _split(rounds), "floor": _child(["-c", floor, e, str(a0)], REPO)}
+            for e, rounds in splits.items()}
+    return {"rates": rates, **both[env_id], "v1_here": both[V1_ID]}
+
+
+def _split(rounds: list[dict]) -> dict:
+    """scripts/step_profile.py's rounds (medians): a reset's ms, a step's kernel and Python ms, its exact strokes."""
+    med = {k: statistics.median(s[k] for s in rounds) for k in
            ("reset_ms", "reset_kernel_ms", "steps_ms", "steps_kernel_ms", "exact_strokes_per_step")}
     split = {"reset_ms_each": med["reset_ms"] / PROTOCOL_RESETS, "reset_kernel_ms_each": med["reset_kernel_ms"] / 2,
              "steps_kernel_ms_per_step": med["steps_kernel_ms"] / PROTOCOL_STEPS,
              "steps_python_ms_per_step": (med["steps_ms"] - med["steps_kernel_ms"]) / PROTOCOL_STEPS,
-             "exact_strokes_per_step": med["exact_strokes_per_step"], "rounds": splits}
+             "exact_strokes_per_step": med["exact_strokes_per_step"], "rounds": rounds}
     per = split["exact_strokes_per_step"]
     split["kernel_ms_per_exact_stroke"] = split["steps_kernel_ms_per_step"] / per if per else None
-    return {"rates": rates, "split": split, "floor": floor}
+    return split
 
 
 def summarise(label: str, m: dict, env_id: str) -> dict:
@@ -244,6 +252,11 @@ def summarise(label: str, m: dict, env_id: str) -> dict:
     out["frontier_at_floor"] = {k: {"strokes_per_step": x, "over_v1_resets_today": rate_multiple(max(v1), reset, fs, x),
                                     "over_v1_resets_at_floor": rate_multiple(max(v1), fs, fs, x)}
                                 for k, x in ks.items()}
+    if "v1_here" in m:  # this tree's v1 with its exact strokes at the floor and no Python: env steps per CPU s
+        sp, f1 = m["v1_here"]["split"], m["v1_here"]["floor"]["floor_ms_per_exact_stroke"]
+        out["v1_here_at_floor_rate"] = {
+            "resets_today": rate_multiple(1.0, sp["reset_ms_each"], f1, sp["exact_strokes_per_step"]),
+            "resets_at_floor": rate_multiple(1.0, f1, f1, sp["exact_strokes_per_step"])}
     return {"action": [ACTIONS[label], 1.0], **out, **m}
 
 
@@ -310,7 +323,7 @@ def report_lines(res: dict) -> list[str]:
                  f"the {bb['goal_s']:.0f} s goal needs {bb['needed_rate_per_core']:.0f} env steps/s a core on "
                  f"{bb['cores']} cores with a free learner")
     for k, x in bb["v1_rates_per_core"].items():
-        lines.append(f"  at {k}'s best protocol rate {x:.0f} a core: at least {bb['lower_bound_s'][k]:.0f} s")
+        lines.append(f"  at {k}: {x:.0f} env steps/CPU s a core -> at least {bb['lower_bound_s'][k]:.0f} s")
     return lines
 
 
@@ -337,8 +350,11 @@ def main(argv: list[str] | None = None) -> int:
                  "actions": {}}
     for label, a0 in ACTIONS.items():
         res["actions"][label] = summarise(label, measure(args.old, env_id, a0, args.repeats), env_id)
-    res["benchmark"] = benchmark_bound({k: max(r[key] for r in res["actions"].values())
-                                        for k, key in (("v1@91adcce", "v1_rate_best"), (V1_HERE, "v1_here_rate_best"))})
+    rates = {k: max(r[key] for r in res["actions"].values())
+             for k, key in (("v1@91adcce", "v1_rate_best"), (V1_HERE, "v1_here_rate_best"))}
+    for label, r in res["actions"].items():  # the most v1's stepping could give: its strokes at the floor only
+        rates[f"{V1_HERE} at the floor, no Python, {label}"] = r["v1_here_at_floor_rate"]["resets_today"]
+    res["benchmark"] = benchmark_bound(rates)
     res["cited_errors"] = CITED
     res["load_avg_end"] = os.getloadavg()
     print("\n".join(report_lines(res)))
