@@ -38,7 +38,7 @@ from srenv.errors import ConfigError
 TOOL = "speed_budget.py"
 REPO = Path(__file__).resolve().parents[1]
 N_TIMESTEPS = Number("n_timesteps", int, hi=10**9)  # a training config's, read as data
-FLAGS = {"--repeats": Number("--repeats", int, hi=20, why="wall time: ~1-2 min of rate processes a round")}
+FLAGS = {"--repeats": Number("--repeats", int, hi=20, why="wall time: ~10-20 s of processes a round")}
 ACTIONS = {"full_speed": 1.0, "vsd_minimum": -0.6}  # the acceptance's a0 of [a0, 1]
 SPEEDUP = 10.0  # the goal over v1@91adcce
 PROTOCOL_STEPS, PROTOCOL_RESETS = 24, 2  # seeds 11 and 12, 12 steps each, in the acceptance's timed loop
