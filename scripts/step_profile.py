@@ -10,7 +10,7 @@ action every step from a fixed seed instead (``srenv bench``'s ``random_actions`
 same actions in every tree), ``--steps`` steps per seed. Prints one JSON line: the
 resets' and the steps' CPU ms, the compiled kernel's share of each (``kernel.run`` timed around), the steps'
 Python per step and ``python_per_kernel`` (the steps' Python over their kernel time: the figure that survives a
-loaded machine, both sides slowing alike), and with ``--functions`` the self time of the step's main Python
+loaded machine, both sides slowing alike), ``exact_strokes_per_step`` (the steps' ``info["exact_strokes"]``), and with ``--functions`` the self time of the step's main Python
 parts (wrapped with a timer: their own time, the wrapped callees' taken out; the wrappers add ~1 µs a call).
 """
 
@@ -131,6 +131,7 @@ def profile(env_id: str, action: float, functions: bool, random: bool = False, n
     timer.ms.clear()
     timer.calls.clear()
     reset = steps = k_reset = k_steps = 0.0
+    exact = 0
     for seed in (11, 12):
         k0, t0 = spent[0], time.process_time()
         env.reset(seed=seed)
@@ -139,14 +140,15 @@ def profile(env_id: str, action: float, functions: bool, random: bool = False, n
         for _ in range(n_steps):
             a = next(actions)
             k0, t0 = spent[0], time.process_time()
-            env.step(a)
+            info = env.step(a)[4]
             steps += time.process_time() - t0
             k_steps += spent[0] - k0
+            exact += info.get("exact_strokes", 0)  # the interval's strokes simulated exactly (0 in an old tree)
     n = 2 * n_steps
     out = {"env": env_id, "action": "random" if random else action, "env_steps_per_cpu_s": n / (reset + steps),
            "reset_ms": 1e3 * reset, "reset_kernel_ms": 1e3 * k_reset, "steps_ms": 1e3 * steps,
            "steps_kernel_ms": 1e3 * k_steps, "steps_python_ms_per_step": 1e3 * (steps - k_steps) / n,
-           "python_per_kernel": (steps - k_steps) / k_steps}
+           "python_per_kernel": (steps - k_steps) / k_steps, "exact_strokes_per_step": exact / n}
     if functions:
         out["self_ms"] = {k: [round(v, 2), timer.calls[k]] for k, v in sorted(timer.ms.items(), key=lambda kv: -kv[1])}
     return out
