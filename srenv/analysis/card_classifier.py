@@ -84,7 +84,7 @@ def members_of(data: dict) -> list[dict]:
     for key, a in data.items():
         if key not in SHARED and (a.ndim < 1 or a.shape[0] != k):
             raise ValueError(f"array {key} has shape {a.shape}, expected a leading member axis of {k} (members)")
-    return [{key: a if key in SHARED else a[i] for key, a in data.items()} for i in range(k)]
+    return [{key: a if key in SHARED else a[i] for key, a in data.items() if key != MEMBERS} for i in range(k)]
 
 
 def stack_members(members: list[dict]) -> dict:
