@@ -37,7 +37,7 @@ from pathlib import Path
 import numpy as np
 
 from ..analysis.card_augment import InstrumentAugment, SpectralAugment, augment
-from ..analysis.card_classifier import MAX_MEMBERS, stack_members
+from ..analysis.card_classifier import MAX_MEMBERS, CardClassifier, stack_members
 from ..analysis.card_shape import CARD_TYPES, BadCard, features
 from ..analysis.pump_level import DESCRIPTION_ERROR, FEATURE_SETS, OFFSET_ERROR, with_level, with_offset
 from ..analysis.surface_level import FEATURE_SET as MIDLINE
@@ -170,8 +170,6 @@ def evaluate(weights: dict, data: dict, idx: np.ndarray, aug: bool, seed: int,
              ruled: np.ndarray | None = None) -> tuple[float, np.ndarray]:
     """Accuracy and confusion on cards idx (augmented: VALIDATION_DRAWS versions each); ``ruled``: labels of
     degenerate cards, called DEGENERATE_RULE by rule, counted once per draw."""
-    from ..analysis.card_classifier import CardClassifier
-
     clf = CardClassifier.from_weights(weights, n_features=np.shape(weights["mean"])[-1])
     rng = np.random.default_rng(seed)
     fl, dl = (None if data.get(k) is None else data[k][idx] for k in ("fluid_load", "down_load"))
@@ -292,6 +290,17 @@ def _members(pool, name: str, a) -> list[dict]:
     return [fit(*pool(aug, a.seed + k), widths, a.epochs, a.seed + k) for k in range(a.members)]
 
 
+def _members_report(members: list[dict], data: dict, idx: np.ndarray, a, inst, spec) -> list[dict]:
+    """Each member's validation accuracies (augmented as the run's validation is, and clean), for the record; scored
+    as the ensemble is (seed a.seed + 1)."""
+    out = []
+    for k, m in enumerate(members):
+        aug_acc, _ = evaluate(m, data, idx, True, a.seed + 1, inst, spec, a.card)
+        clean_acc, _ = evaluate(m, data, idx, False, a.seed + 1, card=a.card)
+        out.append({"seed": a.seed + k, "validation_accuracy_augmented": aug_acc, "validation_accuracy_clean": clean_acc})
+    return out
+
+
 def main(argv: list[str] | None = None) -> int:
     ap = _parser()
     a = ap.parse_args(argv)
@@ -334,10 +343,8 @@ def main(argv: list[str] | None = None) -> int:
     for name, make in models.items():
         members = make()
         if len(members) > 1:  # each member's validation, for the record
-            report["candidates"][f"{name} members"] = [
-                {"seed": a.seed + k, **dict(zip(("validation_accuracy_augmented", "validation_accuracy_clean"), (
-                    evaluate(m, data, split_idx["validation"], aug, a.seed + 1, inst, spec, a.card)[0]
-                    for aug in (True, False))))} for k, m in enumerate(members)]
+            report["candidates"][f"{name} members"] = _members_report(members, data, split_idx["validation"], a, inst,
+                                                                         spec)
         w = stack_members(members)
         acc_aug, _ = evaluate(w, data, split_idx["validation"], True, a.seed + 1, inst, spec, a.card)
         acc_clean, _ = evaluate(w, data, split_idx["validation"], False, a.seed + 1, card=a.card)
