@@ -7,8 +7,11 @@ without it is a surface model, as every file before), since run P2 optionally ``
 pump card's 65th entry is its load level against a described well's fluid load, so the model needs a config; a file
 without it is ``shape``, read as before), since run P3 ``shape+level+offset`` (a 66th entry: the lower plateau
 against the described P+), since run 9 for a surface model ``shape+midline`` (a 66th entry: the surface card's load
-midline against the described well, srenv.analysis.surface_level; ``srenv classify --config`` only). Trained on
-simulated cards only (docs/conditions.md).
+midline against the described well, srenv.analysis.surface_level; ``srenv classify --config`` only). Since run 10 a
+file may hold an ensemble: ``members`` (an integer, 1..MAX_MEMBERS) and every array but ``labels``, ``card_type`` and
+``feature_set`` with a leading member axis of that length; the model's probabilities are the mean of the members'. A
+file without ``members`` is one member and reads as every file before. Trained on simulated cards only
+(docs/conditions.md).
 """
 
 from __future__ import annotations
@@ -18,7 +21,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..errors import ConfigError
+from ..errors import ConfigError, short_repr
 from ..input_files import open_regular
 from ..physics.conditions import LABELS
 from .card_shape import CARD_TYPES, N_FEATURES, features
@@ -42,6 +45,9 @@ CONFIG_MODEL = DEFAULT_MODEL.with_name("classifier_config.npz")
 ALLOWED_FEATURE_SETS = {"surface": (FEATURE_SETS[0], MIDLINE), "pump": FEATURE_SETS}
 MAX_LAYERS = 8
 MAX_WIDTH = 4096
+MAX_MEMBERS = 16  # an ensemble's members in one file (run 10: 5); the inference time grows with them
+MEMBERS = "members"  # the ensemble file's member count; absent: one member without the axis
+SHARED = ("labels", "card_type", "feature_set", MEMBERS)  # an ensemble file's entries without the member axis
 
 
 class BadModel(ValueError):
@@ -66,11 +72,61 @@ def feature_set_of_file(data: dict) -> str:
     return _one_string(data, "feature_set", FEATURE_SETS[0])
 
 
+def members_of(data: dict) -> list[dict]:
+    """A model file's members, each a dict of one member's arrays (a file without ``members``: itself, as before);
+    raises BadModel's message (ValueError) for a count out of range or an array without the member axis."""
+    if MEMBERS not in data:
+        return [data]
+    v = data[MEMBERS]
+    k = int(v.reshape(-1)[0]) if v.size == 1 and v.dtype.kind in "iu" else 0  # one item (write_npz: shape (1,))
+    if not 1 <= k <= MAX_MEMBERS:
+        raise ValueError(f"members = {short_repr(v.tolist(), 40)}, expected an integer in [1, {MAX_MEMBERS}]")
+    for key, a in data.items():
+        if key not in SHARED and (a.ndim < 1 or a.shape[0] != k):
+            raise ValueError(f"array {key} has shape {a.shape}, expected a leading member axis of {k} (members)")
+    return [{key: a if key in SHARED else a[i] for key, a in data.items() if key != MEMBERS} for i in range(k)]
+
+
+def stack_members(members: list[dict]) -> dict:
+    """One model file's arrays from the members' weights (trainer dicts of one shape); one member: its own dict,
+    unchanged (the file every run before 10 wrote)."""
+    if len(members) == 1:
+        return members[0]
+    first = members[0]
+    out = {k: np.stack([m[k] for m in members]) for k in first if k not in SHARED}
+    return {**out, **{k: first[k] for k in SHARED if k in first}, MEMBERS: np.array(len(members))}
+
+
+def _member_proba(f: np.ndarray, mean: np.ndarray, std: np.ndarray, layers: list) -> np.ndarray:
+    """One member's class probabilities of feature rows (n, n_features)."""
+    h = (np.atleast_2d(f) - mean) / std
+    for i, (w, b) in enumerate(layers):
+        h = h @ w + b
+        if i < len(layers) - 1:
+            h = np.maximum(h, 0.0)
+    h = h - h.max(axis=1, keepdims=True)
+    e = np.exp(h)
+    return e / e.sum(axis=1, keepdims=True)
+
+
+def _layers(data: dict) -> tuple[np.ndarray, np.ndarray, list]:
+    """(mean, std, layers) of one member's arrays; raises KeyError for a missing one."""
+    mean, std = data["mean"].astype(np.float64), data["std"].astype(np.float64)
+    layers = []
+    for i in range(MAX_LAYERS):
+        if f"w{i}" not in data:
+            break
+        layers.append((data[f"w{i}"].astype(np.float64), data[f"b{i}"].astype(np.float64)))
+    return mean, std, layers
+
+
 class CardClassifier:
     def __init__(self, labels: tuple[str, ...], mean: np.ndarray, std: np.ndarray, layers: list,
-                 card_type: str = "surface", feature_set: str = FEATURE_SETS[0]):
+                 card_type: str = "surface", feature_set: str = FEATURE_SETS[0], more_members: tuple = ()):
+        """One member's (mean, std, layers); ``more_members``: the ensemble's others, each (mean, std, layers)."""
         self.labels, self.mean, self.std, self.layers = labels, mean, std, layers
         self.card_type, self.feature_set = card_type, feature_set
+        self.members = ((mean, std, layers), *more_members)
 
     @property
     def needs_config(self) -> bool:
@@ -96,24 +152,31 @@ class CardClassifier:
             raise BadModel(f"model file {path}: {exc.expected}") from None
         except (OSError, ValueError, EOFError, zipfile.BadZipFile) as exc:
             raise BadModel(f"model file {path}: not a readable NPZ of arrays ({exc})") from None
+        return cls.from_weights(data, path)
+
+    @classmethod
+    def from_weights(cls, data: dict, path: str | Path = "(in memory)", n_features: int | None = None) -> CardClassifier:
+        """The classifier of a model file's arrays (one member or an ensemble), checked; raises BadModel.
+        ``n_features``: the feature rows' width (the trainer's weights, before their file names a feature set);
+        None: the file's feature set's."""
         try:
             labels = tuple(str(x) for x in data["labels"])
             card_type, feature_set = card_type_of_file(data), feature_set_of_file(data)
-            mean, std = data["mean"].astype(np.float64), data["std"].astype(np.float64)
-            layers = []
-            for i in range(MAX_LAYERS):
-                if f"w{i}" not in data:
-                    break
-                layers.append((data[f"w{i}"].astype(np.float64), data[f"b{i}"].astype(np.float64)))
+            members = [_layers(m) for m in members_of(data)]
         except KeyError as exc:
             raise BadModel(f"model file {path}: missing array {exc}") from None
+        except ValueError as exc:
+            raise BadModel(f"model file {path}: {exc}") from None
         if card_type not in CARD_TYPES:
             raise BadModel(f"model file {path}: card_type {card_type!r}, expected one of {CARD_TYPES}")
         if feature_set not in ALLOWED_FEATURE_SETS[card_type]:
             raise BadModel(f"model file {path}: feature_set {feature_set!r} with card_type {card_type!r}, expected "
                            f"one of {ALLOWED_FEATURE_SETS[card_type]}")
-        cls._check(path, labels, mean, std, layers, N_FEATURES + (feature_set in (FEATURE_SETS[2], MIDLINE)))
-        return cls(labels, mean, std, layers, card_type, feature_set)
+        if n_features is None:
+            n_features = N_FEATURES + (feature_set in (FEATURE_SETS[2], MIDLINE))
+        for i, m in enumerate(members):
+            cls._check(path if len(members) == 1 else f"{path} (member {i})", labels, *m, n_features)
+        return cls(labels, *members[0], card_type, feature_set, tuple(members[1:]))
 
     @staticmethod
     def _check(path, labels, mean, std, layers, n_features: int) -> None:
@@ -132,15 +195,10 @@ class CardClassifier:
             raise BadModel(f"model file {path}: the last layer must give {len(LABELS)} outputs")
 
     def proba_features(self, f: np.ndarray) -> np.ndarray:
-        """Class probabilities of feature rows (n, N_FEATURES)."""
-        h = (np.atleast_2d(f) - self.mean) / self.std
-        for i, (w, b) in enumerate(self.layers):
-            h = h @ w + b
-            if i < len(self.layers) - 1:
-                h = np.maximum(h, 0.0)
-        h = h - h.max(axis=1, keepdims=True)
-        e = np.exp(h)
-        return e / e.sum(axis=1, keepdims=True)
+        """Class probabilities of feature rows (n, N_FEATURES): one member's, or the mean of an ensemble's."""
+        if len(self.members) == 1:
+            return _member_proba(f, *self.members[0])
+        return np.mean([_member_proba(f, *m) for m in self.members], axis=0)
 
     def card_features(self, position, load, fluid_load_n: float | None = None,
                       downstroke_load_n: float | None = None) -> np.ndarray:

@@ -22,6 +22,9 @@ read here. Needs torch (a training-time dependency; inference is numpy only).
 full condition (surface_level; card_set.described_surfaces) as a 66th entry, the description's fluid load times
 U[1 - e, 1 + e] and its downstroke load moved by the fluid load times U[-e, e] on augmented cards (P3's draws), and
 records ``feature_set: shape+midline``: a model ``srenv classify`` reads only with ``--config``.
+``--members K`` (run 10) trains each candidate K times, member k with seed ``--seed`` + k (its augmented pool and its
+network), and writes the K members into one file (card_classifier.stack_members; the model's probabilities are the
+mean of the members'); K = 1, the default, is every earlier run's path and file.
 """
 
 from __future__ import annotations
@@ -34,11 +37,13 @@ from pathlib import Path
 import numpy as np
 
 from ..analysis.card_augment import InstrumentAugment, SpectralAugment, augment
+from ..analysis.card_classifier import MAX_MEMBERS, CardClassifier, stack_members
 from ..analysis.card_shape import CARD_TYPES, BadCard, features
 from ..analysis.pump_level import DESCRIPTION_ERROR, FEATURE_SETS, OFFSET_ERROR, with_level, with_offset
 from ..analysis.surface_level import FEATURE_SET as MIDLINE
 from ..analysis.surface_level import with_midline
 from ..cli_types import OneLineParser
+from ..declarations import Number
 from ..physics.conditions import LABELS
 from ..task.card_set import described_pumps, described_surfaces, load_cards
 
@@ -52,6 +57,8 @@ BATCH = 512
 CARD_ARRAYS = {"surface": ("polished_rod_position_m", "polished_rod_load_n"), "pump": ("pump_position_m", "pump_load_n")}
 FEATURE_SET_LEVEL = FEATURE_SETS[1]  # run P2's model file entry
 DEGENERATE_RULE = "parted_rods"  # a degenerate pump card's label by rule (run P1, fixed a priori)
+# --members: an ensemble's size (run 10); bounded by what one model file may hold
+MEMBERS_FLAG = Number("--members", int, hi=MAX_MEMBERS, why="one model file's members")
 
 
 def load_sets(dirs: list[str], card: str = "surface", level: bool = False, offset: bool = False,
@@ -163,10 +170,7 @@ def evaluate(weights: dict, data: dict, idx: np.ndarray, aug: bool, seed: int,
              ruled: np.ndarray | None = None) -> tuple[float, np.ndarray]:
     """Accuracy and confusion on cards idx (augmented: VALIDATION_DRAWS versions each); ``ruled``: labels of
     degenerate cards, called DEGENERATE_RULE by rule, counted once per draw."""
-    from ..analysis.card_classifier import CardClassifier
-
-    clf = CardClassifier(tuple(str(s) for s in weights["labels"]), weights["mean"], weights["std"],
-                         [(weights[f"w{i}"], weights[f"b{i}"]) for i in range(8) if f"w{i}" in weights])
+    clf = CardClassifier.from_weights(weights, n_features=np.shape(weights["mean"])[-1])
     rng = np.random.default_rng(seed)
     fl, dl = (None if data.get(k) is None else data[k][idx] for k in ("fluid_load", "down_load"))
     f, t = featurise(data["position"][idx], data["load"][idx], data["label"][idx],
@@ -250,7 +254,7 @@ def _pump_report(data: dict, bad: np.ndarray, split_idx: dict, level: bool, offs
     return out
 
 
-def main(argv: list[str] | None = None) -> int:
+def _parser() -> _Parser:
     ap = _Parser(prog="python -m srenv.tools.train_classifier", description=__doc__.splitlines()[0])
     ap.add_argument("--cards", nargs="+", required=True, help="directories written by `srenv cards`")
     ap.add_argument("--out", required=True, help="model file (.npz)")
@@ -274,6 +278,31 @@ def main(argv: list[str] | None = None) -> int:
                     "described P+ (true load) in a 66th entry (run P3)")
     ap.add_argument("--described", action="store_true", help="surface cards: the load midline against each card's "
                     "own described well in a 66th entry (run 9; the model then needs a well config)")
+    ap.add_argument("--members", type=MEMBERS_FLAG.parse, default=1, help="run 10: train each candidate this many "
+                    "times (member k with seed --seed + k) into one ensemble file, probabilities averaged "
+                    f"(default 1: one network, every earlier run; at most {MEMBERS_FLAG.hi})")
+    return ap
+
+
+def _members(pool, name: str, a) -> list[dict]:
+    """Candidate ``name``'s members: member k fitted with seed a.seed + k on the pool drawn with that seed."""
+    widths, aug = CANDIDATES[name]
+    return [fit(*pool(aug, a.seed + k), widths, a.epochs, a.seed + k) for k in range(a.members)]
+
+
+def _members_report(members: list[dict], data: dict, idx: np.ndarray, a, inst, spec) -> list[dict]:
+    """Each member's validation accuracies (augmented as the run's validation is, and clean), for the record; scored
+    as the ensemble is (seed a.seed + 1)."""
+    out = []
+    for k, m in enumerate(members):
+        aug_acc, _ = evaluate(m, data, idx, True, a.seed + 1, inst, spec, a.card)
+        clean_acc, _ = evaluate(m, data, idx, False, a.seed + 1, card=a.card)
+        out.append({"seed": a.seed + k, "validation_accuracy_augmented": aug_acc, "validation_accuracy_clean": clean_acc})
+    return out
+
+
+def main(argv: list[str] | None = None) -> int:
+    ap = _parser()
     a = ap.parse_args(argv)
     _check_args(ap, a)
     inst = (InstrumentAugment(a.synth_position_p, a.position_lag_p)
@@ -297,16 +326,26 @@ def main(argv: list[str] | None = None) -> int:
         report["spectral_augment"] = {"p": spec.p, "k_range": list(spec.k_range)}
     best, best_acc = None, -1.0
     tr = split_idx["train"]
-    pools = {}  # AUG_COPIES augmented versions of every training card (or the clean cards), drawn once
-    for aug in {CANDIDATES[c][1] for c in a.candidates}:
-        pools[aug] = featurise(data["position"][tr], data["load"][tr], data["label"][tr],
-                               np.random.default_rng(a.seed), aug, AUG_COPIES if aug else 1, inst, spec, a.card,
-                               *(None if data[k] is None else data[k][tr] for k in ("fluid_load", "down_load")))
-    models = {name: (lambda widths=widths, aug=aug: fit(*pools[aug], widths, a.epochs, a.seed))
-              for name, (widths, aug) in CANDIDATES.items() if name in a.candidates}
-    models.update({path: (lambda path=path: _read_weights(path)) for path in a.compare})  # trained before
+    pools: dict = {}  # AUG_COPIES augmented versions of every training card (or the clean cards), drawn once a seed
+
+    def pool(aug: bool, seed: int):
+        if (aug, seed) not in pools:
+            pools[aug, seed] = featurise(
+                data["position"][tr], data["load"][tr], data["label"][tr], np.random.default_rng(seed), aug,
+                AUG_COPIES if aug else 1, inst, spec, a.card,
+                *(None if data[k] is None else data[k][tr] for k in ("fluid_load", "down_load")))
+        return pools[aug, seed]
+
+    models = {name: (lambda name=name: _members(pool, name, a)) for name in CANDIDATES if name in a.candidates}
+    models.update({path: (lambda path=path: [_read_weights(path)]) for path in a.compare})  # trained before
+    if a.members > 1:
+        report["members"] = {"count": a.members, "seeds": [a.seed + k for k in range(a.members)]}
     for name, make in models.items():
-        w = make()
+        members = make()
+        if len(members) > 1:  # each member's validation, for the record
+            report["candidates"][f"{name} members"] = _members_report(members, data, split_idx["validation"], a, inst,
+                                                                         spec)
+        w = stack_members(members)
         acc_aug, _ = evaluate(w, data, split_idx["validation"], True, a.seed + 1, inst, spec, a.card)
         acc_clean, _ = evaluate(w, data, split_idx["validation"], False, a.seed + 1, card=a.card)
         report["candidates"][name] = {"validation_accuracy_augmented": acc_aug,

@@ -142,6 +142,25 @@ def test_bad_model_exits_2(tmp_path, capsys) -> None:
         assert len(err.splitlines()) == 1 and "--model" in err
 
 
+@pytest.mark.parametrize("members, axis, what", [
+    (0, 2, "members = [0], expected an integer in [1, 16]"),
+    (2, 3, "array b0 has shape (3, 256), expected a leading member axis of 2"),
+])
+def test_a_model_file_with_a_broken_member_axis_exits_2(tmp_path, capsys, members, axis, what) -> None:
+    """An ensemble file (run 10) whose member count or member axis is wrong: one line naming it, exit 2."""
+    from srenv.analysis.card_classifier import DEFAULT_MODEL
+    from srenv.task.card_set import write_npz
+
+    card = tmp_path / "c.csv"
+    write_card(card, np.sin(np.linspace(0, 2 * np.pi, 50)), np.cos(np.linspace(0, 2 * np.pi, 50)) + 3)
+    with np.load(DEFAULT_MODEL.with_name("classifier_run5.npz"), allow_pickle=False) as z:
+        cols = {k: z[k] if k == "labels" else np.stack([z[k]] * axis) for k in z.files}
+    write_npz(str(tmp_path / "e.npz"), {**cols, "members": np.array(members)})
+    assert main(["classify", str(card), "--model", str(tmp_path / "e.npz")]) == 2
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1 and "--model" in err and what in err
+
+
 def test_shipped_model_is_data() -> None:
     clf = CardClassifier.load()
     assert clf.labels == LABELS
