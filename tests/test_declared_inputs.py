@@ -214,11 +214,18 @@ def test_ctrl_c_to_a_sweep_and_its_workers_is_one_line_and_leaves_nothing(tmp_pa
     root = Path(__file__).resolve().parents[1]
     # 24 cases of 600 s (~6 s of work on 2 cores): with numba's caches warm, 4 cases of 30 s ended before the signal
     values = ",".join(str(0.25 * i) for i in range(1, 25))
-    p = subprocess.Popen([sys.executable, "-m", "srenv.tools.cli", "sweep", "paper_fig7_pullout", "--param",
-                          "surface.pull_velocity_m_s", "--values", values, "--duration-s", "600", "--workers", "2",
-                          "--out", str(tmp_path / "s.csv")], cwd=tmp_path, stdout=subprocess.PIPE,
-                         stderr=subprocess.PIPE, text=True, start_new_session=True,
-                         env={**os.environ, "PYTHONPATH": str(root)})
+    # A terminal starts its foreground job with SIGINT at its default. This test's process may hold SIGINT ignored at
+    # the OS level (a full `-n 2` run once did: the sweep inherited it, ignored the signal and ended 0), so a handler
+    # is set around the start: exec resets a caught signal to its default in the child.
+    previous = signal.signal(signal.SIGINT, signal.default_int_handler)
+    try:
+        p = subprocess.Popen([sys.executable, "-m", "srenv.tools.cli", "sweep", "paper_fig7_pullout", "--param",
+                              "surface.pull_velocity_m_s", "--values", values, "--duration-s", "600", "--workers",
+                              "2", "--out", str(tmp_path / "s.csv")], cwd=tmp_path, stdout=subprocess.PIPE,
+                             stderr=subprocess.PIPE, text=True, start_new_session=True,
+                             env={**os.environ, "PYTHONPATH": str(root)})
+    finally:
+        signal.signal(signal.SIGINT, previous)
     try:
         deadline = time.time() + 60
         # both workers spawned (the resource tracker is a child too: counting any two children could send the
