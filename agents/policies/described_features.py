@@ -21,22 +21,24 @@ from srenv.physics.rod import GRAVITY_M_S2
 from srenv.task import well_family as wf
 from srenv.task.well_file import pump_depth_m, read_well_file
 
-# name (unit in the name) -> (lo, hi) of its scaling: declared once, read by features() and the tests
-FEATURES: dict[str, tuple[float, float]] = {
-    "pump_depth_m": (500.0, 2500.0),
-    "plunger_diameter_m": (0.03175, 0.0635),
-    "fluid_density_kg_m3": (850.0, 1030.0),
-    "rod_weight_buoyant_n": (0.0, 80_000.0),
-    "fluid_load_n": (0.0, 40_000.0),
-    "fluid_to_rod_weight_ratio": (0.0, 2.0),
-    "stroke_max_m": (1.5, 3.0),
-    "gearbox_torque_rating_nm": (0.0, 50_000.0),
-    "spm_max_per_min": (2.0, 12.0),
-    "pump_capacity_m3_s": (0.0, 0.002),
-    "pprl_rating_n": (0.0, 150_000.0),
-    "pprl_headroom_ratio": (1.0, 1.5),
-    "unit_geometry_code": (0.0, 1.0),
-}
+# name (unit in the name), lo, hi of its scaling, what it is: declared once, read by features() and the tests
+_TABLE = """
+pump_depth_m               500      2500    the rod string's length
+plunger_diameter_m         0.03175  0.0635  the pump's bore
+fluid_density_kg_m3        850      1030    the produced fluid's
+rod_weight_buoyant_n       0        80000   the tapers' steel weight, buoyed by the fluid
+fluid_load_n               0        40000   (fluid head at the pump's TVD + wellhead pressure) x plunger area
+fluid_to_rod_weight_ratio  0        2       fluid load / buoyant rod weight
+stroke_max_m               1.5      3       the unit's longest stroke (control range)
+gearbox_torque_rating_nm   0        50000   the beam unit's gearbox rating (no beam unit: 0)
+spm_max_per_min            2        12      the top of the VSD's control range
+pump_capacity_m3_s         0        0.002   plunger area x longest stroke x top SPM / 60
+pprl_rating_n              0        150000  the structure's polished-rod load rating
+pprl_headroom_ratio        1        1.5     PPRL rating / (rod weight in air + fluid load)
+unit_geometry_code         0        1       conventional 0, Mark II 0.5, air-balanced 1 (no beam unit: 0)
+"""
+FEATURES: dict[str, tuple[float, float, str]] = {
+    row[0]: (float(row[1]), float(row[2]), row[3]) for row in (line.split(maxsplit=3) for line in _TABLE.strip().splitlines())}
 GEOMETRY_CODE = {"conventional": 0.0, "mark_ii": 0.5, "air_balanced": 1.0}  # no beam unit (harmonic drive): 0
 
 
@@ -77,7 +79,7 @@ def features(file: Mapping[str, Any]) -> np.ndarray:
     """The well file's :data:`FEATURES`, each scaled by its declared range to [0, 1] (float32, in their order)."""
     raw = raw_features(file)
     out = np.empty(len(FEATURES), np.float32)
-    for i, (name, (lo, hi)) in enumerate(FEATURES.items()):
+    for i, (name, (lo, hi, _)) in enumerate(FEATURES.items()):
         v = raw[name]
         if not np.isfinite(v):
             raise ValueError(f"well file feature {name} = {v!r}: expected a finite number (from the well file)")

@@ -29,7 +29,7 @@ def files():
 
 def test_the_ranges_hold_every_training_and_validation_well(files):
     raw = np.array([[df.raw_features(f)[k] for k in df.FEATURES] for f in files.values()])
-    lo, hi = np.array(list(df.FEATURES.values())).T
+    lo, hi = np.array([v[:2] for v in df.FEATURES.values()]).T
     assert np.all(raw >= lo) and np.all(raw <= hi), [k for k, a, b in zip(df.FEATURES, raw.min(0), raw.max(0))]
     x = np.stack([df.features(f) for f in files.values()])
     assert x.dtype == np.float32 and x.shape == (250, len(df.FEATURES)) == (250, 13)
@@ -62,7 +62,7 @@ def test_the_physics_of_one_well(files):
 
 @pytest.mark.parametrize("name", list(df.FEATURES))
 def test_each_feature_is_scaled_by_its_declared_range_and_clipped(files, name, monkeypatch):
-    lo, hi = df.FEATURES[name]
+    lo, hi, _ = df.FEATURES[name]
     i = list(df.FEATURES).index(name)
     raw = df.raw_features(files[("train", 0)])
     for v, want in ((lo, 0.0), (hi, 1.0), (0.25 * lo + 0.75 * hi, 0.75), (lo - abs(hi - lo), 0.0),

@@ -35,20 +35,6 @@ def described():
     return importlib.import_module(SCRIPT.stem)
 
 
-def test_the_history_registers_data_features_bar_folds_and_gate(described, monkeypatch):
-    monkeypatch.chdir(REPO)
-    hist = load_benchmark_config(DESCRIBED)["history"]
-    assert hist[:2] == load_benchmark_config(WELLS)["history"]  # g40's lines, then this design's
-    mine = " ".join(hist[2:])
-    assert all(s in mine for s in ("59032..59199", "wells 0..31", "<= 0.45", "fold w mod 4", "21600..21615", "scenario validation", "spm_cap: 0",
-                                   "13 scalars", "0.524", "0.515", "BEFORE any label"))
-    # every declared range is written down in the history, in its order (the geometry's codes 0, 0.5, 1: [0, 1])
-    ranges = re.findall(r"\[([-0-9.e]+), ([-0-9.e]+)\]", mine.split("(1) pump depth")[1])
-    assert [(float(a), float(b)) for a, b in ranges][:12] + [(0.0, 1.0)] == list(FEATURES.values())
-    assert described.PRECHECK_MAX == 0.45 and described.CANDIDATE == {"epochs": 30, "weight_decay": 0.0,
-                                                                        "net_arch": [128, 128]}
-
-
 def test_gate_seeds_are_unused_validation_seeds(described):
     gate = described.GATE_SEEDS
     assert gate == list(range(21600, 21616))
@@ -58,6 +44,20 @@ def test_gate_seeds_are_unused_validation_seeds(described):
                       if f.suffix in (".yaml", ".py") and f not in (DESCRIBED, SCRIPT))
     assert not re.search(r"\b216\d\d\b", others)
     assert not re.search(r"\b216\d\d\b", (REPO / "docs/agents.md").read_text().split("(v2, helper d42")[0])
+
+
+def test_the_history_registers_data_features_bar_folds_and_gate(described, monkeypatch):
+    monkeypatch.chdir(REPO)
+    hist = load_benchmark_config(DESCRIBED)["history"]
+    assert hist[:2] == load_benchmark_config(WELLS)["history"]  # g40's lines, then this design's
+    mine = " ".join(hist[2:])
+    assert all(s in mine for s in ("59032..59199", "wells 0..31", "<= 0.45", "fold w mod 4", "21600..21615", "scenario validation", "spm_cap: 0",
+                                   "13 scalars", "0.524", "0.515", "BEFORE any label"))
+    # every declared range is written down in the history, in its order (the geometry's codes 0, 0.5, 1: [0, 1])
+    ranges = re.findall(r"\[([-0-9.e]+), ([-0-9.e]+)\]", mine.split("(1) pump depth")[1])
+    assert [(float(a), float(b)) for a, b in ranges][:12] + [(0.0, 1.0)] == [v[:2] for v in FEATURES.values()]
+    assert described.PRECHECK_MAX == 0.45 and described.CANDIDATE == {"epochs": 30, "weight_decay": 0.0,
+                                                                        "net_arch": [128, 128]}
 
 
 def test_every_row_gets_its_wells_features(described):
