@@ -9,13 +9,16 @@ script and seeds (scripts/oracle_distill_wells.py --stage label) after copying w
         runs/d42/ && cp -r /work/keep/e24_pooled/labels runs/e24_pooled/
     PYTHONPATH=. nice -n 5 python scripts/oracle_distill_wells.py --stage label --out runs/d42 --workers 2
     PYTHONPATH=. nice -n 5 python scripts/oracle_distill_described.py --stage precheck --out runs/d42 --workers 2
+    PYTHONPATH=. nice -n 5 python scripts/oracle_distill_described.py --stage fit --out runs/d42
     PYTHONPATH=. nice -n 5 python scripts/oracle_distill_described.py --stage gate --out runs/d42 --workers 2
 
 ``--stage precheck`` (training labels only): g40's pool (:func:`oracle_distill_wells.wells_pool`), every row's input
 with the 13 features of its training well's file appended (:func:`agents.policies.described_features.features` of
 ``well_file(env)`` after ``reset``), g40's candidate with g40's well-grouped folds (:func:`oracle_distill_wells.well_cv`)
 -> OUT/precheck.json; reported beside it, not judged: the same fit without the features on the same pool, the
-no-correction MSE and g40's recorded figures. ``--stage gate``: only after a passed pre-check.
+no-correction MSE and g40's recorded figures. ``--stage fit`` (only after a passed pre-check): THE DESIGN's 3 fits on
+the described pool -> OUT/design/. ``--stage gate`` (only after a passed pre-check): THE GATE on v2's validation
+split -> OUT/gate.json, the design's policy spec ``described: true`` (:class:`agents.policies.described_features.DescribedInputs`).
 """
 
 from __future__ import annotations
@@ -30,17 +33,20 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from estimated_mpc_pilot import arguments
-from oracle_distill_more import ROOT, write_json
-from oracle_distill_pooled import design, print_outcome, require_precheck
-from oracle_distill_wells import CANDIDATE, PRECHECK_MAX, well_cv, wells_pool, zero_mse_folds
+from oracle_distill_capped import capped
+from oracle_distill_more import ROOT, play_design_gate, students, write_json
+from oracle_distill_pooled import NAME, design, print_outcome, require_precheck
+from oracle_distill_wells import CANDIDATE, CAP, PRECHECK_MAX, well_cv, wells_pool, zero_mse_folds
 
 from agents.evaluation.rollout import Runner
 from agents.policies.described_features import FEATURES, features
+from agents.policies.ensemble import ensemble_spec
+from agents.training.pooled_fit import fit_student
 
 CONFIG = ROOT / "configs/benchmark/v2_oracle_distilled_described.yaml"
 GATE_SEEDS = list(range(21600, 21616))  # THE GATE's seeds, on v2's validation split (the config's history)
 G40 = ROOT / "docs/archive/oracle_distill_wells.json"  # g40's recorded pre-check (read as data, for comparison)
-STAGES = ("precheck", "gate")
+STAGES = ("precheck", "fit", "gate")
 
 
 def well_features(env_kwargs: dict[str, Any], wells: list[int]) -> np.ndarray:
@@ -93,15 +99,43 @@ def precheck(out: Path, workers: int) -> dict[str, Any]:
     return rec
 
 
+def fit(out: Path) -> dict[str, Any]:
+    """THE DESIGN's 3 fits (only after a passed pre-check): the candidate on the whole described pool, fit seeds
+    ``pool.fit_seeds``, statistics from the pool's inputs -> OUT/design/."""
+    require_precheck(out)
+    d = design(CONFIG)
+    with np.load(out / "pool_described.npz", allow_pickle=False) as z:
+        x, y = z["x"], z["label"]
+    (out / "design").mkdir(exist_ok=True)
+    for k in d["pool"]["fit_seeds"]:
+        fit_student(x, y, CANDIDATE, d["pk"], k, out / "design" / f"{NAME}_v2_seed{k}.zip")
+    rec = {"stage": "fit", "fit_seeds": d["pool"]["fit_seeds"], "rows": len(x), "inputs": int(x.shape[1]),
+           "spec": design_spec(out, d)}
+    write_json(out / "fit.json", rec)
+    return rec
+
+
+def design_spec(out: Path, d: dict[str, Any]) -> dict[str, Any]:
+    """THE DESIGN: the mean correction of the 3 fits on the described pool (OUT/design), f24's cap, the well file's
+    features appended to every input (read at reset from ``well_file(env)``)."""
+    return {**capped(ensemble_spec(students(out / "design", NAME, d["pool"]["fit_seeds"], d["res"])), CAP),
+            "described": True}
+
+
 def gate(out: Path, workers: int) -> dict[str, Any]:
     require_precheck(out)
-    raise SystemExit("oracle_distill_described: the acting described student is built only after a passed pre-check")
+    d = design(CONFIG)
+    return play_design_gate(d["cfg"], CONFIG, GATE_SEEDS, {"described_capped": design_spec(out, d)}, d["tuned"],
+                            d["res"], out, workers, scenario="validation", shipped=False)
 
 
 def main() -> None:
     a = arguments(argparse.ArgumentParser(description=__doc__.splitlines()[0]), STAGES)
     a.out.mkdir(parents=True, exist_ok=True)
-    print_outcome(a.stage, precheck(a.out, a.workers) if a.stage == "precheck" else gate(a.out, a.workers))
+    if a.stage == "fit":
+        print(json.dumps(fit(a.out)))
+    else:
+        print_outcome(a.stage, precheck(a.out, a.workers) if a.stage == "precheck" else gate(a.out, a.workers))
 
 
 if __name__ == "__main__":

@@ -19,7 +19,7 @@ import numpy as np
 
 from srenv.physics.rod import GRAVITY_M_S2
 from srenv.task import well_family as wf
-from srenv.task.well_file import pump_depth_m, read_well_file
+from srenv.task.well_file import pump_depth_m, read_well_file, well_file
 
 # name (unit in the name), lo, hi of its scaling, what it is: declared once, read by features() and the tests
 _TABLE = """
@@ -85,3 +85,24 @@ def features(file: Mapping[str, Any]) -> np.ndarray:
             raise ValueError(f"well file feature {name} = {v!r}: expected a finite number (from the well file)")
         out[i] = min(max((v - lo) / (hi - lo), 0.0), 1.0)
     return out
+
+
+class DescribedInputs:
+    """A model policy whose every input gets the played well's :func:`features` appended: the operator's file is read
+    once per episode, at ``reset``, from ``well_file(env)`` (the one hook by which the env hands anything of its
+    well); the described student of configs/benchmark/v2_oracle_distilled_described.yaml."""
+
+    def __init__(self, model: Any) -> None:
+        self.model = model
+        self.extra: np.ndarray | None = None
+
+    def reset(self, env: Any, index: int | None = None) -> None:
+        self.extra = features(well_file(env))
+
+    def predict(self, observation: Any, state: Any = None, episode_start: Any = None,
+                deterministic: bool = True) -> tuple[np.ndarray, Any]:
+        if self.extra is None:
+            raise RuntimeError("DescribedInputs: call reset(env) after env.reset (the well file is read there)")
+        x = np.asarray(observation, np.float32)
+        x = np.concatenate([x, np.broadcast_to(self.extra, (*x.shape[:-1], len(self.extra)))], axis=-1)
+        return self.model.predict(x, state=state, episode_start=episode_start, deterministic=deterministic)

@@ -91,3 +91,46 @@ def test_a_bad_well_file_is_refused_in_one_line(files):
         with pytest.raises(ValueError) as e:
             df.features(f)
         assert field in str(e.value) and "\n" not in str(e.value)
+
+
+@pytest.fixture(scope="module")
+def described_student(tmp_path_factory):
+    """A small student fitted on inputs of the described width: field observation + base action + the 13 features."""
+    from agents.training.pooled_fit import fit_student
+
+    rng = np.random.default_rng(0)
+    x = rng.normal(size=(64, 89 + 2 + len(df.FEATURES))).astype(np.float32)
+    y = np.tanh(x[:, -2:] + x[:, :2]).astype(np.float32)
+    dest = tmp_path_factory.mktemp("described") / "s_v2_seed0.zip"
+    fit_student(x, y, {"epochs": 2, "weight_decay": 0.0, "net_arch": [8]}, {"activation_fn": "tanh"}, 0, dest)
+    return {"path": str(dest), "obs_norm": str(dest.with_name(dest.stem + "_obs_norm.npz"))}
+
+
+def test_the_acting_student_is_the_fitted_model_on_its_described_input(described_student):
+    from agents.evaluation.agent import AgentPolicy, build_policy
+    from agents.policies.residual import augment, bound_correction, compose
+
+    base = {"threshold": 0.95, "idle_time_s": 1800, "a_spm": 0.1, "a_stroke": 0.0}
+    res = {"base": "pump_off", "params": base, "scale": 0.5, "cap": {"spm_cap": 0.0}}
+    spec = {"kind": "ensemble", "members": [described_student] * 2, "residual": res, "described": True}
+    env = gym.make("srenv/SuckerRod-v2", scenario="validation", observation="field", episode_hours=1.0)
+    policy = build_policy(spec, env)
+    plain = build_policy({"kind": "baseline", "name": "pump_off", "params": base}, env)
+    model = AgentPolicy(described_student["path"], described_student["obs_norm"])
+    with pytest.raises(RuntimeError, match="reset"):
+        policy.model.predict(np.zeros(91, np.float32))
+    seen = []
+    for seed in (3, 4):
+        obs, _ = env.reset(seed=seed)
+        policy.reset(env)
+        extra = df.features(well_file(env))  # the played well's file, read once at reset
+        seen.append(extra)
+        for _ in range(3):
+            a, _ = policy.predict(obs)
+            b = np.asarray(plain.predict(obs)[0], np.float32)
+            r = model.predict(np.concatenate([augment(obs, b), extra]), deterministic=True)[0]
+            np.testing.assert_allclose(a, compose(b, bound_correction(r, res["cap"]), 0.5), atol=1e-6)
+            obs = env.step(a)[0]
+    assert not np.array_equal(*seen)  # another well, other features
+    with pytest.raises(ValueError, match="described = 'yes': expected true or false"):
+        build_policy({**spec, "described": "yes"}, env)
