@@ -89,15 +89,25 @@ def wells_pool(out: Path, d: dict[str, Any]) -> tuple[dict[str, np.ndarray], np.
     return pool, pool["key"] + np.asarray(first)[pool["file"]]
 
 
+def well_cv(runner: Runner, pool_npz: Path, d: dict[str, Any], well: np.ndarray, workdir: Path) -> dict[str, Any]:
+    """:data:`CANDIDATE`'s held-out MSE with folds by training well (well w in fold w mod K: the pre-check's fit)."""
+    block = {**d["pool"], "epochs": [CANDIDATE["epochs"]], "weight_decay": [CANDIDATE["weight_decay"]],
+             "net_arch": [CANDIDATE["net_arch"]]}
+    (row,) = cv_table(runner, pool_npz, block, well, d["pk"], 0, workdir)
+    return row
+
+
+def zero_mse_folds(label: np.ndarray, well: np.ndarray, folds: int) -> list[float]:
+    """Predicting no correction: the labels' mean square per well fold."""
+    return [float(np.mean(label[well % folds == f] ** 2)) for f in range(folds)]
+
+
 def precheck(out: Path, workers: int) -> dict[str, Any]:
     d = design(CONFIG)
     pool, well = wells_pool(out, d)
     np.savez(out / "pool.npz", x=pool["x"], label=pool["label"])
-    block = {**d["pool"], "epochs": [CANDIDATE["epochs"]], "weight_decay": [CANDIDATE["weight_decay"]],
-             "net_arch": [CANDIDATE["net_arch"]]}
     with Runner(workers) as runner:
-        (row,) = cv_table(runner, out / "pool.npz", block, well, d["pk"], 0, out / "cv")
-    folds = d["pool"]["folds"]
+        row = well_cv(runner, out / "pool.npz", d, well, out / "cv")
     new = well >= 32
     e24 = [AgentPolicy(m["path"], m["obs_norm"]) for m in
            ensemble_spec(students(out / "models", NAME, d["pool"]["fit_seeds"], d["res"]))["members"]]
@@ -105,7 +115,7 @@ def precheck(out: Path, workers: int) -> dict[str, Any]:
            "wells": len(set(well.tolist())), "candidate": CANDIDATE,
            "heldout_well_mse_folds": row["heldout_mse_folds"], "heldout_well_mse": row["heldout_mse"],
            "precheck_max": PRECHECK_MAX, "precheck": bool(row["heldout_mse"] <= PRECHECK_MAX),
-           "zero_correction_mse_folds": [float(np.mean(pool["label"][well % folds == f] ** 2)) for f in range(folds)],
+           "zero_correction_mse_folds": zero_mse_folds(pool["label"], well, d["pool"]["folds"]),
            "e24_ensemble_mse_on_new_wells": model_mse(e24, pool["x"][new], pool["label"][new]),
            "zero_correction_mse_on_new_wells": clipped_mse(np.zeros_like(pool["label"][new]), pool["label"][new])}
     rec["zero_correction_mse"] = float(np.mean(rec["zero_correction_mse_folds"]))

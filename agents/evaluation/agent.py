@@ -6,6 +6,8 @@ run in worker processes that build their own env and policy:
   observation normalisation it was trained with, stored as npz; both are read as data, nothing is unpickled),
   optionally with ``"residual": {"base", "params", "scale"[, "idle_scale"][, "cap"]}`` (:mod:`agents.policies.residual`)
   and, for a residual student that sees the last K observations, ``"history": K`` (:mod:`agents.policies.history`),
+  and, for one whose input ends with the well file's features, ``"described": true``
+  (:mod:`agents.policies.described_features`, read at ``reset`` from ``well_file(env)``),
 - ``{"kind": "ensemble", "members": [{"path", "obs_norm"}, ...], "residual": ... | None}``: the mean of the
   members' actions (:mod:`agents.policies.ensemble`);
 - ``{"kind": "guarded", "inner": <agent or ensemble spec>, "fallback": {"name", "params"}, "guard": {...},
@@ -18,6 +20,7 @@ from typing import Any
 
 import numpy as np
 
+from ..policies.described_features import DescribedInputs
 from ..policies.ensemble import EnsemblePolicy
 from ..policies.factory import make_baseline
 from ..policies.field import obs_names_of
@@ -80,10 +83,16 @@ def build_policy(spec: dict[str, Any], env: Any) -> Any:
         res = spec.get("residual")
         if spec.get("history", 1) != 1 and not res:  # before any file is read: the spec itself is wrong
             raise ValueError(f"policy spec history = {spec['history']!r}: a history needs a residual student")
+        described = spec.get("described", False)
+        if not isinstance(described, bool):
+            raise ValueError(f"policy spec described = {described!r}: expected true or false (the well file's "
+                             "features appended to the model's input)")
         if spec["kind"] == "agent":
             agent: Any = AgentPolicy(spec["path"], spec.get("obs_norm"))
         else:
             agent = EnsemblePolicy([AgentPolicy(m["path"], m.get("obs_norm")) for m in spec["members"]])
+        if described:
+            agent = DescribedInputs(agent)
         if res:
             return ResidualAgentPolicy(agent, res["base"], res["params"], res["scale"], res.get("idle_scale"),
                                        spec.get("history", 1), res.get("cap"))

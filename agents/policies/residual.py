@@ -116,6 +116,8 @@ class ResidualAgentPolicy:
         self.base = _Base(self.base_name, self.base_params, env)
         self.base.reset(env)
         self.history.reset()
+        if hasattr(self.model, "reset"):  # a model that reads the well at reset (agents.policies.described_features)
+            self.model.reset(env)
 
     def predict(self, observation: Any, state: Any = None, episode_start: Any = None,
                 deterministic: bool = True) -> tuple[np.ndarray, Any]:

@@ -23,6 +23,7 @@ SCRIPT = REPO / "scripts" / "oracle_distill_capped.py"
 CAPPED = REPO / "configs/benchmark/v2_oracle_distilled_capped.yaml"
 POOLED = REPO / "configs/benchmark/v2_oracle_distilled_pooled.yaml"
 LATER = REPO / "configs/benchmark/v2_oracle_distilled_wells.yaml"  # g40's: it names the earlier seeds as used
+DESCRIBED = REPO / "configs/benchmark/v2_oracle_distilled_described.yaml"  # d42's: g40's copied
 
 
 @pytest.fixture(scope="module")
@@ -31,7 +32,7 @@ def capped():
     return importlib.import_module(SCRIPT.stem)
 
 
-@pytest.mark.parametrize("config, source", [(CAPPED, POOLED), (LATER, CAPPED)])  # g40's config is f24's copied
+@pytest.mark.parametrize("config, source", [(CAPPED, POOLED), (LATER, CAPPED), (DESCRIBED, LATER)])  # copies
 def test_config_is_e24s_but_its_history(monkeypatch, config, source):
     monkeypatch.chdir(REPO)
     a, b = load_benchmark_config(config), load_benchmark_config(source)
@@ -50,7 +51,7 @@ def test_seeds_are_unused(capped, monkeypatch):
     look, sel, gate = set(capped.LOOK_SEEDS), set(capped.SELECT_SEEDS), set(capped.GATE_SEEDS)
     assert not (look | sel | gate) & used and not look & sel and not (look | sel) & gate
     assert (min(sel), len(sel), min(gate), len(gate)) == (58000, len(capped.SELECT_SEEDS), 21200, 16)
-    others = " ".join(f.read_text() for f in (REPO / "configs").rglob("*.yaml") if f not in (CAPPED, LATER))
+    others = " ".join(f.read_text() for f in (REPO / "configs").rglob("*.yaml") if f not in (CAPPED, LATER, DESCRIBED))
     assert not re.search(r"\b(58[01]\d\d|212\d\d)\b", others)
     hist = " ".join(cfg["history"])
     assert all(s in hist for s in ("58100..58107", "58000..58011", "21200..21215", "scenario validation"))

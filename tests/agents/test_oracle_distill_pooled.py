@@ -25,6 +25,7 @@ SCRIPT = REPO / "scripts" / "oracle_distill_pooled.py"
 POOLED = REPO / "configs/benchmark/v2_oracle_distilled_pooled.yaml"
 CAPPED = REPO / "configs/benchmark/v2_oracle_distilled_capped.yaml"  # f24: e24's agents block, copied
 WELLS = REPO / "configs/benchmark/v2_oracle_distilled_wells.yaml"  # g40: f24's config, copied
+DESCRIBED = REPO / "configs/benchmark/v2_oracle_distilled_described.yaml"  # d42: g40's config, copied
 
 
 @pytest.fixture(scope="module")
@@ -50,7 +51,7 @@ def test_seeds_are_unused_training_seeds(pooled, monkeypatch):
     earlier = set(range(20000, 20248)) | set(range(20400, 20416)) | set(range(20600, 20616)) | set(range(20800, 20816))
     assert not (dagger | pre) & (d24 | set(range(10)) | set(range(20000, 21000)) | set(range(50000, 53000)))
     assert not set(pooled.GATE_SEEDS) & (earlier | set(range(100000, 100100)))
-    others = " ".join(f.read_text() for f in (REPO / "configs").rglob("*.yaml") if f not in (POOLED, CAPPED, WELLS))
+    others = " ".join(f.read_text() for f in (REPO / "configs").rglob("*.yaml") if f not in (POOLED, CAPPED, WELLS, DESCRIBED))
     assert not re.search(r"\b(560\d\d|570\d\d|210\d\d)\b", others)
     hist = " ".join(cfg["history"])
     assert all(s in hist for s in ("56000..56031", "57000..57015", "21000..21015", "0.6 x M_d24"))
@@ -75,7 +76,8 @@ def test_the_gate_rule_is_d24s_on_the_pooled_ensemble(pooled):
     assert not more.gate(summ, "pooled_ensemble")
 
 
-@pytest.mark.parametrize("script", [SCRIPT, SCRIPT.with_name("oracle_distill_wells.py")])  # g40's shares the check
+@pytest.mark.parametrize("script", [SCRIPT, SCRIPT.with_name("oracle_distill_wells.py"),  # g40's and d42's
+                                    SCRIPT.with_name("oracle_distill_described.py")])  # share the check
 @pytest.mark.parametrize("precheck", [None, {"precheck": False}, {"precheck": "yes"}])
 def test_no_gate_without_a_passed_precheck(tmp_path, precheck, script):
     out = tmp_path / "o"

@@ -1,0 +1,90 @@
+"""The described student's pre-check (scripts/oracle_distill_described.py, configs/benchmark/v2_oracle_distilled_described
+.yaml, issue 24, helper d42): the config is g40's but its history, which names the data (g40's seeds), the 13
+features, the bar, the folds and the gate's unused validation seeds; every row's input gets ITS well's features, as
+``well_file(env)`` hands them over after ``reset``. tests/agents/test_oracle_distill_pooled.py checks this script's
+refusals (no gate without a passed pre-check), test_oracle_distill_capped.py that the config is g40's but its
+history."""
+
+from __future__ import annotations
+
+import importlib
+import os
+import re
+import subprocess
+import sys
+from pathlib import Path
+
+import gymnasium as gym
+import numpy as np
+import pytest
+
+import srenv  # noqa: F401  (registers the envs)
+from agents.benchmark.config import load_benchmark_config
+from agents.policies.described_features import FEATURES, features
+from srenv.task.well_file import well_file
+
+REPO = Path(__file__).resolve().parents[2]
+SCRIPT = REPO / "scripts" / "oracle_distill_described.py"
+DESCRIBED = REPO / "configs/benchmark/v2_oracle_distilled_described.yaml"
+WELLS = REPO / "configs/benchmark/v2_oracle_distilled_wells.yaml"
+
+
+@pytest.fixture(scope="module")
+def described():
+    sys.path.insert(0, str(SCRIPT.parent))  # the script and the pilots it imports, as when it runs
+    return importlib.import_module(SCRIPT.stem)
+
+
+def test_gate_seeds_are_unused_validation_seeds(described):
+    gate = described.GATE_SEEDS
+    assert gate == list(range(21600, 21616))
+    used = [(0, 10), (20000, 21416), (50000, 60000), (100000, 100100)]  # every earlier design's and split's seeds
+    assert not any(lo <= s < hi for s in gate for lo, hi in used)
+    others = " ".join(f.read_text() for d in ("configs", "scripts") for f in (REPO / d).rglob("*.*")
+                      if f.suffix in (".yaml", ".py") and f not in (DESCRIBED, SCRIPT))
+    assert not re.search(r"\b216\d\d\b", others)
+    assert not re.search(r"\b216\d\d\b", (REPO / "docs/agents.md").read_text().split("(v2, helper d42")[0])
+
+
+def test_the_history_registers_data_features_bar_folds_and_gate(described, monkeypatch):
+    monkeypatch.chdir(REPO)
+    hist = load_benchmark_config(DESCRIBED)["history"]
+    assert hist[:2] == load_benchmark_config(WELLS)["history"]  # g40's lines, then this design's
+    mine = " ".join(hist[2:])
+    assert all(s in mine for s in ("59032..59199", "wells 0..31", "<= 0.45", "fold w mod 4", "21600..21615", "scenario validation", "spm_cap: 0",
+                                   "13 scalars", "0.524", "0.515", "BEFORE any label"))
+    # every declared range is written down in the history, in its order (the geometry's codes 0, 0.5, 1: [0, 1])
+    ranges = re.findall(r"\[([-0-9.e]+), ([-0-9.e]+)\]", mine.split("(1) pump depth")[1])
+    assert [(float(a), float(b)) for a, b in ranges][:12] + [(0.0, 1.0)] == [v[:2] for v in FEATURES.values()]
+    assert described.PRECHECK_MAX == 0.45 and described.CANDIDATE == {"epochs": 30, "weight_decay": 0.0,
+                                                                        "net_arch": [128, 128]}
+
+
+def test_every_row_gets_its_wells_features(described):
+    x = np.arange(12, dtype=np.float32).reshape(6, 2)
+    well = np.array([0, 0, 2, 1, 2, 0])
+    table = np.array([[10.0, 11.0], [20.0, 21.0], [30.0, 31.0]])
+    out = described.described_inputs(x, well, table)
+    assert out.dtype == np.float32 and out.shape == (6, 4)
+    np.testing.assert_array_equal(out[:, :2], x)
+    np.testing.assert_array_equal(out[:, 2:], table[well])
+
+
+def test_well_features_are_the_files_the_env_hands_over(described):
+    table = described.well_features({"observation": "field", "scenario": "train"}, [3, 0])
+    env = gym.make("srenv/SuckerRod-v2", scenario="train", observation="field")
+    for row, w in zip(table, (3, 0)):
+        env.reset(seed=200 + w)  # seed mod 200 = the well, whatever the episode
+        assert env.unwrapped.well.well_id == f"train-{w:03d}"
+        np.testing.assert_array_equal(row, features(well_file(env)))
+    assert not np.array_equal(table[0], table[1])
+
+
+def test_bad_flags_refused_in_one_line(tmp_path):
+    for args, match in ((["--stage", "precheck", "--workers", "3"], "--workers 3"),
+                        (["--stage", "label"], "invalid choice")):
+        r = subprocess.run([sys.executable, str(SCRIPT), *args, "--out", str(tmp_path / "o")], check=False,
+                           capture_output=True, text=True, cwd=REPO, timeout=120,
+                           env={**os.environ, "PYTHONPATH": str(REPO)})
+        assert r.returncode == 2 and "Traceback" not in r.stderr
+        assert match in r.stderr.strip().splitlines()[-1] and not (tmp_path / "o").exists()
