@@ -11,6 +11,7 @@ script and seeds (scripts/oracle_distill_wells.py --stage label) after copying w
     PYTHONPATH=. nice -n 5 python scripts/oracle_distill_described.py --stage precheck --out runs/d42 --workers 2
     PYTHONPATH=. nice -n 5 python scripts/oracle_distill_described.py --stage fit --out runs/d42
     PYTHONPATH=. nice -n 5 python scripts/oracle_distill_described.py --stage gate --out runs/d42 --workers 2
+    PYTHONPATH=. nice -n 5 python scripts/oracle_distill_described.py --stage gate2 --out runs/d42 --workers 2
 
 ``--stage precheck`` (training labels only): g40's pool (:func:`oracle_distill_wells.wells_pool`), every row's input
 with the 13 features of its training well's file appended (:func:`agents.policies.described_features.features` of
@@ -19,6 +20,8 @@ with the 13 features of its training well's file appended (:func:`agents.policie
 no-correction MSE and g40's recorded figures. ``--stage fit`` (only after a passed pre-check): THE DESIGN's 3 fits on
 the described pool -> OUT/design/. ``--stage gate`` (only after a passed pre-check): THE GATE on v2's validation
 split -> OUT/gate.json, the design's policy spec ``described: true`` (:class:`agents.policies.described_features.DescribedInputs`).
+``--stage gate2`` (helper g42, after the first gate failed on its CI): GATE 2, the same frozen design on the 50
+validation wells once each (GATE2_SEEDS) -> OUT/gate2/gate.json.
 """
 
 from __future__ import annotations
@@ -45,8 +48,9 @@ from agents.training.pooled_fit import fit_student
 
 CONFIG = ROOT / "configs/benchmark/v2_oracle_distilled_described.yaml"
 GATE_SEEDS = list(range(21600, 21616))  # THE GATE's seeds, on v2's validation split (the config's history)
+GATE2_SEEDS = list(range(21650, 21700))  # GATE 2's (helper g42): the 50 validation wells once each (seed mod 50)
 G40 = ROOT / "docs/archive/oracle_distill_wells.json"  # g40's recorded pre-check (read as data, for comparison)
-STAGES = ("precheck", "fit", "gate")
+STAGES = ("precheck", "fit", "gate", "gate2")
 
 
 def well_features(env_kwargs: dict[str, Any], wells: list[int]) -> np.ndarray:
@@ -122,11 +126,13 @@ def design_spec(out: Path, d: dict[str, Any]) -> dict[str, Any]:
             "described": True}
 
 
-def gate(out: Path, workers: int) -> dict[str, Any]:
+def gate(out: Path, workers: int, seeds: list[int] = GATE_SEEDS, to: Path | None = None) -> dict[str, Any]:
+    """THE GATE (``seeds`` GATE_SEEDS -> OUT/gate.json) or GATE 2 (GATE2_SEEDS -> OUT/gate2/gate.json): the same
+    frozen design against alarm_pump_off on v2's validation split, by the same code."""
     require_precheck(out)
     d = design(CONFIG)
-    return play_design_gate(d["cfg"], CONFIG, GATE_SEEDS, {"described_capped": design_spec(out, d)}, d["tuned"],
-                            d["res"], out, workers, scenario="validation", shipped=False)
+    return play_design_gate(d["cfg"], CONFIG, seeds, {"described_capped": design_spec(out, d)}, d["tuned"],
+                            d["res"], to or out, workers, scenario="validation", shipped=False)
 
 
 def main() -> None:
@@ -134,6 +140,9 @@ def main() -> None:
     a.out.mkdir(parents=True, exist_ok=True)
     if a.stage == "fit":
         print(json.dumps(fit(a.out)))
+    elif a.stage == "gate2":
+        (a.out / "gate2").mkdir(exist_ok=True)
+        print_outcome("gate", gate(a.out, a.workers, GATE2_SEEDS, a.out / "gate2"))
     else:
         print_outcome(a.stage, precheck(a.out, a.workers) if a.stage == "precheck" else gate(a.out, a.workers))
 

@@ -88,3 +88,60 @@ def test_bad_flags_refused_in_one_line(tmp_path):
                            env={**os.environ, "PYTHONPATH": str(REPO)})
         assert r.returncode == 2 and "Traceback" not in r.stderr
         assert match in r.stderr.strip().splitlines()[-1] and not (tmp_path / "o").exists()
+
+
+def test_gate2_seeds_are_the_50_validation_wells_unused_and_registered(described, monkeypatch):
+    """GATE 2 (helper g42): seeds 21650..21699 play validation-000..049 once each (seed mod 50), are disjoint from
+    the first gate's and every earlier design's seeds, appear in no other config or script, and the history names
+    them, the rule and the looks that a pass would have allowed (the fresh seed never played)."""
+    gate2 = described.GATE2_SEEDS
+    assert gate2 == list(range(21650, 21700)) and not set(gate2) & set(described.GATE_SEEDS)
+    used = [(0, 10), (20000, 21416), (21600, 21616), (50000, 60000), (100000, 100100)]
+    assert not any(lo <= s < hi for s in gate2 for lo, hi in used)
+    assert sorted(s % 50 for s in gate2) == list(range(50))
+    env = gym.make("srenv/SuckerRod-v2", scenario="validation", observation="field")
+    for s in (gate2[0], gate2[17], gate2[-1]):
+        env.reset(seed=s)
+        assert env.unwrapped.well.well_id == f"validation-{s % 50:03d}"
+    others = " ".join(f.read_text() for d in ("configs", "scripts") for f in (REPO / d).rglob("*.*")
+                      if f.suffix in (".yaml", ".py") and f not in (DESCRIBED, SCRIPT))
+    assert not re.search(r"\b216[5-9]\d\b", others)
+    monkeypatch.chdir(REPO)
+    hist = load_benchmark_config(DESCRIBED)["history"]
+    g42 = " ".join(h for h in hist if "helper g42" in h)
+    assert all(s in g42 for s in ("21650..21699", "scenario validation", "--stage gate2", "lower bound > 0",
+                                  "constraint cost <=", "A failed gate 2 means no look", "100000..100099",
+                                  "ci95_by_well", ">= 10 %", "--fresh-seed", "20261205", "spm_cap: 0"))
+    assert any("GATE 2 played once" in h and "FAILED" in h for h in hist)
+
+
+def test_the_registered_fresh_seed_was_never_played():
+    """No fresh look in docs/ played seed 20261205 (those played: 20261203, 20261204)."""
+    import json
+
+    played = set()
+    for f in (REPO / "docs").rglob("*.json"):
+        rep = json.loads(f.read_text())
+        fresh = rep.get("fresh") if isinstance(rep, dict) else None
+        if isinstance(fresh, dict) and "seed" in fresh:
+            played.add(fresh["seed"])
+    assert {20261203, 20261204} <= played and 20261205 not in played
+
+
+def test_stage_gate2_plays_the_first_gates_code_on_its_seeds(described, monkeypatch, tmp_path):
+    """--stage gate2 hands play_design_gate the frozen design, GATE2_SEEDS, v2's validation split and OUT/gate2."""
+    seen = {}
+
+    def play(cfg, config, seeds, design, tuned, res, out, workers, scenario="train", also=None, shipped=True):
+        seen.update(seeds=seeds, design=design, out=out, scenario=scenario, shipped=shipped)
+        return {"summary": {}, "gate": False}
+
+    monkeypatch.setattr(described, "require_precheck", lambda out: None)
+    monkeypatch.setattr(described, "design_spec", lambda out, d: {"kind": "ensemble", "described": True})
+    monkeypatch.setattr(described, "play_design_gate", play)
+    monkeypatch.setattr(described, "print_outcome", lambda stage, rec: None)
+    monkeypatch.setattr(sys, "argv", ["oracle_distill_described.py", "--stage", "gate2", "--out", str(tmp_path)])
+    described.main()
+    assert seen == {"seeds": list(range(21650, 21700)), "design": {"described_capped": {"kind": "ensemble",
+                                                                                         "described": True}},
+                    "out": tmp_path / "gate2", "scenario": "validation", "shipped": False}
