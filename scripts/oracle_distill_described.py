@@ -42,7 +42,7 @@ from oracle_distill_pooled import NAME, design, print_outcome, require_precheck
 from oracle_distill_wells import CANDIDATE, CAP, PRECHECK_MAX, well_cv, wells_pool, zero_mse_folds
 
 from agents.evaluation.rollout import Runner
-from agents.policies.described_features import FEATURES, features
+from agents.policies.described_features import FEATURES, append_features, features
 from agents.policies.ensemble import ensemble_spec
 from agents.training.pooled_fit import fit_student
 
@@ -74,7 +74,7 @@ def well_features(env_kwargs: dict[str, Any], wells: list[int]) -> np.ndarray:
 
 def described_inputs(x: np.ndarray, well: np.ndarray, table: np.ndarray) -> np.ndarray:
     """Every row's input ``x`` with its well's features (``table[w]``) appended: the described student's input."""
-    return np.concatenate([np.asarray(x, np.float32), np.asarray(table, np.float32)[np.asarray(well)]], axis=1)
+    return append_features(x, np.asarray(table)[np.asarray(well)])
 
 
 def precheck(out: Path, workers: int) -> dict[str, Any]:

@@ -221,7 +221,7 @@ def _split(rounds: list[dict]) -> dict:
     """scripts/step_profile.py's rounds (medians): a reset's ms, a step's kernel and Python ms, its exact strokes."""
     med = {k: statistics.median(s[k] for s in rounds) for k in
            ("reset_ms", "reset_kernel_ms", "steps_ms", "steps_kernel_ms", "exact_strokes_per_step")}
-    split = {"reset_ms_each": med["reset_ms"] / PROTOCOL_RESETS, "reset_kernel_ms_each": med["reset_kernel_ms"] / 2,
+    split = {"reset_ms_each": med["reset_ms"] / PROTOCOL_RESETS, "reset_kernel_ms_each": med["reset_kernel_ms"] / PROTOCOL_RESETS,
              "steps_kernel_ms_per_step": med["steps_kernel_ms"] / PROTOCOL_STEPS,
              "steps_python_ms_per_step": (med["steps_ms"] - med["steps_kernel_ms"]) / PROTOCOL_STEPS,
              "exact_strokes_per_step": med["exact_strokes_per_step"], "rounds": rounds}

@@ -49,10 +49,11 @@ def raw_features(file: Mapping[str, Any]) -> dict[str, float]:
     depth = pump_depth_m(f)
     rho = float(f["fluid"]["density_kg_m3"])
     area = math.pi / 4 * (float(f["pump"]["plunger_diameter_mm"]) * 1e-3) ** 2
-    rod_air = sum(float(t["density_kg_m3"]) * GRAVITY_M_S2 * math.pi / 4 * (float(t["diameter_mm"]) * 1e-3) ** 2
-                  * float(t["length_m"]) for t in f["rod"]["tapers"])
-    rod_buoyant = sum(float(t["density_kg_m3"]) * GRAVITY_M_S2 * math.pi / 4 * (float(t["diameter_mm"]) * 1e-3) ** 2
-                      * float(t["length_m"]) * (1.0 - rho / float(t["density_kg_m3"])) for t in f["rod"]["tapers"])
+    # each taper's weight in air, with its own density (steel or fiberglass), then buoyed by the fluid
+    tapers = [(float(t["density_kg_m3"]), float(t["density_kg_m3"]) * GRAVITY_M_S2 * math.pi / 4
+               * (float(t["diameter_mm"]) * 1e-3) ** 2 * float(t["length_m"])) for t in f["rod"]["tapers"]]
+    rod_air = sum(w for _, w in tapers)
+    rod_buoyant = sum(w * (1.0 - rho / dens) for dens, w in tapers)
     tvd = wf.tvd_m(f["survey"]["stations"], depth)
     fluid = (rho * GRAVITY_M_S2 * tvd + float(f["fluid"]["wellhead_pressure_pa"])) * area
     c = f["control"]
@@ -87,6 +88,15 @@ def features(file: Mapping[str, Any]) -> np.ndarray:
     return out
 
 
+def append_features(x: Any, extra: np.ndarray) -> np.ndarray:
+    """The described student's input: ``x`` (float32) with ``extra`` appended on the last axis - one well's features
+    broadcast over every row, or a row's own (the training pool's, ``table[well]``). The one place both the pool and
+    the acting student build it, so the two cannot drift apart."""
+    x = np.asarray(x, np.float32)
+    extra = np.asarray(extra, np.float32)
+    return np.concatenate([x, np.broadcast_to(extra, (*x.shape[:-1], extra.shape[-1]))], axis=-1)
+
+
 class DescribedInputs:
     """A model policy whose every input gets the played well's :func:`features` appended: the operator's file is read
     once per episode, at ``reset``, from ``well_file(env)`` (the one hook by which the env hands anything of its
@@ -103,6 +113,5 @@ class DescribedInputs:
                 deterministic: bool = True) -> tuple[np.ndarray, Any]:
         if self.extra is None:
             raise RuntimeError("DescribedInputs: call reset(env) after env.reset (the well file is read there)")
-        x = np.asarray(observation, np.float32)
-        x = np.concatenate([x, np.broadcast_to(self.extra, (*x.shape[:-1], len(self.extra)))], axis=-1)
-        return self.model.predict(x, state=state, episode_start=episode_start, deterministic=deterministic)
+        return self.model.predict(append_features(observation, self.extra), state=state, episode_start=episode_start,
+                                  deterministic=deterministic)

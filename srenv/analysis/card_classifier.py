@@ -124,9 +124,21 @@ class CardClassifier:
     def __init__(self, labels: tuple[str, ...], mean: np.ndarray, std: np.ndarray, layers: list,
                  card_type: str = "surface", feature_set: str = FEATURE_SETS[0], more_members: tuple = ()):
         """One member's (mean, std, layers); ``more_members``: the ensemble's others, each (mean, std, layers)."""
-        self.labels, self.mean, self.std, self.layers = labels, mean, std, layers
-        self.card_type, self.feature_set = card_type, feature_set
+        self.labels, self.card_type, self.feature_set = labels, card_type, feature_set
         self.members = ((mean, std, layers), *more_members)
+
+    @property
+    def mean(self) -> np.ndarray:
+        """The first member's feature means (every member's features have the same width)."""
+        return self.members[0][0]
+
+    @property
+    def std(self) -> np.ndarray:
+        return self.members[0][1]
+
+    @property
+    def layers(self) -> list:
+        return self.members[0][2]
 
     @property
     def needs_config(self) -> bool:
