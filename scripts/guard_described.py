@@ -1,0 +1,150 @@
+"""Issue 24, helper a43: a deployment-time guard on d42's FROZEN described students, chosen on training wells.
+
+d42's design (described students, f24's cap, residual on the tuned pump_off at scale 0.5) failed gate 2 on its CI
+and its cost: one validation well where it pumps all day and tags, one where alarm_pump_off loses to stick-slip.
+Does a guard (agents/policies/guarded.py, fallback the tuned alarm_pump_off) remove the tagging / cost tail without
+losing the median gain? Everything below is pre-registered in
+configs/benchmark/v2_oracle_distilled_described_guarded.yaml (its ``history``):
+
+    mkdir -p runs/a43 && cp -r /work/keep/d42/d42/design /work/keep/d42/d42/precheck.json runs/a43/
+    PYTHONPATH=. nice -n 5 python scripts/guard_described.py --stage select --out runs/a43 --workers 2
+    PYTHONPATH=. nice -n 5 python scripts/guard_described.py --stage gate --out runs/a43 --workers 2
+
+``--stage select`` (training wells only): alarm_pump_off and every variant (:data:`VARIANTS`: the unguarded inner
+and the declared guard grid) on :data:`SELECT_SEEDS`, THE SELECTION RULE (:func:`choose`) -> OUT/select.json.
+``--stage gate`` (only with a chosen variant): that variant once on v2's validation split (:data:`GATE_SEEDS`)
+against alarm_pump_off by play_design_gate -> OUT/gate/gate.json.
+"""
+
+from __future__ import annotations
+
+import argparse
+import copy
+import itertools
+import json
+import sys
+from pathlib import Path
+from typing import Any
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from estimated_mpc_pilot import arguments
+from guard_pilot import play_validation, summarise
+from oracle_distill_described import design_spec
+from oracle_distill_more import ROOT, episode_tables, play_design_gate, write_json
+from oracle_distill_pooled import design, require_precheck
+
+from agents.policies.guarded import guarded_spec
+
+CONFIG = ROOT / "configs/benchmark/v2_oracle_distilled_described_guarded.yaml"
+SELECT_SEEDS = list(range(59400, 59450))  # THE SELECTION's: training wells 0..49 once each (seed mod 200)
+GATE_SEEDS = list(range(21700, 21750))  # THE GATE's: v2's validation wells 0..49 once each (seed mod 50)
+BASE = "alarm_pump_off"  # the fallback and the baseline every variant is judged against
+REFERENCE = "unguarded"  # variant 0: the inner as it is (reported, not a candidate)
+STAGES = ("select", "gate")
+
+# THE GUARD FAMILY (the config's history), declared once: tagging x pound x load x hold, follow_shut_in always
+TAG = (0.3, 0.5)  # prob_tagging_up and prob_tagging_down above T (the classifier's tagging labels)
+POUND: dict[str, dict[str, float]] = {"none": {}, "pound": {"fillage_est": 0.85},
+                                      "pound_minspm": {"fillage_est": 0.85, "spm": 0.45}}
+LOAD: dict[str, dict[str, float]] = {"noload": {}, "load95": {"pprl": 0.95}}
+HOLD = (3, 6)
+
+
+def family() -> dict[str, dict[str, Any] | None]:
+    """{name: guard} - variant 0 (``unguarded``: None), then the grid in its declared order."""
+    out: dict[str, dict[str, Any] | None] = {REFERENCE: None}
+    for t, (p, below), (ld, above), h in itertools.product(TAG, POUND.items(), LOAD.items(), HOLD):
+        out[f"tag{t}_{p}_{ld}_hold{h}"] = {"above": {"prob_tagging_up": t, "prob_tagging_down": t, **above},
+                                           "below": dict(below), "hold_intervals": h, "follow_shut_in": True}
+    return out
+
+
+VARIANTS = family()
+
+
+def conditions(guard: dict[str, Any] | None) -> int:
+    """The number of limits a guard watches (above + below): the selection's tie-break."""
+    return 0 if guard is None else len(guard.get("above") or {}) + len(guard.get("below") or {})
+
+
+def choose(summ: dict[str, Any], variants: dict[str, Any] = VARIANTS) -> str | None:
+    """THE SELECTION RULE: among the guarded variants (not the reference) whose mean constraint cost is at most
+    alarm_pump_off's, the highest lower bound of the paired 95 % CI vs alarm_pump_off; ties -> fewer guard conditions,
+    then the declared order. None if none qualifies or the best lower bound is <= 0 (a negative result, no gate)."""
+    order = [n for n in variants if n != REFERENCE and n in summ and summ[n]["cost"] <= summ[BASE]["cost"]]
+    if not order:
+        return None
+    best = min(order, key=lambda n: (-summ[n][f"vs_{BASE}"]["ci95"][0], conditions(variants[n]), order.index(n)))
+    return best if summ[best][f"vs_{BASE}"]["ci95"][0] > 0 else None
+
+
+def specs(out: Path, d: dict[str, Any], variants: dict[str, Any] = VARIANTS) -> dict[str, dict[str, Any]]:
+    """alarm_pump_off (the tuned parameters) and every variant's policy spec: d42's frozen design (OUT/design) under
+    its guard, fallback the tuned alarm_pump_off."""
+    inner = design_spec(out, d)
+    fb = d["tuned"][BASE]["params"]
+    return {BASE: {"kind": "baseline", "name": BASE, "params": fb},
+            **{n: inner if g is None else guarded_spec(inner, BASE, fb, g) for n, g in variants.items()}}
+
+
+def select(out: Path, workers: int) -> dict[str, Any]:
+    """THE SELECTION on the training wells (SELECT_SEEDS) -> OUT/select.json."""
+    require_precheck(out)
+    d = design(CONFIG)
+    sp = specs(out, d)
+    gcfg = {**copy.deepcopy(d["cfg"]), "validation": {"seeds": SELECT_SEEDS, "scenario": "train"}}
+    eps = play_validation(gcfg, sp, out / "select", workers)
+    summ = summarise(eps, (BASE,))
+    rec = {"stage": "select", "config": str(CONFIG.relative_to(ROOT)), "seeds": SELECT_SEEDS, "scenario": "train",
+           "specs": sp, "summary": summ, "conditions": {n: conditions(g) for n, g in VARIANTS.items()},
+           "chosen": choose(summ), **episode_tables(eps)}
+    write_json(out / "select.json", rec)
+    return rec
+
+
+def chosen(out: Path) -> str:
+    """The variant OUT/select.json chose (the rule re-applied to its summary); exit 2 in one line without one."""
+    path = out / "select.json"
+    rec = json.loads(path.read_text()) if path.is_file() and not path.is_symlink() else {}
+    name = rec.get("chosen")
+    if name is None or name not in VARIANTS or choose(rec.get("summary") or {}) != name:
+        print(f"{Path(sys.argv[0]).stem}: {path}: chosen = {name!r}: expected a variant chosen by --stage select "
+              "(none chosen: a negative result, no gate)", file=sys.stderr)
+        sys.exit(2)
+    return name
+
+
+def gate(out: Path, workers: int) -> dict[str, Any]:
+    """THE GATE: the chosen variant once on v2's validation split (GATE_SEEDS) -> OUT/gate/gate.json."""
+    name = chosen(out)
+    d = design(CONFIG)
+    (out / "gate").mkdir(exist_ok=True)
+    return play_design_gate(d["cfg"], CONFIG, GATE_SEEDS, {name: specs(out, d, {name: VARIANTS[name]})[name]},
+                            d["tuned"], d["res"], out / "gate", workers, scenario="validation", shipped=False)
+
+
+def rows(rec: dict[str, Any]) -> list[str]:
+    """A stage's table: USD/h, cost and its terms, d vs alarm_pump_off [95 % CI] and wins."""
+    out = ["| policy | USD/h | cost (pound, overload, tagging) | vs alarm_pump_off [95 % CI] wins |", "|---|---|---|---|"]
+    for k, r in rec["summary"].items():
+        t = r["cost_terms"]
+        v = r.get(f"vs_{BASE}")
+        cell = f"{v['mean']:+.2f} [{v['ci95'][0]:+.2f}, {v['ci95'][1]:+.2f}] {v['wins']}/{v['n']}" if v else "-"
+        out.append(f"| {k} | {r['usd_h']:.2f} | {r['cost']:.2f} ({t.get('cost_pound', 0):.2f}, "
+                   f"{t.get('cost_overload', 0):.2f}, {t.get('cost_tagging', 0):.2f}) | {cell} |")
+    return out
+
+
+def main() -> None:
+    a = arguments(argparse.ArgumentParser(description=__doc__.splitlines()[0]), STAGES)
+    a.out.mkdir(parents=True, exist_ok=True)
+    rec = select(a.out, a.workers) if a.stage == "select" else gate(a.out, a.workers)
+    print("\n".join(rows(rec)))
+    if a.stage == "select":
+        print("CHOSEN:", rec["chosen"] or "none (a negative result, no gate)")
+    else:
+        print("GATE:", "passed" if rec["gate"] else "failed")
+
+
+if __name__ == "__main__":
+    main()
