@@ -14,14 +14,24 @@ configs/benchmark/v2_oracle_distilled_described_guarded.yaml (its ``history``):
 and the declared guard grid) on :data:`SELECT_SEEDS`, THE SELECTION RULE (:func:`choose`) -> OUT/select.json.
 ``--stage gate`` (only with a chosen variant): that variant once on v2's validation split (:data:`GATE_SEEDS`)
 against alarm_pump_off by play_design_gate -> OUT/gate/gate.json.
+``--stage test`` (only after a passed gate): THE TEST LOOK, scripts/v2_test_look.py's ``test_look`` with this design
+(the baselines re-tuned by the benchmark's code and checked equal to the ones the design was gated with; d42's fits
+copied to OUT/test/models, sha256 checked, where the report's ``models/`` names resolve) -> OUT/test/benchmark.json.
+The fresh look then rebuilds the design from that report (``described`` and ``guarded`` records):
+
+    PYTHONPATH=. nice -n 5 python scripts/guard_described.py --stage test --out runs/a43 --workers 2
+    python -m agents benchmark configs/benchmark/v2_oracle_distilled_described_guarded.yaml --evaluate-only \
+        --fresh-seed 20261205 --episodes 40 --report runs/a43/test/benchmark.json --out-dir runs/a43/fresh
 """
 
 from __future__ import annotations
 
 import argparse
 import copy
+import hashlib
 import itertools
 import json
+import shutil
 import sys
 from pathlib import Path
 from typing import Any
@@ -31,8 +41,10 @@ from estimated_mpc_pilot import arguments
 from guard_pilot import play_validation, summarise
 from oracle_distill_described import design_spec
 from oracle_distill_more import ROOT, episode_tables, play_design_gate, write_json
-from oracle_distill_pooled import design, require_precheck
+from oracle_distill_pooled import NAME, design, require_precheck
 
+from agents.benchmark.assemble import guarded_record
+from agents.benchmark.runs import residual_spec
 from agents.policies.guarded import guarded_spec
 
 CONFIG = ROOT / "configs/benchmark/v2_oracle_distilled_described_guarded.yaml"
@@ -40,7 +52,12 @@ SELECT_SEEDS = list(range(59400, 59450))  # THE SELECTION's: training wells 0..4
 GATE_SEEDS = list(range(21700, 21750))  # THE GATE's: v2's validation wells 0..49 once each (seed mod 50)
 BASE = "alarm_pump_off"  # the fallback and the baseline every variant is judged against
 REFERENCE = "unguarded"  # variant 0: the inner as it is (reported, not a candidate)
-STAGES = ("select", "gate")
+STAGES = ("select", "gate", "test")
+LOOK_NAME = "oracle_distilled_guarded"  # the design's name in the looks' reports (the config's evaluate_only.agents)
+FITS_SHA256 = {  # d42's frozen fits, as registered in the config's history
+    "oracle_distilled_v2_seed0.zip": "359b418671b20164fa823b09f38cc8594eef06b5a4fede689480546106f25463",
+    "oracle_distilled_v2_seed1.zip": "32d4036bc512231ba8aceeda9b0ed0480856f243be2cb0c2adf03ceaede3d623",
+    "oracle_distilled_v2_seed2.zip": "8a445f9731bcffd75a98ae8c8dcb73bc8ffbabd3ab0f7892c617688fe760f0ea"}
 
 # THE GUARD FAMILY (the config's history), declared once: tagging x pound x load x hold, follow_shut_in always
 TAG = (0.3, 0.5)  # prob_tagging_up and prob_tagging_down above T (the classifier's tagging labels)
@@ -123,6 +140,42 @@ def gate(out: Path, workers: int) -> dict[str, Any]:
                             d["tuned"], d["res"], out / "gate", workers, scenario="validation", shipped=False)
 
 
+def passed_gate(out: Path) -> str:
+    """The chosen variant, if OUT/gate/gate.json records its passed gate; exit 2 in one line otherwise."""
+    name, path = chosen(out), out / "gate" / "gate.json"
+    rec = json.loads(path.read_text()) if path.is_file() and not path.is_symlink() else {}
+    if rec.get("gate") is not True or name not in rec.get("specs", {}):
+        print(f"{Path(sys.argv[0]).stem}: {path}: gate = {rec.get('gate')!r}: expected a passed gate of {name} "
+              "(no look without it)", file=sys.stderr)
+        sys.exit(2)
+    return name
+
+
+def look_design(out: Path, name: str, tuned: dict[str, Any], to: Path) -> tuple[str, dict, dict]:
+    """(report name, policy spec, report record) of the chosen variant on the re-tuned baselines ``tuned``; d42's
+    fits copied to TO/models (their registered sha256 checked) so the report's ``models/`` names resolve there."""
+    d = design(CONFIG)
+    (to / "models").mkdir(parents=True, exist_ok=True)
+    for f in sorted((out / "design").glob(f"{NAME}_v2_seed*")):
+        if f.suffix == ".zip" and hashlib.sha256(f.read_bytes()).hexdigest() != FITS_SHA256.get(f.name):
+            raise SystemExit(f"{f}: sha256 differs from the registered fit's: not d42's frozen design")
+        shutil.copyfile(f, to / "models" / f.name)
+    d = {**d, "tuned": tuned, "res": residual_spec(d["run"], tuned)}
+    spec = specs(out, d, {name: VARIANTS[name]})[name]
+    return LOOK_NAME, spec, guarded_record({**spec, "of": NAME}, d["cfg"]["agents"]["runs"], [])
+
+
+def play_test_look(out: Path, workers: int) -> dict[str, Any]:
+    """THE TEST LOOK (only after a passed gate) -> OUT/test/benchmark.json (and .md)."""
+    from v2_test_look import test_look
+
+    name = passed_gate(out)
+    d = design(CONFIG)
+    return test_look(str(CONFIG), out, None, workers, out / "test",
+                     built=lambda tuned: look_design(out, name, tuned, out / "test"),
+                     expected={k: v["params"] for k, v in d["tuned"].items()})
+
+
 def rows(rec: dict[str, Any]) -> list[str]:
     """A stage's table: USD/h, cost and its terms, d vs alarm_pump_off [95 % CI] and wins."""
     out = ["| policy | USD/h | cost (pound, overload, tagging) | vs alarm_pump_off [95 % CI] wins |", "|---|---|---|---|"]
@@ -138,6 +191,13 @@ def rows(rec: dict[str, Any]) -> list[str]:
 def main() -> None:
     a = arguments(argparse.ArgumentParser(description=__doc__.splitlines()[0]), STAGES)
     a.out.mkdir(parents=True, exist_ok=True)
+    if a.stage == "test":
+        from agents.benchmark.report import markdown_tables, verdict
+
+        rep = play_test_look(a.out, a.workers)
+        print(markdown_tables(rep))
+        print(verdict(rep))
+        return
     rec = select(a.out, a.workers) if a.stage == "select" else gate(a.out, a.workers)
     print("\n".join(rows(rec)))
     if a.stage == "select":

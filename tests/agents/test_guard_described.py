@@ -46,6 +46,9 @@ def _hist(monkeypatch) -> str:
 def test_config_is_d42s_but_its_history(monkeypatch):
     monkeypatch.chdir(REPO)
     a, b = load_benchmark_config(CONFIG), load_benchmark_config(DESCRIBED)
+    assert a["evaluate_only"]["agents"] == ["oracle_distilled_guarded"]
+    for c in (a, b):  # the design's name in the looks' reports is this config's own
+        del c["evaluate_only"]["agents"]
     assert {k: v for k, v in a.items() if k not in ("history", "source")} == {k: v for k, v in b.items()
                                                                      if k not in ("history", "source")}
 
@@ -151,7 +154,7 @@ def test_gate_refuses_without_a_chosen_variant(tmp_path):
 
 
 def test_bad_flags_refused_in_one_line(tmp_path):
-    for args, match in ((["--stage", "select", "--workers", "3"], "--workers 3"), (["--stage", "test"], "invalid choice")):
+    for args, match in ((["--stage", "select", "--workers", "3"], "--workers 3"), (["--stage", "look"], "invalid choice")):
         r = subprocess.run([sys.executable, str(SCRIPT), *args, "--out", str(tmp_path / "o")], check=False,
                            capture_output=True, text=True, cwd=REPO, timeout=120,
                            env={**os.environ, "PYTHONPATH": str(REPO)})
@@ -194,3 +197,70 @@ def test_stages_play_their_seeds_on_their_split(gd, monkeypatch, tmp_path):
     assert name == rec["chosen"] and spec["kind"] == "guarded" and spec["inner"] == inner
     assert spec["guard"] == gd.VARIANTS[name] and spec["fallback"] == {"name": "alarm_pump_off",
                                                                        "params": {"threshold": 0.99}}
+
+
+def _names(spec: dict) -> dict:
+    """The spec with every member's files by name (the look plays OUT/design's, the report names models/ copies)."""
+    inner = spec["inner"]
+    members = [{k: Path(v).name for k, v in m.items()} for m in inner["members"]]
+    return {**spec, "inner": {**inner, "members": members}}
+
+
+def test_a_report_with_the_described_guarded_design_rebuilds_its_spec(gd, described_student, monkeypatch, tmp_path):
+    """The look's record (guarded_record of the chosen variant on d42's fits) holds ``described: true``; replay's
+    policy_specs and the fresh look's record copy rebuild the very spec the look played; a bad flag is refused."""
+    import hashlib
+    import shutil
+
+    from agents.benchmark.fresh import _policies
+    from agents.evaluation.replay import ReplayError, load_report, policy_specs
+
+    out, to = tmp_path / "out", tmp_path / "out" / "test"
+    (out / "design").mkdir(parents=True)
+    sha = {}
+    for k in (0, 1, 2):
+        f = out / "design" / f"oracle_distilled_v2_seed{k}.zip"
+        shutil.copyfile(described_student["path"], f)
+        shutil.copyfile(described_student["obs_norm"], f.with_name(f.stem + "_obs_norm.npz"))
+        sha[f.name] = hashlib.sha256(f.read_bytes()).hexdigest()
+    monkeypatch.setattr(gd, "FITS_SHA256", sha)
+    tuned = load_report(REPO / "docs/v2/benchmark.json")["tuned"]
+    name, spec, rec = gd.look_design(out, "tag0.3_none_noload_hold3", tuned, to)
+    assert name == "oracle_distilled_guarded" and rec["described"] is True and spec["inner"]["described"] is True
+    assert spec["inner"]["residual"]["cap"] == {"spm_cap": 0.0} and spec["guard"] == gd.VARIANTS["tag0.3_none_noload_hold3"]
+    assert rec["guarded"]["fallback"] == {"name": "alarm_pump_off", "params": tuned["alarm_pump_off"]["params"]}
+    (rebuilt,) = policy_specs({"policies": {name: rec}}, name, to)
+    assert _names(rebuilt) == _names(spec) and all(Path(m["path"]).parent == to / "models"
+                                                  for m in rebuilt["inner"]["members"])
+    fresh = _policies({"policies": {name: rec}}, {name: [rebuilt]}, [name], [{"reward": 0.0}], 1)
+    assert policy_specs({"policies": fresh}, name, to) == [rebuilt]  # the fresh look's report rebuilds it too
+    with pytest.raises(ReplayError, match="described = yes: expected true or false"):
+        policy_specs({"policies": {name: {**rec, "described": "yes"}}}, name, to)
+    monkeypatch.setattr(gd, "FITS_SHA256", {**sha, "oracle_distilled_v2_seed1.zip": "0" * 64})
+    with pytest.raises(SystemExit, match="not d42's frozen design"):
+        gd.look_design(out, "tag0.3_none_noload_hold3", tuned, to)
+
+
+def test_an_ensemble_without_the_flag_records_none():
+    from agents.benchmark.assemble import _ensemble_record
+
+    ens = {"kind": "ensemble", "members": [{"path": "a/x.zip", "obs_norm": None}], "of": "r"}
+    runs = {"r": {"config": "configs/train/ppo_residual_v2.yaml", "seeds": [0]}}
+    assert "described" not in _ensemble_record(ens, runs, [])  # earlier reports' records unchanged
+    assert _ensemble_record({**ens, "described": True}, runs, [])["described"] is True
+
+
+def test_the_test_look_needs_a_passed_gate(gd, tmp_path):
+    sel = {"chosen": "tag0.3_none_noload_hold3",
+           "summary": {"alarm_pump_off": {"cost": 2.0},
+                       "tag0.3_none_noload_hold3": {"cost": 1.0, "vs_alarm_pump_off": {"ci95": [1.0, 2.0]}}}}
+    (tmp_path / "select.json").write_text(json.dumps(sel))
+    (tmp_path / "gate").mkdir()
+    for gate in (None, {"gate": False, "specs": {"tag0.3_none_noload_hold3": {}}}):
+        if gate is not None:
+            (tmp_path / "gate" / "gate.json").write_text(json.dumps(gate))
+        r = subprocess.run([sys.executable, str(SCRIPT), "--stage", "test", "--out", str(tmp_path)], check=False,
+                           capture_output=True, text=True, cwd=REPO, timeout=120,
+                           env={**os.environ, "PYTHONPATH": str(REPO)})
+        assert r.returncode == 2 and "Traceback" not in r.stderr and not (tmp_path / "test").exists()
+        assert "expected a passed gate of tag0.3_none_noload_hold3" in r.stderr.strip().splitlines()[-1]
