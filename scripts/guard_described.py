@@ -171,7 +171,8 @@ def play_test_look(out: Path, workers: int) -> dict[str, Any]:
 
     name = passed_gate(out)
     d = design(CONFIG)
-    return test_look(str(CONFIG), out, None, workers, out / "test",
+    return test_look(str(CONFIG.relative_to(ROOT)) if Path.cwd().resolve() == ROOT else str(CONFIG), out, None, workers,
+                     out / "test",
                      built=lambda tuned: look_design(out, name, tuned, out / "test"),
                      expected={k: v["params"] for k, v in d["tuned"].items()})
 
