@@ -14,6 +14,7 @@ configs/benchmark/v2_oracle_distilled_described_guarded.yaml (its ``history``):
 and the declared guard grid) on :data:`SELECT_SEEDS`, THE SELECTION RULE (:func:`choose`) -> OUT/select.json.
 ``--stage gate`` (only with a chosen variant): that variant once on v2's validation split (:data:`GATE_SEEDS`)
 against alarm_pump_off by play_design_gate -> OUT/gate/gate.json.
+``--stage tails`` (after the looks, judging nothing): the chosen variant on gate 2's two tail episodes.
 ``--stage test`` (only after a passed gate): THE TEST LOOK, scripts/v2_test_look.py's ``test_look`` with this design
 (the baselines re-tuned by the benchmark's code and checked equal to the ones the design was gated with; d42's fits
 copied to OUT/test/models, sha256 checked, where the report's ``models/`` names resolve) -> OUT/test/benchmark.json.
@@ -39,7 +40,7 @@ from typing import Any
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from estimated_mpc_pilot import arguments
 from guard_pilot import play_validation, summarise
-from oracle_distill_described import design_spec
+from oracle_distill_described import GATE2_SEEDS, design_spec
 from oracle_distill_more import ROOT, episode_tables, play_design_gate, write_json
 from oracle_distill_pooled import NAME, design, require_precheck
 
@@ -52,7 +53,8 @@ SELECT_SEEDS = list(range(59400, 59450))  # THE SELECTION's: training wells 0..4
 GATE_SEEDS = list(range(21700, 21750))  # THE GATE's: v2's validation wells 0..49 once each (seed mod 50)
 BASE = "alarm_pump_off"  # the fallback and the baseline every variant is judged against
 REFERENCE = "unguarded"  # variant 0: the inner as it is (reported, not a candidate)
-STAGES = ("select", "gate", "test")
+STAGES = ("select", "gate", "test", "tails")
+TAILS = (3, 20)  # gate 2's two tail wells (validation-003: tagging; validation-020: stick-slip), its seeds' indices
 LOOK_NAME = "oracle_distilled_guarded"  # the design's name in the looks' reports (the config's evaluate_only.agents)
 FITS_SHA256 = {  # d42's frozen fits, as registered in the config's history
     "oracle_distilled_v2_seed0.zip": "359b418671b20164fa823b09f38cc8594eef06b5a4fede689480546106f25463",
@@ -177,6 +179,19 @@ def play_test_look(out: Path, workers: int) -> dict[str, Any]:
                      expected={k: v["params"] for k, v in d["tuned"].items()})
 
 
+def tails(out: Path, workers: int) -> dict[str, Any]:
+    """Read after the looks, judging nothing: alarm_pump_off, the unguarded inner and the chosen variant on gate 2's
+    two tail episodes (its seeds for validation-003 and -020) -> OUT/tails/tails.json. Did the guard remove them?"""
+    name = chosen(out)
+    d = design(CONFIG)
+    seeds = [GATE2_SEEDS[k] for k in TAILS]
+    gcfg = {**copy.deepcopy(d["cfg"]), "validation": {"seeds": seeds, "scenario": "validation"}}
+    eps = play_validation(gcfg, specs(out, d, {REFERENCE: None, name: VARIANTS[name]}), out / "tails", workers)
+    rec = {"stage": "tails", "seeds": seeds, "summary": summarise(eps, (BASE,)), **episode_tables(eps)}
+    write_json(out / "tails" / "tails.json", rec)
+    return rec
+
+
 def rows(rec: dict[str, Any]) -> list[str]:
     """A stage's table: USD/h, cost and its terms, d vs alarm_pump_off [95 % CI] and wins."""
     out = ["| policy | USD/h | cost (pound, overload, tagging) | vs alarm_pump_off [95 % CI] wins |", "|---|---|---|---|"]
@@ -198,6 +213,10 @@ def main() -> None:
         rep = play_test_look(a.out, a.workers)
         print(markdown_tables(rep))
         print(verdict(rep))
+        return
+    if a.stage == "tails":
+        rec = tails(a.out, a.workers)
+        print(json.dumps({k: rec[k] for k in ("well_id", "per_episode_usd_h", "per_episode_cost")}))
         return
     rec = select(a.out, a.workers) if a.stage == "select" else gate(a.out, a.workers)
     print("\n".join(rows(rec)))

@@ -264,3 +264,33 @@ def test_the_test_look_needs_a_passed_gate(gd, tmp_path):
                            env={**os.environ, "PYTHONPATH": str(REPO)})
         assert r.returncode == 2 and "Traceback" not in r.stderr and not (tmp_path / "test").exists()
         assert "expected a passed gate of tag0.3_none_noload_hold3" in r.stderr.strip().splitlines()[-1]
+
+
+def test_stage_tails_replays_gate2s_two_tail_episodes(gd, monkeypatch, tmp_path):
+    """--stage tails (read after the looks): alarm_pump_off, the unguarded inner and the chosen variant on gate 2's
+    episodes of validation-003 and validation-020 (its seeds, by index), on v2's validation split."""
+    sel = {"chosen": "tag0.3_none_noload_hold3",
+           "summary": {"alarm_pump_off": {"cost": 2.0},
+                       "tag0.3_none_noload_hold3": {"cost": 1.0, "vs_alarm_pump_off": {"ci95": [1.0, 2.0]}}}}
+    (tmp_path / "select.json").write_text(json.dumps(sel))
+    seen = {}
+
+    def play_validation(cfg, specs, out, workers):
+        seen.update(validation=cfg["validation"], names=list(specs), out=out)
+        return {n: [{"reward": 0.0, "cost": 0.0, "well_id": w} for w in ("validation-003", "validation-020")]
+                for n in specs}
+
+    monkeypatch.setattr(gd, "design_spec", lambda out, d: {"kind": "ensemble", "members": [], "residual": {"b": 1}})
+    monkeypatch.setattr(gd, "design", lambda config: {"cfg": {"validation": {}}, "tuned": {"alarm_pump_off": {
+        "params": {}}}})
+    monkeypatch.setattr(gd, "play_validation", play_validation)
+    (tmp_path / "tails").mkdir()
+    rec = gd.tails(tmp_path, 2)
+    seeds = [gd.GATE2_SEEDS[3], gd.GATE2_SEEDS[20]]
+    assert seen == {"validation": {"seeds": seeds, "scenario": "validation"},
+                    "names": ["alarm_pump_off", "unguarded", "tag0.3_none_noload_hold3"], "out": tmp_path / "tails"}
+    assert rec["seeds"] == seeds and rec["well_id"] == ["validation-003", "validation-020"]
+    env = gym.make("srenv/SuckerRod-v2", scenario="validation", observation="field")
+    for s, w in zip(seeds, ("validation-003", "validation-020")):
+        env.reset(seed=s)
+        assert env.unwrapped.well.well_id == w
