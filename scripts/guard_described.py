@@ -187,9 +187,34 @@ def tails(out: Path, workers: int) -> dict[str, Any]:
     seeds = [GATE2_SEEDS[k] for k in TAILS]
     gcfg = {**copy.deepcopy(d["cfg"]), "validation": {"seeds": seeds, "scenario": "validation"}}
     eps = play_validation(gcfg, specs(out, d, {REFERENCE: None, name: VARIANTS[name]}), out / "tails", workers)
-    rec = {"stage": "tails", "seeds": seeds, "summary": summarise(eps, (BASE,)), **episode_tables(eps)}
+    rec = {"stage": "tails", "seeds": seeds, "summary": summarise(eps, (BASE,)), **episode_tables(eps),
+           "trace": {str(s): trace(specs(out, d, {name: VARIANTS[name]})[name], d["cfg"], s) for s in seeds}}
     write_json(out / "tails" / "tails.json", rec)
     return rec
+
+
+def trace(spec: dict[str, Any], cfg: dict[str, Any], seed: int) -> dict[str, Any]:
+    """One validation episode of a guarded spec, interval by interval: how often the fallback acted, and the tagging
+    cost and mean SPM while it acted and while the inner did (the rollout's records do not say)."""
+    import gymnasium as gym
+
+    from agents.evaluation.agent import build_policy
+
+    env = gym.make(cfg["env_id"], **{**cfg["env_kwargs"], "scenario": "validation"})
+    pol = build_policy(spec, env)
+    obs, _ = env.reset(seed=seed)
+    pol.reset(env)
+    rows: dict[bool, list[tuple[float, float]]] = {True: [], False: []}
+    done = False
+    while not done:
+        before = pol.fired
+        act, _ = pol.predict(obs)
+        obs, _, term, trunc, info = env.step(act)
+        rows[pol.fired > before].append((float(info.get("cost_tagging", 0.0)), float(info["spm"])))
+        done = term or trunc
+    return {who: {"intervals": len(r), "tagging_cost": round(sum(t for t, _ in r), 4),
+                  "mean_spm": round(sum(v for _, v in r) / len(r), 3) if r else None}
+            for who, r in (("fallback", rows[True]), ("inner", rows[False]))}
 
 
 def rows(rec: dict[str, Any]) -> list[str]:
@@ -216,7 +241,7 @@ def main() -> None:
         return
     if a.stage == "tails":
         rec = tails(a.out, a.workers)
-        print(json.dumps({k: rec[k] for k in ("well_id", "per_episode_usd_h", "per_episode_cost")}))
+        print(json.dumps({k: rec[k] for k in ("well_id", "per_episode_usd_h", "per_episode_cost", "trace")}))
         return
     rec = select(a.out, a.workers) if a.stage == "select" else gate(a.out, a.workers)
     print("\n".join(rows(rec)))

@@ -284,13 +284,29 @@ def test_stage_tails_replays_gate2s_two_tail_episodes(gd, monkeypatch, tmp_path)
     monkeypatch.setattr(gd, "design", lambda config: {"cfg": {"validation": {}}, "tuned": {"alarm_pump_off": {
         "params": {}}}})
     monkeypatch.setattr(gd, "play_validation", play_validation)
+    monkeypatch.setattr(gd, "trace", lambda spec, cfg, seed: {"spec": spec["kind"], "seed": seed})
     (tmp_path / "tails").mkdir()
     rec = gd.tails(tmp_path, 2)
     seeds = [gd.GATE2_SEEDS[3], gd.GATE2_SEEDS[20]]
     assert seen == {"validation": {"seeds": seeds, "scenario": "validation"},
                     "names": ["alarm_pump_off", "unguarded", "tag0.3_none_noload_hold3"], "out": tmp_path / "tails"}
     assert rec["seeds"] == seeds and rec["well_id"] == ["validation-003", "validation-020"]
+    assert rec["trace"] == {str(s): {"spec": "guarded", "seed": s} for s in seeds}  # the chosen variant traced
     env = gym.make("srenv/SuckerRod-v2", scenario="validation", observation="field")
     for s, w in zip(seeds, ("validation-003", "validation-020")):
         env.reset(seed=s)
         assert env.unwrapped.well.well_id == w
+
+
+def test_trace_splits_the_episode_between_the_fallback_and_the_inner(gd):
+    """A guard that always fires: every interval is the fallback's; one that never fires: every one the inner's."""
+    from agents.policies.guarded import guarded_spec
+
+    base = {"threshold": 0.95, "idle_time_s": 1800, "a_spm": 0.1, "a_stroke": 0.0}
+    inner = {"kind": "baseline", "name": "pump_off", "params": base}
+    cfg = {"env_id": "srenv/SuckerRod-v2", "env_kwargs": {"observation": "field", "episode_hours": 1.0}}
+    for lim, who in ((-1.0, "fallback"), (2.0, "inner")):
+        tr = gd.trace(guarded_spec(inner, "pump_off", base, {"above": {"prob_tagging_down": lim}}), cfg, 3)
+        other = "inner" if who == "fallback" else "fallback"
+        assert tr[who]["intervals"] > 1 and tr[other] == {"intervals": 0, "tagging_cost": 0, "mean_spm": None}
+        assert tr[who]["mean_spm"] > 0
