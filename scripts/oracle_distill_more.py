@@ -120,17 +120,22 @@ def play_design_gate(cfg: dict[str, Any], config: Path, seeds: list[int], design
     gcfg = {**copy.deepcopy(cfg), "validation": {"seeds": seeds, "scenario": scenario}}
     eps = play_validation(gcfg, specs, out / "gate", workers)
     summ = summarise(eps, BASES)
-    terms = {k: {t: float(np.mean([e[t] for e in v])) / INTERVALS for t in sorted(v[0])
-                 if t.startswith(("reward_", "cost_"))} for k, v in eps.items()}
-    point = {k: {t: float(np.mean([e[t] for e in v])) for t in sorted(v[0]) if t.startswith("mean_")}
-             for k, v in eps.items()}
     res_out = {"stage": "gate", "config": str(config.relative_to(ROOT)), "seeds": seeds, "scenario": scenario, "specs": specs,
-               "summary": summ, "gate": gate(summ, dname), "terms_usd_h": terms, "operating_point": point,
-               "well_id": [e["well_id"] for e in eps["alarm_pump_off"]],
-               "per_episode_usd_h": {k: [round(e["reward"] / INTERVALS, 3) for e in v] for k, v in eps.items()},
-               "per_episode_cost": {k: [round(e["cost"], 4) for e in v] for k, v in eps.items()}}
+               "summary": summ, "gate": gate(summ, dname), **episode_tables(eps)}
     write_json(out / "gate.json", res_out)
     return res_out
+
+
+def episode_tables(eps: dict[str, list[dict[str, Any]]]) -> dict[str, Any]:
+    """Every policy's mean reward and cost terms (USD/h), mean operating point, the wells played and every
+    episode's USD/h and cost: the per-episode part of a gate's (or a selection's) record."""
+    return {"terms_usd_h": {k: {t: float(np.mean([e[t] for e in v])) / INTERVALS for t in sorted(v[0])
+                                if t.startswith(("reward_", "cost_"))} for k, v in eps.items()},
+            "operating_point": {k: {t: float(np.mean([e[t] for e in v])) for t in sorted(v[0]) if t.startswith("mean_")}
+                                for k, v in eps.items()},
+            "well_id": [e["well_id"] for e in eps.get("alarm_pump_off", next(iter(eps.values())))],
+            "per_episode_usd_h": {k: [round(e["reward"] / INTERVALS, 3) for e in v] for k, v in eps.items()},
+            "per_episode_cost": {k: [round(e["cost"], 4) for e in v] for k, v in eps.items()}}
 
 
 def fit_table(out: Path) -> dict[str, Any]:

@@ -36,6 +36,7 @@ import re
 import shutil
 import sys
 import time
+from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
@@ -98,11 +99,15 @@ def design(cfg: dict[str, Any], run_dir: Path, tuned: dict[str, Any], out_dir: P
     return f"{a}_guarded", _policy_part(spec), rec
 
 
-def test_look(config: str, run_dir: Path, log: Path, workers: int | None = None,
-              out_dir: Path | None = None) -> dict[str, Any]:
+def test_look(config: str, run_dir: Path, log: Path | None, workers: int | None = None,
+              out_dir: Path | None = None, built: Callable[[dict[str, Any]], tuple[str, dict, dict]] | None = None,
+              expected: dict[str, dict[str, Any]] | None = None) -> dict[str, Any]:
+    """The look. A caller with its own design (scripts/guard_described.py: d42's fits under a guard) hands
+    ``built`` (the re-tuned baselines -> (name, spec, report record)) and ``expected`` (the tuned parameters the
+    design was gated with, checked instead of the run's ``log``)."""
     cfg = load_benchmark_config(config)
     out_dir = out_dir or run_dir
-    logged, hist = logged_run(log)
+    logged, hist = (expected, {}) if expected is not None else logged_run(log)
     (a, run), = cfg["agents"]["runs"].items()
     t0 = time.perf_counter()
     with Runner(workers or cfg["workers"]) as runner:
@@ -111,7 +116,7 @@ def test_look(config: str, run_dir: Path, log: Path, workers: int | None = None,
             if n != "oracle" and tuned[n]["params"] != params:
                 raise SystemExit(f"tuned {n} = {tuned[n]['params']}, the run logged {params}: not the run's tuning")
         wall = {"tuning": time.perf_counter() - t0}
-        name, spec, rec = design(cfg, run_dir, tuned, out_dir)
+        name, spec, rec = built(tuned) if built else design(cfg, run_dir, tuned, out_dir)
         bases = [n for n in benchmark_baselines(tuned) if n != "oracle"]
         t1 = time.perf_counter()
         by_entry = run_test_episodes(cfg, runner, tuned, {name: [spec]}, -1, policies=bases)

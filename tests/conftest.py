@@ -13,6 +13,8 @@
 3. The ``wheel`` fixture: srenv's wheel, built once per session (tests/test_wheel.py, test_core_install.py).
 4. :func:`run_on_avx2_numpy`: a snippet in a fresh interpreter on numpy's AVX2 kernels, for the tests that pin
    results to the bit.
+5. The ``described_student`` fixture: a small student fitted on inputs of the described width (the acting
+   described student, tests/agents/test_described_features.py, and under a guard, test_guard_described.py).
 """
 
 from __future__ import annotations
@@ -256,3 +258,17 @@ def with_couplings():
 
     return make
 
+
+
+@pytest.fixture(scope="session")
+def described_student(tmp_path_factory):
+    """A small student fitted on inputs of the described width: field observation + base action + the 13 features."""
+    from agents.policies.described_features import FEATURES
+    from agents.training.pooled_fit import fit_student
+
+    rng = np.random.default_rng(0)
+    x = rng.normal(size=(64, 89 + 2 + len(FEATURES))).astype(np.float32)
+    y = np.tanh(x[:, -2:] + x[:, :2]).astype(np.float32)
+    dest = tmp_path_factory.mktemp("described") / "s_v2_seed0.zip"
+    fit_student(x, y, {"epochs": 2, "weight_decay": 0.0, "net_arch": [8]}, {"activation_fn": "tanh"}, 0, dest)
+    return {"path": str(dest), "obs_norm": str(dest.with_name(dest.stem + "_obs_norm.npz"))}

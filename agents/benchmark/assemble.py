@@ -25,11 +25,15 @@ def model_ref(path: str | Path) -> str:
 
 
 def _ensemble_record(spec: dict[str, Any], runs: dict[str, Any], eps: list[dict[str, Any]]) -> dict[str, Any]:
+    """An ensemble's record; ``described: true`` only for students that read the well file (replay rebuilds it)."""
     of = spec["of"]
-    return {"kind": "agent", "algo": _algo_of(runs[of]), "ensemble_of": of,
-            "selection": f"one policy: the mean action of {of}'s {len(spec['members'])} seeds' models",
-            "residual_on": spec.get("residual"), "models": [model_ref(m["path"]) for m in spec["members"]],
-            "episodes": eps}
+    rec = {"kind": "agent", "algo": _algo_of(runs[of]), "ensemble_of": of,
+           "selection": f"one policy: the mean action of {of}'s {len(spec['members'])} seeds' models",
+           "residual_on": spec.get("residual"), "models": [model_ref(m["path"]) for m in spec["members"]],
+           "episodes": eps}
+    if spec.get("described"):
+        rec["described"] = True
+    return rec
 
 
 def guarded_record(spec: dict[str, Any], runs: dict[str, Any], eps: list[dict[str, Any]]) -> dict[str, Any]:

@@ -152,7 +152,7 @@ def _policies(rep: dict[str, Any], specs: dict[str, list[dict[str, Any]]], owner
             entry["params"] = sps[0].get("params", {})
         else:  # what replay needs to rebuild it (agents/evaluation/replay.py)
             entry.update({k: v for k, v in rep["policies"][n].items()
-                          if k in ("models", "residual_on", "ensemble_of", "algo", "guarded")})
+                          if k in ("models", "residual_on", "ensemble_of", "algo", "guarded", "described")})
         out[n] = entry
     return out
 

@@ -63,9 +63,10 @@ def _algo_of(run: dict[str, Any]) -> str:
 
 
 def _policy_part(spec: dict[str, Any]) -> dict[str, Any]:
-    # a guarded spec's parts too (agents/policies/guarded.py): its inner policy, fallback, guard and scale
+    # a guarded spec's parts too (agents/policies/guarded.py): its inner policy, fallback, guard and scale; and a
+    # described student's flag (agents/policies/described_features.py: the well file's features on its input)
     return {k: spec[k] for k in ("kind", "path", "obs_norm", "residual", "members", "inner", "fallback", "guard",
-                                 "scale") if k in spec}
+                                 "scale", "described") if k in spec}
 
 
 def residual_spec(run: dict[str, Any], tuned: dict[str, Any]) -> dict[str, Any] | None:

@@ -8,7 +8,8 @@ episodes from ``reset(seed=S)`` on ``scenario="test"``, and puts every return be
 - An agent entry that is the mean over its seeds' models is replayed as such: every model plays the episode,
   and the mean of their returns is compared.
 - A ``*_ensemble`` entry is one policy (:mod:`agents.policies.ensemble`); with a ``guarded`` record (fallback,
-  guard, scale) it is that ensemble under the constraint guard (:mod:`agents.policies.guarded`).
+  guard, scale) it is that ensemble under the constraint guard (:mod:`agents.policies.guarded`); with
+  ``described: true`` its students read the well file's features (:mod:`agents.policies.described_features`).
 - Model zips are read as data (:class:`agents.evaluation.agent.AgentPolicy`). A report names each as
   ``models/<file>.zip``; :func:`locate_model` looks for it in the report's own folder (a fresh run's
   ``OUT/models``), then in the repository's ``models/`` (:data:`MODELS_HOME`, where the shipped report's
@@ -130,10 +131,14 @@ def policy_specs(rep: dict[str, Any], name: str, root: Path) -> list[dict[str, A
     if pol.get("kind") != "agent" or not isinstance(models, list) or not models:
         raise ReplayError(f"policies.{name}: expected a baseline, or an agent with a list of models")
     res = _residual(pol.get("residual_on"), name)
-    specs = [{"kind": "agent", **_model(root, m, name), **({"residual": res} if res else {})} for m in models]
+    described = pol.get("described", False)
+    if not isinstance(described, bool):
+        raise ReplayError(f"policies.{name}.described = {str(described)[:80]}: expected true or false")
+    flag = {"described": True} if described else {}  # the well file's features on the students' input
+    specs = [{"kind": "agent", **_model(root, m, name), **({"residual": res} if res else {}), **flag} for m in models]
     if pol.get("guarded") is not None:
-        return [_guarded(pol["guarded"], ensemble_spec(specs), name)]
-    return [ensemble_spec(specs)] if pol.get("ensemble_of") else specs
+        return [_guarded(pol["guarded"], {**ensemble_spec(specs), **flag}, name)]
+    return [{**ensemble_spec(specs), **flag}] if pol.get("ensemble_of") else specs
 
 
 def _guarded(rec: Any, inner: dict[str, Any], name: str) -> dict[str, Any]:

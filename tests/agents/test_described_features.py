@@ -93,19 +93,6 @@ def test_a_bad_well_file_is_refused_in_one_line(files):
         assert field in str(e.value) and "\n" not in str(e.value)
 
 
-@pytest.fixture(scope="module")
-def described_student(tmp_path_factory):
-    """A small student fitted on inputs of the described width: field observation + base action + the 13 features."""
-    from agents.training.pooled_fit import fit_student
-
-    rng = np.random.default_rng(0)
-    x = rng.normal(size=(64, 89 + 2 + len(df.FEATURES))).astype(np.float32)
-    y = np.tanh(x[:, -2:] + x[:, :2]).astype(np.float32)
-    dest = tmp_path_factory.mktemp("described") / "s_v2_seed0.zip"
-    fit_student(x, y, {"epochs": 2, "weight_decay": 0.0, "net_arch": [8]}, {"activation_fn": "tanh"}, 0, dest)
-    return {"path": str(dest), "obs_norm": str(dest.with_name(dest.stem + "_obs_norm.npz"))}
-
-
 def test_the_acting_student_is_the_fitted_model_on_its_described_input(described_student):
     from agents.evaluation.agent import AgentPolicy, build_policy
     from agents.policies.residual import augment, bound_correction, compose
