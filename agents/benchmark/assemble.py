@@ -11,6 +11,7 @@ from typing import Any
 import numpy as np
 
 from ..envs import env_tag
+from ..evaluation.model_pins import PINS, member_pins
 from ..policies.factory import benchmark_baselines
 from .report import _average_episodes, iqm
 from .runs import _algo_of
@@ -25,11 +26,12 @@ def model_ref(path: str | Path) -> str:
 
 
 def _ensemble_record(spec: dict[str, Any], runs: dict[str, Any], eps: list[dict[str, Any]]) -> dict[str, Any]:
-    """An ensemble's record; ``described: true`` only for students that read the well file (replay rebuilds it)."""
-    of = spec["of"]
+    """An ensemble's record; ``described: true`` only for students that read the well file (replay rebuilds it);
+    ``sha256`` pins its members' files (:mod:`agents.evaluation.model_pins`)."""
+    of, refs = spec["of"], [model_ref(m["path"]) for m in spec["members"]]
     rec = {"kind": "agent", "algo": _algo_of(runs[of]), "ensemble_of": of,
            "selection": f"one policy: the mean action of {of}'s {len(spec['members'])} seeds' models",
-           "residual_on": spec.get("residual"), "models": [model_ref(m["path"]) for m in spec["members"]],
+           "residual_on": spec.get("residual"), "models": refs, PINS: member_pins(refs, spec["members"]),
            "episodes": eps}
     if spec.get("described"):
         rec["described"] = True
@@ -95,9 +97,10 @@ def policy_records(cfg: dict[str, Any], tuned: dict[str, Any], agent_specs: dict
         else:
             eps, how = _average_episodes(per_seed), "mean over training seeds' models, per test episode"
         shipped = _ship(specs, pick, a, models_dir, env_tag(cfg["env_id"]))
+        refs = [model_ref(sp["path"]) for sp in specs]
         policies[a] = {"kind": "agent", "algo": _algo_of(runs[a]), "selection": how,
-                       "residual_on": specs[0].get("residual"),
-                       "models": [model_ref(sp["path"]) for sp in specs], "episodes": eps}
+                       "residual_on": specs[0].get("residual"), "models": refs, PINS: member_pins(refs, specs),
+                       "episodes": eps}
         training["runs"][a] = _run_record(runs[a], specs, per_seed, val, pick, shipped)
         if runs[a].get("teacher"):
             oracle = a not in teachers  # a causal-oracle teacher (agents/training/oracle_distill.py): no model

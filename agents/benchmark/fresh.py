@@ -18,6 +18,9 @@ tuned, selected or evaluated on - with no training and no tuning, and writes the
   (``docs/v2/benchmark.json``), ``configs/benchmark/v2.yaml`` the shipped v1 agents. v1 agents on v2 see v1's part
   of v2's field observation (its first 77 entries are v1's: :class:`agents.evaluation.v1_view.V1ObsView`), so they
   run unchanged; the conditions and the classifier's output are then unseen by them.
+- Models: the report's agents are rebuilt by :func:`agents.evaluation.replay.policy_specs`, so a record that pins
+  its files (``sha256``) refuses, before any episode, a member whose file has another digest; the written report
+  pins the files it played (:mod:`agents.evaluation.model_pins`), whether or not ``--report`` pinned them.
 - ``python -m agents replay DIR/benchmark.json`` re-runs the report's episodes on the same family wells.
 """
 
@@ -32,6 +35,7 @@ from typing import Any
 import numpy as np
 
 from ..envs import ENV_ID_V1, env_tag
+from ..evaluation.model_pins import PINS, member_pins, spec_members
 from ..evaluation.replay import ReplayError, load_report, policy_specs
 from ..evaluation.rollout import Runner, _cached_env, run_episode
 from ..evaluation.v1_view import build_policy_any
@@ -150,9 +154,10 @@ def _policies(rep: dict[str, Any], specs: dict[str, list[dict[str, Any]]], owner
         entry: dict[str, Any] = {"kind": kind, "episodes": eps}
         if kind == "baseline":
             entry["params"] = sps[0].get("params", {})
-        else:  # what replay needs to rebuild it (agents/evaluation/replay.py)
+        else:  # what replay needs to rebuild it (agents/evaluation/replay.py), the files it played pinned
             entry.update({k: v for k, v in rep["policies"][n].items()
                           if k in ("models", "residual_on", "ensemble_of", "algo", "guarded", "described")})
+            entry[PINS] = member_pins(entry["models"], [m for sp in sps for m in spec_members(sp)])
         out[n] = entry
     return out
 

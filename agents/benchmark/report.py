@@ -104,8 +104,8 @@ def machine() -> dict[str, Any]:
 
 def build_report(cfg: dict[str, Any], policies: dict[str, dict[str, Any]], splits: dict[str, Any],
                  tuning: dict[str, Any], training: dict[str, Any], wall: dict[str, float]) -> dict[str, Any]:
-    """The benchmark JSON. ``policies.NAME = {kind, params|models, episodes: [{well_id, seed, reward, cost,
-    reward_*, cost_*, ...}]}``; ``tuning`` / ``validation`` / ``test`` = {scenario, well_ids, seeds};
+    """The benchmark JSON. ``policies.NAME = {kind, params|models (+ sha256: each member file's digest,
+    agents.evaluation.model_pins), episodes: [{well_id, seed, reward, cost, reward_*, cost_*, ...}]}``; ``tuning`` / ``validation`` / ``test`` = {scenario, well_ids, seeds};
     ``summary.NAME`` = mean return with 95 % CI, rate, cost, normalised score (0 = installed, 1 = oracle,
     ratio of mean returns); ``paired.AGENT.BASELINE`` = mean paired difference of returns with its 95 % CI
     over the test episodes; ``agents.ALGO`` = per-seed mean returns and the IQM over (seed, episode)."""

@@ -13,7 +13,9 @@ episodes from ``reset(seed=S)`` on ``scenario="test"``, and puts every return be
 - Model zips are read as data (:class:`agents.evaluation.agent.AgentPolicy`). A report names each as
   ``models/<file>.zip``; :func:`locate_model` looks for it in the report's own folder (a fresh run's
   ``OUT/models``), then in the repository's ``models/`` (:data:`MODELS_HOME`, where the shipped report's
-  models live, beside their ``MANIFEST.json``), and nowhere else.
+  models live, beside their ``MANIFEST.json``), and nowhere else. A record with ``sha256`` (every report written
+  since issue 24's pinning) names its files by content too: a member whose found zip or obs_norm has another digest
+  is refused in one line before any episode (:mod:`agents.evaluation.model_pins`); older records are trusted by name.
 - The oracle re-plans each episode, about 20 episodes of simulation each; it runs only when named.
 
 It returns True when every return matches to ``tol`` (relative, default 1e-9). The CLI then exits 0, and 1 on a
@@ -36,6 +38,7 @@ from ..policies.ensemble import ensemble_spec
 from ..policies.guarded import guarded_spec
 from ..policies.residual import RESIDUAL_BASES, check_cap, check_scales
 from .manifest import MODELS_HOME
+from .model_pins import PINS, check_pins, check_record, obs_norm_path
 from .rollout import run_episode
 from .v1_view import build_policy_any
 
@@ -85,10 +88,14 @@ def locate_model(root: Path, rel: Any, name: str) -> Path:
     raise ReplayError(f"policies.{name}.models: {rel!r}: no such model file in {root} or {MODELS_HOME}")
 
 
-def _model(root: Path, rel: Any, name: str) -> dict[str, Any]:
-    """``{"path", "obs_norm"}`` of one model named in the report."""
+def _model(root: Path, rel: Any, name: str, pins: dict[str, str | None] | None) -> dict[str, Any]:
+    """``{"path", "obs_norm"}`` of one model named in the report; refused when the record pins other files."""
     path = locate_model(root, rel, name)
-    norm = path.with_name(f"{path.stem}_obs_norm.npz")
+    try:
+        check_pins(pins, rel, path, f"policies.{name}.{PINS}", root)
+    except ValueError as exc:
+        raise ReplayError(str(exc)) from None
+    norm = obs_norm_path(path)
     return {"path": str(path), "obs_norm": str(norm) if norm.is_file() else None}
 
 
@@ -135,7 +142,12 @@ def policy_specs(rep: dict[str, Any], name: str, root: Path) -> list[dict[str, A
     if not isinstance(described, bool):
         raise ReplayError(f"policies.{name}.described = {str(described)[:80]}: expected true or false")
     flag = {"described": True} if described else {}  # the well file's features on the students' input
-    specs = [{"kind": "agent", **_model(root, m, name), **({"residual": res} if res else {}), **flag} for m in models]
+    try:  # the files the report played, by content (absent in older reports: trusted by name)
+        pins = check_record(pol.get(PINS), f"policies.{name}.{PINS}")
+    except ValueError as exc:
+        raise ReplayError(str(exc)) from None
+    specs = [{"kind": "agent", **_model(root, m, name, pins), **({"residual": res} if res else {}), **flag}
+             for m in models]
     if pol.get("guarded") is not None:
         return [_guarded(pol["guarded"], {**ensemble_spec(specs), **flag}, name)]
     return [{**ensemble_spec(specs), **flag}] if pol.get("ensemble_of") else specs

@@ -275,6 +275,12 @@ def test_quick_benchmark_writes_the_schema_on_disjoint_splits_same_episodes(tmp_
             zipfile.ZipFile(out / "models" / "ppo_residual_shaped_v1_seed0.zip") as b:
         assert [n for n in a.namelist() if a.read(n) != b.read(n)] == ["policy.pth"]
     assert {P[n]["kind"] for n in ("ppo", "sac", "ppo_residual", "ppo_residual_shaped", "ppo_ensemble")} == {"agent"}
+    from agents.evaluation.manifest import sha256
+    from agents.evaluation.model_pins import obs_norm_path
+
+    for n in ("ppo", "sac", "ppo_residual", "ppo_residual_shaped", "ppo_ensemble", "distilled"):  # pinned by content
+        files = {*P[n]["models"], *(obs_norm_path(m).as_posix() for m in P[n]["models"])}
+        assert P[n]["sha256"] == {f: sha256(out / f) if (out / f).is_file() else None for f in files}, n
     # the seed ensemble is one more policy, made of the run's own models
     assert P["ppo_ensemble"]["ensemble_of"] == "ppo" and P["ppo_ensemble"]["models"] == P["ppo"]["models"]
     assert len(P["ppo"]["models"]) == 2 and "ppo_ensemble" in d["paired"]

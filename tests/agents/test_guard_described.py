@@ -241,10 +241,11 @@ def test_a_report_with_the_described_guarded_design_rebuilds_its_spec(gd, descri
         gd.look_design(out, "tag0.3_none_noload_hold3", tuned, to)
 
 
-def test_an_ensemble_without_the_flag_records_none():
+def test_an_ensemble_without_the_flag_records_none(tmp_path):
     from agents.benchmark.assemble import _ensemble_record
 
-    ens = {"kind": "ensemble", "members": [{"path": "a/x.zip", "obs_norm": None}], "of": "r"}
+    (tmp_path / "x.zip").write_bytes(b"x")  # a record pins its members' files (tests/agents/test_model_pins.py)
+    ens = {"kind": "ensemble", "members": [{"path": str(tmp_path / "x.zip"), "obs_norm": None}], "of": "r"}
     runs = {"r": {"config": "configs/train/ppo_residual_v2.yaml", "seeds": [0]}}
     assert "described" not in _ensemble_record(ens, runs, [])  # earlier reports' records unchanged
     assert _ensemble_record({**ens, "described": True}, runs, [])["described"] is True
