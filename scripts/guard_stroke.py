@@ -13,6 +13,8 @@ scripts/guard_described.py's, handed this design's :data:`PLAN`:
     PYTHONPATH=. nice -n 5 python scripts/guard_stroke.py --stage select --out runs/b43 --workers 2
     PYTHONPATH=. nice -n 5 python scripts/guard_stroke.py --stage gate --out runs/b43 --workers 2
 
+``--stage read`` (after the selection, judging nothing): per variant, the episodes its guard changed and how many of
+them had a tagging event -> OUT/read.json.
 ``--stage mechanism`` (before the family was registered; judging nothing): on a training well with a tagging event
 (:data:`MECHANISM_SEED`), the tuned alarm_pump_off with each of :data:`MECHANISM` parameter changes from the start:
 the tagging intervals' cost, damage, SPM, stroke, duty and the classifier's tagging probability -> OUT/mechanism.json.
@@ -23,6 +25,7 @@ from __future__ import annotations
 import argparse
 import hashlib
 import itertools
+import json
 import sys
 from pathlib import Path
 from typing import Any
@@ -41,7 +44,7 @@ CONFIG = ROOT / "configs/benchmark/v2_oracle_distilled_stroke_guarded.yaml"
 SELECT_SEEDS = list(range(59450, 59500))  # THE SELECTION's: training wells 50..99 once each (seed mod 200)
 GATE_SEEDS = list(range(21750, 21800))  # THE GATE's: v2's validation wells 0..49 once each (seed mod 50)
 FRESH_SEED = 20261206  # THE FRESH LOOK's (registered; never played before)
-STAGES = ("mechanism", "select", "gate", "test")
+STAGES = ("mechanism", "select", "gate", "test", "read")
 LOOK_NAME = "oracle_distilled_guarded"  # the design's name in the looks' reports (the config's evaluate_only.agents)
 MODELS_SHA256 = {  # the shipped students, as registered in the config's history
     "oracle_distilled_v2_seed0.zip": "45bded836663b230551420939e09b19d798ce16d789ae54d09ccd9777eed597c",
@@ -157,12 +160,73 @@ def mechanism(out: Path) -> dict[str, Any]:
 PLAN = Plan(CONFIG, SELECT_SEEDS, GATE_SEEDS, VARIANTS, specs, look_design, precheck=False)
 
 
+def read(eps: dict[str, list[dict[str, Any]]]) -> dict[str, Any]:
+    """Read after the selection, judging nothing: per variant, on how many episodes it acted otherwise than the
+    unguarded inner (the guard fired), how many of those had a tagging event (the inner's tagging cost > 0), and the
+    mean d vs the inner (USD/h over all episodes) carried by the tagging episodes and by the others."""
+    ref = eps[REFERENCE]
+    tagged = {i for i, e in enumerate(ref) if e["cost_tagging"] > 0}
+    out: dict[str, Any] = {"tagging_episodes": [ref[i]["well_id"] for i in sorted(tagged)]}
+    for n, v in eps.items():
+        if n in (BASE, REFERENCE):
+            continue
+        d = [(e["reward"] - r["reward"]) / INTERVALS for e, r in zip(v, ref)]
+        fired = {i for i, x in enumerate(d) if x != 0.0}
+        out[n] = {"fired": len(fired), "fired_tagging": len(fired & tagged),
+                  "d_tagging": sum(d[i] for i in tagged) / len(d),
+                  "d_other": sum(d[i] for i in fired - tagged) / len(d),
+                  "tagging_cost": [round(v[i]["cost_tagging"], 2) for i in sorted(tagged)]}
+    return out
+
+
+TRACED = "tag0.8_none_idle_hold3"  # --stage read traces this variant (tagging limits only, the idle fallback)
+
+
+def why(seed: int, name: str = TRACED) -> dict[str, Any]:
+    """One selection episode of a variant, interval by interval: how often the tagging limits fired, how often the
+    fallback's shut-in alarm held the well, and the first card they fired on (its interval and true condition; the
+    cards after it are an idle well's stale ones)."""
+    import gymnasium as gym
+    from oracle_distill_pooled import design
+
+    from agents.evaluation.agent import build_policy
+
+    env = gym.make("srenv/SuckerRod-v2", observation="field", scenario="train")
+    pol = build_policy(specs(None, design(CONFIG), {name: VARIANTS[name]})[name], env)
+    obs, _ = env.reset(seed=seed)
+    pol.reset(env)
+    limits, shut, first, k, done, info = 0, 0, None, 0, False, {}
+    while not done:
+        if pol.fires(obs):
+            limits += 1
+            first = first or {"interval": k, "condition": str(info.get("condition", "(the well as found)"))}
+        before = pol.fired
+        act, _ = pol.predict(obs)
+        st = pol.fallback.state
+        shut += int(pol.fired > before and st is not None and float(st.reshape(-1, 4)[0, 2]) > 0.5)
+        obs, _, term, trunc, info = env.step(act)
+        done, k = term or trunc, k + 1
+    return {"well_id": info["well_id"], "limits_fired": limits, "shut_in": shut, "first_fired_on": first}
+
+
 def main() -> None:
     a = arguments(argparse.ArgumentParser(description=__doc__.splitlines()[0]), STAGES)
     a.out.mkdir(parents=True, exist_ok=True)
     if a.stage == "mechanism":
         for k, r in mechanism(a.out)["rows"].items():
             print(k, {n: round(v, 3) if isinstance(v, float) else v for n, v in r.items()})
+        return
+    if a.stage == "read":
+        path = a.out / "select" / "episodes.json"
+        if not path.is_file() or path.is_symlink():
+            print(f"guard_stroke: {path}: no such file: expected --stage select's episodes", file=sys.stderr)
+            sys.exit(2)
+        eps = json.loads(path.read_text())
+        rec = read(eps)
+        ref, v = eps[REFERENCE], eps[TRACED]
+        rec["traced"] = {TRACED: [why(r["seed"]) for r, e in zip(ref, v) if e["reward"] != r["reward"]]}
+        write_json(a.out / "read.json", rec)
+        print(json.dumps(rec, indent=1))
         return
     run_stage(a.stage, a.out, a.workers, PLAN)
 

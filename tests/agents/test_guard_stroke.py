@@ -263,3 +263,25 @@ def test_bad_flags_refused_in_one_line(tmp_path):
                            env={**os.environ, "PYTHONPATH": str(REPO)})
         assert r.returncode == 2 and "Traceback" not in r.stderr
         assert match in r.stderr.strip().splitlines()[-1] and not (tmp_path / "o").exists()
+
+
+def test_read_counts_the_episodes_a_guard_changed_and_their_tagging(gs):
+    """--stage read on a fixed table: the episodes a variant changed, those with a tagging event, and the mean d vs
+    the inner each part carries (USD/h over all episodes)."""
+    def ep(well, reward, tag):
+        return {"well_id": well, "reward": 144.0 * reward, "cost_tagging": tag}
+
+    eps = {"alarm_pump_off": [ep("w0", 0, 0), ep("w1", 0, 0), ep("w2", 0, 0), ep("w3", 0, 0)],
+           "unguarded": [ep("w0", 10, 5.0), ep("w1", 10, 0), ep("w2", 10, 0), ep("w3", 10, 0)],
+           "v": [ep("w0", 8, 0.0), ep("w1", 6, 0), ep("w2", 10, 0), ep("w3", 2, 0)]}
+    r = gs.read(eps)
+    assert r["tagging_episodes"] == ["w0"] and set(r) == {"tagging_episodes", "v"}
+    assert r["v"] == {"fired": 3, "fired_tagging": 1, "d_tagging": -0.5, "d_other": -3.0, "tagging_cost": [0.0]}
+
+
+def test_why_traces_the_tagging_episode_to_its_first_tagging_card(gs):
+    """The traced variant on the selection's one tagging episode (train-068): its tagging limits first fire on a
+    tagging card, and no followed shut-in acts."""
+    w = gs.why(59468)
+    assert w["well_id"] == "train-068" and w["shut_in"] == 0 and w["limits_fired"] > 100
+    assert w["first_fired_on"]["condition"] == "tagging_down"
