@@ -18,6 +18,8 @@ from pathlib import Path
 
 import gymnasium as gym
 import pytest
+from test_guard_described import FAM as A43_FAM  # a43's design: THE RULE's cases, the history reader
+from test_guard_described import REPO, RULE_CASES, _hist, _summ
 
 import srenv  # noqa: F401  (registers the envs)
 from agents.benchmark.config import load_benchmark_config
@@ -25,26 +27,12 @@ from agents.inputs import ConfigError, baseline_params
 from agents.policies.field import IDLE, obs_names_of
 from agents.policies.guarded import check_guard
 
-REPO = Path(__file__).resolve().parents[2]
 SCRIPT = REPO / "scripts" / "guard_stroke.py"
 CONFIG = REPO / "configs/benchmark/v2_oracle_distilled_stroke_guarded.yaml"
 A43 = REPO / "configs/benchmark/v2_oracle_distilled_described_guarded.yaml"
-
-
-@pytest.fixture(scope="module")
-def gs():
-    sys.path.insert(0, str(SCRIPT.parent))  # the script and the pilots it imports, as when it runs
-    return importlib.import_module(SCRIPT.stem)
-
-
-@pytest.fixture(scope="module")
-def gd(gs):
-    return importlib.import_module("guard_described")  # the stages and THE RULE this design reuses
-
-
-def _hist(monkeypatch) -> str:
-    monkeypatch.chdir(REPO)
-    return " ".join(load_benchmark_config(CONFIG)["history"])
+sys.path.insert(0, str(SCRIPT.parent))  # the script and the pilots it imports, as when it runs
+gs = importlib.import_module(SCRIPT.stem)
+gd = importlib.import_module("guard_described")  # whose stages and RULE this design hands its plan
 
 
 def test_config_is_a43s_but_its_history(monkeypatch):
@@ -54,8 +42,8 @@ def test_config_is_a43s_but_its_history(monkeypatch):
                                                                      if k not in ("history", "source")}
 
 
-def test_the_history_registers_inner_mechanism_family_data_rule_gate_and_looks(gs, monkeypatch):
-    hist = _hist(monkeypatch)
+def test_the_history_registers_inner_mechanism_family_data_rule_gate_and_looks(monkeypatch):
+    hist = _hist(monkeypatch, CONFIG)
     assert "BEFORE any selection or gate episode" in hist
     for name, sha in gs.MODELS_SHA256.items():  # the registered files are the shipped ones
         assert sha in hist and hashlib.sha256((REPO / "models" / name).read_bytes()).hexdigest() == sha
@@ -71,7 +59,7 @@ def test_the_history_registers_inner_mechanism_family_data_rule_gate_and_looks(g
                            "short": {"a_stroke": -1.0}}
 
 
-def test_seeds_are_unused_and_play_the_wells_they_say(gs):
+def test_seeds_are_unused_and_play_the_wells_they_say():
     sel, gate = gs.SELECT_SEEDS, gs.GATE_SEEDS
     assert sel == list(range(59450, 59500)) and gate == list(range(21750, 21800)) and gs.FRESH_SEED == 20261206
     used = [(0, 10), (20000, 21750), (50000, 59450), (100000, 100100)]  # every earlier design's and split's seeds
@@ -90,7 +78,7 @@ def test_seeds_are_unused_and_play_the_wells_they_say(gs):
         assert env.unwrapped.well.well_id == well
 
 
-def test_the_family_is_declared_once_and_bounded(gs, gd):
+def test_the_family_is_declared_once_and_bounded():
     v = gs.VARIANTS
     assert next(iter(v)) == "unguarded" and v["unguarded"] is None and len(v) == 25
     names = obs_names_of(gym.make("srenv/SuckerRod-v2", scenario="train", observation="field"))
@@ -108,33 +96,16 @@ def test_the_family_is_declared_once_and_bounded(gs, gd):
     assert baseline_params("alarm_pump_off", {"a_spm": IDLE}, "x") == {"a_spm": -1.0}
 
 
-def _summ(**rows: tuple[float, float]) -> dict:
-    """{name: (lower bound of the CI vs alarm_pump_off, cost)}, alarm_pump_off's cost 2.0."""
-    return {"alarm_pump_off": {"cost": 2.0}, **{k: {"cost": c, "vs_alarm_pump_off": {"ci95": [lo, lo + 5.0]}}
-                                                   for k, (lo, c) in rows.items()}}
+# a43's cases of THE RULE, on this design's variant form ({"guard", "fallback"}): the same choices
+FAM = {n: None if g is None else {"guard": g, "fallback": {"a_spm": -1.0}} for n, g in A43_FAM.items()}
 
 
-def _v(above: int, below: int) -> dict:
-    return {"guard": {"above": {f"x{i}": 1 for i in range(above)}, "below": {f"y{i}": 1 for i in range(below)}},
-            "fallback": {"a_spm": -1.0}}
-
-
-FAM = {"unguarded": None, "a": _v(2, 1), "b": _v(2, 0), "c": _v(2, 1), "d": _v(2, 0)}
-
-
-@pytest.mark.parametrize("rows, chosen", [
-    ({"unguarded": (9.0, 1.0), "a": (1.0, 2.0), "b": (2.0, 2.1), "c": (1.5, 1.9)}, "c"),  # best LB at cost <= base's
-    ({"a": (1.0, 2.1), "b": (3.0, 2.5)}, None),  # none qualifies on cost -> a negative result
-    ({"a": (0.0, 1.0), "c": (-1.0, 1.0)}, None),  # the best lower bound is not above zero -> no gate
-    ({"a": (1.0, 1.0), "b": (1.0, 1.5), "c": (1.0, 1.0)}, "b"),  # a tie: fewer guard conditions
-    ({"d": (1.0, 1.0), "b": (1.0, 1.0)}, "b"),  # a tie with as many conditions: the declared order
-    ({"unguarded": (5.0, 1.0)}, None),  # the reference is never a candidate
-])
-def test_the_selection_rule(gd, rows, chosen):
+@pytest.mark.parametrize("rows, chosen", RULE_CASES)
+def test_the_selection_rule(rows, chosen):
     assert gd.choose(_summ(**rows), FAM) == chosen
 
 
-def test_the_inner_is_the_shipped_record(gs, monkeypatch):
+def test_the_inner_is_the_shipped_record(monkeypatch):
     ens = gs.inner()
     assert ens["kind"] == "ensemble" and "described" not in ens and "cap" not in ens["residual"]
     assert ens["residual"]["base"] == "pump_off" and ens["residual"]["scale"] == 0.5
@@ -144,7 +115,7 @@ def test_the_inner_is_the_shipped_record(gs, monkeypatch):
         gs.inner()
 
 
-def test_the_mechanism_only_idling_stops_the_tagging_cost(gs, tmp_path):
+def test_the_mechanism_only_idling_stops_the_tagging_cost(tmp_path):
     """On the registered training well with a tagging event, a shorter stroke and a lower SPM leave the tagging cost
     as it is (cost_tagging = severity x the fraction pumped); idling stops it."""
     rows = gs.mechanism(tmp_path)["rows"]
@@ -159,7 +130,7 @@ def test_the_mechanism_only_idling_stops_the_tagging_cost(gs, tmp_path):
     assert json.loads((tmp_path / "mechanism.json").read_text())["well_id"] == "train-004"
 
 
-def test_stages_play_their_seeds_on_their_split(gs, gd, monkeypatch, tmp_path):
+def test_stages_play_their_seeds_on_their_split(monkeypatch, tmp_path):
     """--stage select plays alarm_pump_off and every variant on SELECT_SEEDS (training wells) and applies the rule;
     --stage gate hands play_design_gate the chosen variant's spec (its fallback changed), GATE_SEEDS, v2's validation
     split, OUT/gate."""
@@ -196,7 +167,7 @@ def test_stages_play_their_seeds_on_their_split(gs, gd, monkeypatch, tmp_path):
     assert spec["fallback"] == {"name": "alarm_pump_off", "params": {**fb, "a_spm": -1.0}}
 
 
-def test_a_report_of_the_look_rebuilds_its_spec_with_the_changed_fallback(gs):
+def test_a_report_of_the_look_rebuilds_its_spec_with_the_changed_fallback():
     """The look's record (guarded_record of the chosen variant on the shipped students) keeps the fallback's changed
     parameters; replay's policy_specs and the fresh look's record copy rebuild the very spec the look played."""
     from agents.benchmark.fresh import _policies
@@ -213,7 +184,7 @@ def test_a_report_of_the_look_rebuilds_its_spec_with_the_changed_fallback(gs):
     assert policy_specs({"policies": fresh}, name, REPO / "docs/v2") == [rebuilt]
 
 
-def test_an_idle_fallback_idles_the_well_while_the_guard_holds(gs):
+def test_an_idle_fallback_idles_the_well_while_the_guard_holds():
     from agents.evaluation.agent import build_policy
 
     env = gym.make("srenv/SuckerRod-v2", scenario="train", observation="field", episode_hours=1.0)
@@ -256,16 +227,7 @@ def test_the_test_look_needs_a_passed_gate(tmp_path):
     assert f"expected a passed gate of {n}" in r.stderr.strip().splitlines()[-1]
 
 
-def test_bad_flags_refused_in_one_line(tmp_path):
-    for args, match in ((["--stage", "select", "--workers", "3"], "--workers 3"), (["--stage", "look"], "invalid choice")):
-        r = subprocess.run([sys.executable, str(SCRIPT), *args, "--out", str(tmp_path / "o")], check=False,
-                           capture_output=True, text=True, cwd=REPO, timeout=120,
-                           env={**os.environ, "PYTHONPATH": str(REPO)})
-        assert r.returncode == 2 and "Traceback" not in r.stderr
-        assert match in r.stderr.strip().splitlines()[-1] and not (tmp_path / "o").exists()
-
-
-def test_read_counts_the_episodes_a_guard_changed_and_their_tagging(gs):
+def test_read_counts_the_episodes_a_guard_changed_and_their_tagging():
     """--stage read on a fixed table: the episodes a variant changed, those with a tagging event, and the mean d vs
     the inner each part carries (USD/h over all episodes)."""
     def ep(well, reward, tag):
@@ -279,7 +241,7 @@ def test_read_counts_the_episodes_a_guard_changed_and_their_tagging(gs):
     assert r["v"] == {"fired": 3, "fired_tagging": 1, "d_tagging": -0.5, "d_other": -3.0, "tagging_cost": [0.0]}
 
 
-def test_why_traces_the_tagging_episode_to_its_first_tagging_card(gs):
+def test_why_traces_the_tagging_episode_to_its_first_tagging_card():
     """The traced variant on the selection's one tagging episode (train-068): its tagging limits first fire on a
     tagging card, and no followed shut-in acts."""
     w = gs.why(59468)
