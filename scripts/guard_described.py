@@ -34,6 +34,8 @@ import itertools
 import json
 import shutil
 import sys
+from collections.abc import Callable
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
@@ -81,6 +83,26 @@ def family() -> dict[str, dict[str, Any] | None]:
 VARIANTS = family()
 
 
+@dataclass(frozen=True)
+class Plan:
+    """One guard design's registered pieces (its config's history): the stages below play any of them.
+    ``variants`` {name: guard | {"guard", "fallback"} | None (the reference)}; ``specs`` (OUT, design(config),
+    variants) -> {name: policy spec} with alarm_pump_off first; ``look`` (OUT, name, re-tuned baselines, TO) ->
+    (report name, spec, record) for the test look; ``precheck``: the stages need d42's OUT/precheck.json."""
+    config: Path
+    select_seeds: list[int]
+    gate_seeds: list[int]
+    variants: dict[str, Any]
+    specs: Callable[..., dict[str, dict[str, Any]]]
+    look: Callable[..., tuple[str, dict, dict]]
+    precheck: bool = True
+
+
+def guard_of(variant: Any) -> dict[str, Any] | None:
+    """A variant's guard (a variant is its guard, or {"guard", "fallback"} with the fallback's parameter changes)."""
+    return variant.get("guard") if isinstance(variant, dict) and "fallback" in variant else variant
+
+
 def conditions(guard: dict[str, Any] | None) -> int:
     """The number of limits a guard watches (above + below): the selection's tie-break."""
     return 0 if guard is None else len(guard.get("above") or {}) + len(guard.get("below") or {})
@@ -93,7 +115,8 @@ def choose(summ: dict[str, Any], variants: dict[str, Any] = VARIANTS) -> str | N
     order = [n for n in variants if n != REFERENCE and n in summ and summ[n]["cost"] <= summ[BASE]["cost"]]
     if not order:
         return None
-    best = min(order, key=lambda n: (-summ[n][f"vs_{BASE}"]["ci95"][0], conditions(variants[n]), order.index(n)))
+    best = min(order, key=lambda n: (-summ[n][f"vs_{BASE}"]["ci95"][0], conditions(guard_of(variants[n])),
+                                     order.index(n)))
     return best if summ[best][f"vs_{BASE}"]["ci95"][0] > 0 else None
 
 
@@ -106,45 +129,49 @@ def specs(out: Path, d: dict[str, Any], variants: dict[str, Any] = VARIANTS) -> 
             **{n: inner if g is None else guarded_spec(inner, BASE, fb, g) for n, g in variants.items()}}
 
 
-def select(out: Path, workers: int) -> dict[str, Any]:
-    """THE SELECTION on the training wells (SELECT_SEEDS) -> OUT/select.json."""
-    require_precheck(out)
-    d = design(CONFIG)
-    sp = specs(out, d)
-    gcfg = {**copy.deepcopy(d["cfg"]), "validation": {"seeds": SELECT_SEEDS, "scenario": "train"}}
+def select(out: Path, workers: int, plan: Plan | None = None) -> dict[str, Any]:
+    """THE SELECTION on the training wells (the plan's select_seeds) -> OUT/select.json."""
+    p = plan or A43
+    if p.precheck:
+        require_precheck(out)
+    d = design(p.config)
+    sp = p.specs(out, d, p.variants)
+    gcfg = {**copy.deepcopy(d["cfg"]), "validation": {"seeds": p.select_seeds, "scenario": "train"}}
     eps = play_validation(gcfg, sp, out / "select", workers)
     summ = summarise(eps, (BASE,))
-    rec = {"stage": "select", "config": str(CONFIG.relative_to(ROOT)), "seeds": SELECT_SEEDS, "scenario": "train",
-           "specs": sp, "summary": summ, "conditions": {n: conditions(g) for n, g in VARIANTS.items()},
-           "chosen": choose(summ), **episode_tables(eps)}
+    rec = {"stage": "select", "config": str(p.config.relative_to(ROOT)), "seeds": p.select_seeds, "scenario": "train",
+           "specs": sp, "summary": summ, "conditions": {n: conditions(guard_of(v)) for n, v in p.variants.items()},
+           "chosen": choose(summ, p.variants), **episode_tables(eps)}
     write_json(out / "select.json", rec)
     return rec
 
 
-def chosen(out: Path) -> str:
+def chosen(out: Path, plan: Plan | None = None) -> str:
     """The variant OUT/select.json chose (the rule re-applied to its summary); exit 2 in one line without one."""
+    p = plan or A43
     path = out / "select.json"
     rec = json.loads(path.read_text()) if path.is_file() and not path.is_symlink() else {}
     name = rec.get("chosen")
-    if name is None or name not in VARIANTS or choose(rec.get("summary") or {}) != name:
+    if name is None or name not in p.variants or choose(rec.get("summary") or {}, p.variants) != name:
         print(f"{Path(sys.argv[0]).stem}: {path}: chosen = {name!r}: expected a variant chosen by --stage select "
               "(none chosen: a negative result, no gate)", file=sys.stderr)
         sys.exit(2)
     return name
 
 
-def gate(out: Path, workers: int) -> dict[str, Any]:
-    """THE GATE: the chosen variant once on v2's validation split (GATE_SEEDS) -> OUT/gate/gate.json."""
-    name = chosen(out)
-    d = design(CONFIG)
+def gate(out: Path, workers: int, plan: Plan | None = None) -> dict[str, Any]:
+    """THE GATE: the chosen variant once on v2's validation split (the plan's gate_seeds) -> OUT/gate/gate.json."""
+    p = plan or A43
+    name = chosen(out, p)
+    d = design(p.config)
     (out / "gate").mkdir(exist_ok=True)
-    return play_design_gate(d["cfg"], CONFIG, GATE_SEEDS, {name: specs(out, d, {name: VARIANTS[name]})[name]},
+    return play_design_gate(d["cfg"], p.config, p.gate_seeds, {name: p.specs(out, d, {name: p.variants[name]})[name]},
                             d["tuned"], d["res"], out / "gate", workers, scenario="validation", shipped=False)
 
 
-def passed_gate(out: Path) -> str:
+def passed_gate(out: Path, plan: Plan | None = None) -> str:
     """The chosen variant, if OUT/gate/gate.json records its passed gate; exit 2 in one line otherwise."""
-    name, path = chosen(out), out / "gate" / "gate.json"
+    name, path = chosen(out, plan), out / "gate" / "gate.json"
     rec = json.loads(path.read_text()) if path.is_file() and not path.is_symlink() else {}
     if rec.get("gate") is not True or name not in rec.get("specs", {}):
         print(f"{Path(sys.argv[0]).stem}: {path}: gate = {rec.get('gate')!r}: expected a passed gate of {name} "
@@ -167,15 +194,19 @@ def look_design(out: Path, name: str, tuned: dict[str, Any], to: Path) -> tuple[
     return LOOK_NAME, spec, guarded_record({**spec, "of": NAME}, d["cfg"]["agents"]["runs"], [])
 
 
-def play_test_look(out: Path, workers: int) -> dict[str, Any]:
+A43 = Plan(CONFIG, SELECT_SEEDS, GATE_SEEDS, VARIANTS, specs, look_design)
+
+
+def play_test_look(out: Path, workers: int, plan: Plan | None = None) -> dict[str, Any]:
     """THE TEST LOOK (only after a passed gate) -> OUT/test/benchmark.json (and .md)."""
     from v2_test_look import test_look
 
-    name = passed_gate(out)
-    d = design(CONFIG)
-    return test_look(str(CONFIG.relative_to(ROOT)) if Path.cwd().resolve() == ROOT else str(CONFIG), out, None, workers,
-                     out / "test",
-                     built=lambda tuned: look_design(out, name, tuned, out / "test"),
+    p = plan or A43
+    name = passed_gate(out, p)
+    d = design(p.config)
+    return test_look(str(p.config.relative_to(ROOT)) if Path.cwd().resolve() == ROOT else str(p.config), out, None,
+                     workers, out / "test",
+                     built=lambda tuned: p.look(out, name, tuned, out / "test"),
                      expected={k: v["params"] for k, v in d["tuned"].items()})
 
 
@@ -229,26 +260,31 @@ def rows(rec: dict[str, Any]) -> list[str]:
     return out
 
 
-def main() -> None:
-    a = arguments(argparse.ArgumentParser(description=__doc__.splitlines()[0]), STAGES)
-    a.out.mkdir(parents=True, exist_ok=True)
-    if a.stage == "test":
+def run_stage(stage: str, out: Path, workers: int, plan: Plan | None = None) -> None:
+    """--stage select | gate | test of a plan, its table printed."""
+    if stage == "test":
         from agents.benchmark.report import markdown_tables, verdict
 
-        rep = play_test_look(a.out, a.workers)
+        rep = play_test_look(out, workers, plan)
         print(markdown_tables(rep))
         print(verdict(rep))
         return
+    rec = select(out, workers, plan) if stage == "select" else gate(out, workers, plan)
+    print("\n".join(rows(rec)))
+    if stage == "select":
+        print("CHOSEN:", rec["chosen"] or "none (a negative result, no gate)")
+    else:
+        print("GATE:", "passed" if rec["gate"] else "failed")
+
+
+def main() -> None:
+    a = arguments(argparse.ArgumentParser(description=__doc__.splitlines()[0]), STAGES)
+    a.out.mkdir(parents=True, exist_ok=True)
     if a.stage == "tails":
         rec = tails(a.out, a.workers)
         print(json.dumps({k: rec[k] for k in ("well_id", "per_episode_usd_h", "per_episode_cost", "trace")}))
         return
-    rec = select(a.out, a.workers) if a.stage == "select" else gate(a.out, a.workers)
-    print("\n".join(rows(rec)))
-    if a.stage == "select":
-        print("CHOSEN:", rec["chosen"] or "none (a negative result, no gate)")
-    else:
-        print("GATE:", "passed" if rec["gate"] else "failed")
+    run_stage(a.stage, a.out, a.workers)
 
 
 if __name__ == "__main__":

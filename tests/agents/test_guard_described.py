@@ -38,9 +38,10 @@ def gd():
     return importlib.import_module(SCRIPT.stem)
 
 
-def _hist(monkeypatch) -> str:
+def _hist(monkeypatch, config: Path = CONFIG) -> str:
+    """A config's history lines, joined (read from the repository's root, as the stages read it)."""
     monkeypatch.chdir(REPO)
-    return " ".join(load_benchmark_config(CONFIG)["history"])
+    return " ".join(load_benchmark_config(config)["history"])
 
 
 def test_config_is_d42s_but_its_history(monkeypatch):
@@ -72,8 +73,10 @@ def test_seeds_are_unused_and_play_the_wells_they_say(gd):
     used = [(0, 10), (20000, 21700), (50000, 59200), (100000, 100100)]  # every earlier design's and split's seeds
     assert not any(lo <= s < hi for s in sel + gate for lo, hi in used)
     mine = (CONFIG, SCRIPT, Path(__file__).resolve())
+    b43 = (REPO / "configs/benchmark/v2_oracle_distilled_stroke_guarded.yaml", SCRIPT.with_name("guard_stroke.py"),
+           Path(__file__).with_name("test_guard_stroke.py"))  # b43's design: its own blocks, checked there
     others = " ".join(f.read_text() for d in ("configs", "scripts", "tests") for f in (REPO / d).rglob("*.*")
-                      if f.suffix in (".yaml", ".py") and f.resolve() not in mine)
+                      if f.suffix in (".yaml", ".py") and f.resolve() not in mine + b43)
     assert not re.search(r"\b(594\d\d|217\d\d)\b", others.replace("range(21650, 21700)", ""))
     assert not re.search(r"\b(594\d\d|217\d\d)\b", (REPO / "docs/agents.md").read_text().split("(v2, helper a43")[0])
     for scenario, seed, well in (("train", sel[0], "train-000"), ("train", sel[-1], "train-049"),
@@ -105,14 +108,17 @@ FAM = {"unguarded": None, "a": {"above": {"x": 1}, "below": {"y": 1}}, "b": {"ab
        "c": {"above": {"x": 1, "z": 1}, "below": {"y": 1}}, "d": {"above": {"x": 1}}}
 
 
-@pytest.mark.parametrize("rows, chosen", [
+RULE_CASES = [  # (rows, the variant THE RULE chooses); also b43's design's (tests/agents/test_guard_stroke.py)
     ({"unguarded": (9.0, 1.0), "a": (1.0, 2.0), "b": (2.0, 2.1), "c": (1.5, 1.9)}, "c"),  # best LB at cost <= base's
     ({"a": (1.0, 2.1), "b": (3.0, 2.5)}, None),  # none qualifies on cost -> a negative result
     ({"a": (0.0, 1.0), "c": (-1.0, 1.0)}, None),  # the best lower bound is not above zero -> no gate
     ({"a": (1.0, 1.0), "b": (1.0, 1.5), "c": (1.0, 1.0)}, "b"),  # a tie: fewer guard conditions
     ({"d": (1.0, 1.0), "b": (1.0, 1.0)}, "b"),  # a tie with as many conditions: the declared order
     ({"unguarded": (5.0, 1.0)}, None),  # the reference is never a candidate
-])
+]
+
+
+@pytest.mark.parametrize("rows, chosen", RULE_CASES)
 def test_the_selection_rule(gd, rows, chosen):
     assert gd.choose(_summ(**rows), FAM) == chosen
 
@@ -153,9 +159,10 @@ def test_gate_refuses_without_a_chosen_variant(tmp_path):
         assert "expected a variant chosen by --stage select" in r.stderr.strip().splitlines()[-1]
 
 
-def test_bad_flags_refused_in_one_line(tmp_path):
+@pytest.mark.parametrize("script", [SCRIPT, SCRIPT.with_name("guard_stroke.py")])  # a43's and b43's designs
+def test_bad_flags_refused_in_one_line(tmp_path, script):
     for args, match in ((["--stage", "select", "--workers", "3"], "--workers 3"), (["--stage", "look"], "invalid choice")):
-        r = subprocess.run([sys.executable, str(SCRIPT), *args, "--out", str(tmp_path / "o")], check=False,
+        r = subprocess.run([sys.executable, str(script), *args, "--out", str(tmp_path / "o")], check=False,
                            capture_output=True, text=True, cwd=REPO, timeout=120,
                            env={**os.environ, "PYTHONPATH": str(REPO)})
         assert r.returncode == 2 and "Traceback" not in r.stderr
