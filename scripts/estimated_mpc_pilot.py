@@ -177,9 +177,11 @@ def arguments(ap: argparse.ArgumentParser, stages: tuple[str, ...]) -> argparse.
     ap.add_argument("--out", type=Path, required=True)
     ap.add_argument("--workers", type=int, default=2, help="worker processes, 1 or 2")
     a = ap.parse_args()
-    if not 1 <= a.workers <= 2 or a.out.is_symlink() or a.out.is_file():
-        print(f"{Path(ap.prog).stem}: --workers {a.workers} / --out {str(a.out)!r}: expected 1 or 2 workers and a "
-              "directory that is not a symlink", file=sys.stderr)
+    bad = (f"--workers {a.workers}: expected 1 or 2 worker processes" if not 1 <= a.workers <= 2 else
+           f"--out {str(a.out)!r}: expected a directory that is not a symlink (or a path not yet made)"
+           if a.out.is_symlink() or a.out.is_file() else None)
+    if bad:  # one line naming only the flag that is wrong
+        print(f"{Path(ap.prog).stem}: {bad}", file=sys.stderr)
         sys.exit(2)
     return a
 

@@ -167,6 +167,12 @@ def test_bad_flags_refused_in_one_line(tmp_path, script):
                            env={**os.environ, "PYTHONPATH": str(REPO)})
         assert r.returncode == 2 and "Traceback" not in r.stderr
         assert match in r.stderr.strip().splitlines()[-1] and not (tmp_path / "o").exists()
+        assert "--out" not in r.stderr.strip().splitlines()[-1]  # only the wrong flag is named
+    (tmp_path / "link").symlink_to(tmp_path)
+    r = subprocess.run([sys.executable, str(script), "--stage", "select", "--out", str(tmp_path / "link")], check=False,
+                       capture_output=True, text=True, cwd=REPO, timeout=120, env={**os.environ, "PYTHONPATH": str(REPO)})
+    line = r.stderr.strip().splitlines()[-1]
+    assert r.returncode == 2 and "--out" in line and "symlink" in line and "--workers" not in line
 
 
 def test_stages_play_their_seeds_on_their_split(gd, monkeypatch, tmp_path):
