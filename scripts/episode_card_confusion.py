@@ -1,7 +1,7 @@
 """Issues 23/24, helper c43 (measurement only): how well the classifiers read v2's OWN episode cards.
 
-N v2 episodes on TRAINING wells (scenario ``train``, seeds ``--seed-start`` .. + N - 1; 68000.. by default, a block
-no other script plays) under the tuned ``alarm_pump_off`` of the shipped v2 report (docs/v2/benchmark.json, its
+N v2 episodes on TRAINING wells (scenario ``train``, seeds ``--seed-start`` .. + N - 1; 68000..68199 by default, a
+block no other script plays: every training well once, seed mod 200) under the tuned ``alarm_pump_off`` of the shipped v2 report (docs/v2/benchmark.json, its
 parameters through replay's ``policy_specs``). The env is built with a ``classifier`` (its public constructor kwarg)
 that returns run 2's pinned probabilities (:func:`srenv.envs.sucker_rod_v2.default_classifier`, exactly what the
 observation carries) and, on the same trace, records run 7's (srenv/models/classifier.npz, ``CardClassifier.classify``,
@@ -11,9 +11,9 @@ new card, so the card behind each interval's observation is the last one classif
 card's index in the episode (0: the reset's card; ``first_card``: index <= 1, the well's first card) and whether
 the previous interval idled (``idle_s > 0``). Choosing nothing, changing no model and no env:
 
-    PYTHONPATH=. nice -n 5 python scripts/episode_card_confusion.py --episodes 40 --workers 2
+    PYTHONPATH=. nice -n 5 python scripts/episode_card_confusion.py --episodes 200 --workers 2
 
-writes docs/archive/episode_card_confusion.json (``KEYS``): per model the confusion (true -> argmax) and the rate of
+writes docs/archive/episode_card_confusion.json (``KEYS``; ``--rows FILE``: also every interval's row): per model the confusion (true -> argmax) and the rate of
 ``max(prob_tagging_up, prob_tagging_down) > T`` per true label (a false alarm on a non-tagging label, a hit on a
 tagging one), overall and split by first card / after idle / other, and per episode whether it ever fired.
 """
@@ -47,9 +47,9 @@ FLAGS = {  # every numeric flag, declared once: its type, unit and range
 }
 KEYS = {  # the JSON's keys (documented in docs/conditions.md)
     "top": ("command", "report", "policy", "scenario", "seeds", "labels", "intervals", "distinct_cards",
-            "models", "episodes", "wall_time_s", "rows_columns", "rows"),
+            "models", "episodes", "wall_time_s", "rows_columns"),
     "model": ("confusion", "accuracy", "tagging_alarm"),
-    "alarm": ("by_label", "false_alarm_rate", "hit_rate", "by_split", "episodes_fired"),
+    "alarm": ("by_label", "false_alarm_rate", "hit_rate", "by_split", "distinct_cards", "episodes_fired"),
 }
 ROW = ("seed", "step", "true", "severity", "card_index", "first_card", "after_idle",
        "run2_label", "run2_tagging_up", "run2_tagging_down", "run7_label", "run7_tagging_up", "run7_tagging_down")
@@ -58,16 +58,17 @@ ROW = ("seed", "step", "true", "severity", "card_index", "first_card", "after_id
 def parse(argv: list[str] | None) -> argparse.Namespace:
     ap = OneLineParser(prog=TOOL, description=__doc__.splitlines()[0])
     ap.tool = TOOL
-    for flag, default, text in (("--episodes", 40, "episodes, one per seed"), ("--seed-start", 68000, "first seed"),
+    for flag, default, text in (("--episodes", 200, "episodes, one per seed (200: every training well once)"), ("--seed-start", 68000, "first seed"),
                                 ("--workers", 2, "worker processes"),
                                 ("--max-intervals", None, "intervals per episode (default: the whole episode)")):
         ap.add_argument(flag, type=FLAGS[flag].parse, default=default, help=text)
     ap.add_argument("--out", default="docs/archive/episode_card_confusion.json", help="the record (.json)")
+    ap.add_argument("--rows", default=None, help="also every interval's row (.json: rows_columns, rows)")
     args = ap.parse_args(argv)
     from srenv.outputs import check_outputs
 
     try:
-        check_outputs({"--out": (args.out, (".json",))})
+        check_outputs({"--out": (args.out, (".json",)), "--rows": (args.rows, (".json",))})
     except ConfigError as exc:
         ap.error(f"{exc.field} = {exc.value!r}: expected {exc.expected}")
     return args
@@ -140,7 +141,8 @@ def rate(fired: list[bool]) -> dict[str, Any]:
 
 def tagging_alarm(rows: list[dict[str, Any]], model: str, t: float) -> dict[str, Any]:
     """The rate of max(prob_tagging_up, prob_tagging_down) > t: per true label, on non-tagging intervals (false
-    alarms) and tagging ones (hits), per split, and over episodes (did it ever fire; did the episode ever tag)."""
+    alarms) and tagging ones (hits), per split, per distinct card (an interval that reused a stroke shows its
+    card again) and over episodes (did it ever fire; did the episode ever tag)."""
     fire = [max(r[f"{model}_tagging_up"], r[f"{model}_tagging_down"]) > t for r in rows]
     tag = [r["true"] in TAGGING for r in rows]
     split = {"all": [True] * len(rows), "first_card": [r["first_card"] for r in rows],
@@ -150,6 +152,9 @@ def tagging_alarm(rows: list[dict[str, Any]], model: str, t: float) -> dict[str,
     def on(mask: list[bool], tagging: bool) -> dict[str, Any]:
         return rate([f for f, m, g in zip(fire, mask, tag) if m and g == tagging])
 
+    cards: dict[tuple, bool] = {}  # (seed, card index, tagging): fired on any interval that showed the card
+    for r, f, g in zip(rows, fire, tag):
+        cards[(r["seed"], r["card_index"], g)] = cards.get((r["seed"], r["card_index"], g), False) or f
     by_ep: dict[int, list[bool]] = {}
     for r, f, g in zip(rows, fire, tag):
         e = by_ep.setdefault(r["seed"], [False, False])
@@ -158,6 +163,8 @@ def tagging_alarm(rows: list[dict[str, Any]], model: str, t: float) -> dict[str,
                          for k in sorted({r["true"] for r in rows})},
             "false_alarm_rate": on(split["all"], False), "hit_rate": on(split["all"], True),
             "by_split": {s: {"false_alarm_rate": on(m, False), "hit_rate": on(m, True)} for s, m in split.items()},
+            "distinct_cards": {"false_alarm_rate": rate([f for k, f in cards.items() if not k[2]]),
+                               "hit_rate": rate([f for k, f in cards.items() if k[2]])},
             "episodes_fired": {"never_tagged": rate([f for f, g in by_ep.values() if not g]),
                                "tagged": rate([f for f, g in by_ep.values() if g])}}
 
@@ -199,9 +206,12 @@ def main(argv: list[str] | None = None) -> int:
            "policy": spec, "scenario": "train", "seeds": [seeds[0], seeds[-1]], "labels": list(LABELS),
            "intervals": len(rows), "distinct_cards": len({(r["seed"], r["card_index"]) for r in rows}),
            "models": summarise(rows, LABELS), "episodes": len(per_ep), "wall_time_s": time.perf_counter() - t0,
-           "rows_columns": list(ROW), "rows": table}
-    text = json.dumps(out, indent=None, separators=(",", ":"), allow_nan=False)
-    atomic_write_all([(Path(args.out), lambda tmp: Path(tmp).write_text(text + "\n", encoding="utf-8"))])
+           "rows_columns": list(ROW)}
+    texts = {args.out: json.dumps(out, indent=1, allow_nan=False)}
+    if args.rows:
+        texts[args.rows] = json.dumps({"rows_columns": list(ROW), "rows": table}, separators=(",", ":"))
+    atomic_write_all([(Path(p), lambda tmp, t=t: Path(tmp).write_text(t + "\n", encoding="utf-8"))
+                      for p, t in texts.items()])
     for m in MODELS:
         a = out["models"][m]["tagging_alarm"]
         print(f"{m}: accuracy {out['models'][m]['accuracy']:.3f}; " + "; ".join(
