@@ -4,8 +4,8 @@ N v2 episodes on TRAINING wells (scenario ``train``, seeds ``--seed-start`` .. +
 block no other script plays: every training well once, seed mod 200) under the tuned ``alarm_pump_off`` of the shipped v2 report (docs/v2/benchmark.json, its
 parameters through replay's ``policy_specs``). The env is built with a ``classifier`` (its public constructor kwarg)
 that returns run 2's pinned probabilities (:func:`srenv.envs.sucker_rod_v2.default_classifier`, exactly what the
-observation carries) and, on the same trace, records run 7's (srenv/models/classifier.npz, ``CardClassifier.classify``,
-the path of ``srenv classify``; a card it cannot read gets the uniform vector, as v2 does). The env calls it once per
+observation carries) and, on the same trace, records run 7's (srenv/models/classifier.npz, the model ``srenv classify`` ships,
+read by the same ``default_classifier`` with that file: a card it cannot read gets the uniform vector, as v2 does). The env calls it once per
 new card, so the card behind each interval's observation is the last one classified. Per interval that pumped
 (``info["strokes"] > 0``): the true label (``info["condition"]``), its severity, both models' probabilities, the
 card's index in the episode (0: the reset's card; ``first_card``: index <= 1, the well's first card) and whether
@@ -79,22 +79,14 @@ class Recorder:
     trace, kept with the card's index in the episode (the env calls it once per new card)."""
 
     def __init__(self) -> None:
-        from srenv.analysis.card_classifier import DEFAULT_MODEL, CardClassifier
-        from srenv.envs.sucker_rod_v2 import LABELS, default_classifier
+        from srenv.analysis.card_classifier import DEFAULT_MODEL
+        from srenv.envs.sucker_rod_v2 import default_classifier
 
-        self.run2, self.run7 = default_classifier(), CardClassifier.load(DEFAULT_MODEL)
-        self.order = [self.run7.labels.index(k) for k in LABELS]
+        self.run2, self.run7 = default_classifier(), default_classifier(DEFAULT_MODEL)
         self.calls, self.last = 0, (np.zeros(0), np.zeros(0))
 
     def __call__(self, trace: dict) -> np.ndarray:
-        from srenv.analysis.card_shape import BadCard
-
-        p2 = np.asarray(self.run2(trace), np.float64)
-        try:
-            f = self.run7.card_features(trace["polished_rod_position_m"], trace["polished_rod_load_n"])
-            p7 = np.asarray(self.run7.proba_features(f[None, :])[0], np.float64)[self.order]
-        except BadCard:
-            p7 = np.full(len(p2), 1.0 / len(p2))
+        p2, p7 = (np.asarray(clf(trace), np.float64) for clf in (self.run2, self.run7))
         self.calls += 1
         self.last = (p2, p7)
         return p2

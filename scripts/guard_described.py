@@ -29,7 +29,6 @@ from __future__ import annotations
 
 import argparse
 import copy
-import hashlib
 import itertools
 import json
 import shutil
@@ -48,6 +47,7 @@ from oracle_distill_pooled import NAME, design, require_precheck
 
 from agents.benchmark.assemble import guarded_record
 from agents.benchmark.runs import residual_spec
+from agents.evaluation.manifest import sha256
 from agents.policies.guarded import guarded_spec
 
 CONFIG = ROOT / "configs/benchmark/v2_oracle_distilled_described_guarded.yaml"
@@ -96,6 +96,12 @@ class Plan:
     specs: Callable[..., dict[str, dict[str, Any]]]
     look: Callable[..., tuple[str, dict, dict]]
     precheck: bool = True
+
+
+def registered(path: Path, digests: dict[str, str], what: str) -> None:
+    """Stop unless ``path`` is the file its design's history registered (``digests`` by file name)."""
+    if sha256(path) != digests.get(path.name):
+        raise SystemExit(f"{path}: sha256 differs from the registered {what}")
 
 
 def guard_of(variant: Any) -> dict[str, Any] | None:
@@ -186,8 +192,8 @@ def look_design(out: Path, name: str, tuned: dict[str, Any], to: Path) -> tuple[
     d = design(CONFIG)
     (to / "models").mkdir(parents=True, exist_ok=True)
     for f in sorted((out / "design").glob(f"{NAME}_v2_seed*")):
-        if f.suffix == ".zip" and hashlib.sha256(f.read_bytes()).hexdigest() != FITS_SHA256.get(f.name):
-            raise SystemExit(f"{f}: sha256 differs from the registered fit's: not d42's frozen design")
+        if f.suffix == ".zip":
+            registered(f, FITS_SHA256, "fit's: not d42's frozen design")
         shutil.copyfile(f, to / "models" / f.name)
     d = {**d, "tuned": tuned, "res": residual_spec(d["run"], tuned)}
     spec = specs(out, d, {name: VARIANTS[name]})[name]
@@ -217,9 +223,10 @@ def tails(out: Path, workers: int) -> dict[str, Any]:
     d = design(CONFIG)
     seeds = [GATE2_SEEDS[k] for k in TAILS]
     gcfg = {**copy.deepcopy(d["cfg"]), "validation": {"seeds": seeds, "scenario": "validation"}}
-    eps = play_validation(gcfg, specs(out, d, {REFERENCE: None, name: VARIANTS[name]}), out / "tails", workers)
+    sp = specs(out, d, {REFERENCE: None, name: VARIANTS[name]})
+    eps = play_validation(gcfg, sp, out / "tails", workers)
     rec = {"stage": "tails", "seeds": seeds, "summary": summarise(eps, (BASE,)), **episode_tables(eps),
-           "trace": {str(s): trace(specs(out, d, {name: VARIANTS[name]})[name], d["cfg"], s) for s in seeds}}
+           "trace": {str(s): trace(sp[name], d["cfg"], s) for s in seeds}}
     write_json(out / "tails" / "tails.json", rec)
     return rec
 

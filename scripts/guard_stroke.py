@@ -23,7 +23,6 @@ the tagging intervals' cost, damage, SPM, stroke, duty and the classifier's tagg
 from __future__ import annotations
 
 import argparse
-import hashlib
 import itertools
 import json
 import sys
@@ -32,7 +31,7 @@ from typing import Any
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from estimated_mpc_pilot import arguments
-from guard_described import BASE, REFERENCE, Plan, run_stage
+from guard_described import BASE, REFERENCE, Plan, registered, run_stage
 from guard_pilot import INTERVALS, shipped
 from oracle_distill_more import ROOT, write_json
 
@@ -90,9 +89,7 @@ def inner() -> dict[str, Any]:
     """The shipped ensemble's spec, as docs/v2/benchmark.json records it, its models' sha256 checked."""
     ens, _ = shipped()
     for m in ens["members"]:
-        p = Path(m["path"])
-        if hashlib.sha256(p.read_bytes()).hexdigest() != MODELS_SHA256.get(p.name):
-            raise SystemExit(f"{p}: sha256 differs from the registered shipped student's")
+        registered(Path(m["path"]), MODELS_SHA256, "shipped student's")
     return ens
 
 

@@ -12,6 +12,7 @@ import numpy as np
 
 from ..envs import env_tag
 from ..evaluation.model_pins import PINS, member_pins
+from ..evaluation.normalizer import obs_norm_path
 from ..policies.factory import benchmark_baselines
 from .report import _average_episodes, iqm
 from .runs import _algo_of
@@ -51,7 +52,7 @@ def _ship(specs: list[dict[str, Any]], pick: int, a: str, models_dir: Path, tag:
     shipped = models_dir / f"{a}_{tag}.zip"
     shutil.copyfile(specs[pick]["path"], shipped)
     if specs[pick].get("obs_norm"):
-        shutil.copyfile(specs[pick]["obs_norm"], shipped.with_name(f"{a}_{tag}_obs_norm.npz"))
+        shutil.copyfile(specs[pick]["obs_norm"], obs_norm_path(shipped))
     return shipped
 
 

@@ -14,7 +14,7 @@ from pathlib import Path
 from typing import Any
 
 from ..envs import env_tag
-from ..evaluation.normalizer import ObsNormalizer
+from ..evaluation.normalizer import ObsNormalizer, obs_norm_path
 from ..policies.residual import RESIDUAL_BASES
 from ..training.tuning import refuse_test_split
 from .config import BenchmarkConfigError
@@ -51,7 +51,7 @@ def export_model(summary: dict[str, Any], dest_zip: Path) -> dict[str, Any]:
         with open(summary["vecnormalize"], "rb") as fh:
             vn = pickle.load(fh)  # written by this benchmark's own training run
         if vn.norm_obs:
-            norm_path = dest_zip.with_name(dest_zip.stem + "_obs_norm.npz")
+            norm_path = obs_norm_path(dest_zip)
             ObsNormalizer.from_variance(vn.obs_rms.mean, vn.obs_rms.var, vn.clip_obs, vn.epsilon).save(str(norm_path))
     return {"kind": "agent", "path": str(dest_zip), "obs_norm": str(norm_path) if norm_path else None}
 

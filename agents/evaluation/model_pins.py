@@ -18,15 +18,10 @@ from pathlib import Path
 from typing import Any
 
 from .manifest import sha256
+from .normalizer import obs_norm_path
 
 PINS = "sha256"  # the record's field
 _DIGEST = re.compile(r"[0-9a-f]{64}")
-
-
-def obs_norm_path(zip_path: str | Path) -> Path:
-    """The observation statistics that go with a model zip: ``<stem>_obs_norm.npz`` beside it."""
-    p = Path(zip_path)
-    return p.with_name(f"{p.stem}_obs_norm.npz")
 
 
 def member_pins(refs: Sequence[str], members: Sequence[dict[str, Any]]) -> dict[str, str | None]:

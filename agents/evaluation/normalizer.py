@@ -25,6 +25,13 @@ OBS_NORMALIZER_KEY = "obs_normalizer"  # in an RLlib checkpoint's srenv_policy.j
 RLLIB_SMALL_NUMBER = 1e-6  # ray.rllib.utils.numpy.SMALL_NUMBER, MeanStdFilter's guard on the std
 
 
+def obs_norm_path(zip_path: str | Path) -> Path:
+    """The observation statistics that go with a model zip: ``<stem>_obs_norm.npz`` beside it (every writer and
+    reader of a model's statistics names them so)."""
+    p = Path(zip_path)
+    return p.with_name(f"{p.stem}_obs_norm.npz")
+
+
 class ObsNormalizer:
     """``clip((obs - mean) / scale, -clip, clip)`` as float32; callable, and SB3's ``normalize_obs`` too."""
 

@@ -33,6 +33,7 @@ from typing import Any
 
 import numpy as np
 
+from ..evaluation.normalizer import obs_norm_path
 from ..policies.residual import _Base, augment, compose
 from .tuning import refuse_test_split
 
@@ -154,7 +155,7 @@ def distill(teachers: Sequence[dict[str, Any]], student_init: dict[str, Any], re
     write_student(student_init["path"], student.model, dest_zip)
     norm = None
     if student_init.get("obs_norm"):
-        norm = dest_zip.with_name(dest_zip.stem + "_obs_norm.npz")
+        norm = obs_norm_path(dest_zip)
         shutil.copyfile(student_init["obs_norm"], norm)
     return {"kind": "agent", "path": str(dest_zip), "obs_norm": str(norm) if norm else None, "distill": history}
 

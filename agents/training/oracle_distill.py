@@ -34,6 +34,7 @@ from typing import Any
 
 import numpy as np
 
+from ..evaluation.normalizer import obs_norm_path
 from ..policies.history import History, check_history
 from ..policies.residual import _Base, augment, compose
 from .tuning import refuse_test_split
@@ -209,7 +210,7 @@ def distill_oracle(runner: Any, teacher: dict[str, Any], oracle: dict[str, Any],
     hist_key = {"history": k_hist} if k_hist != 1 else {}  # K = 1: today's spec, key for key
     t0 = time.perf_counter()
     init = dest_zip.with_name(dest_zip.stem + "_init.zip")
-    norm = dest_zip.with_name(dest_zip.stem + "_obs_norm.npz")
+    norm = obs_norm_path(dest_zip)
     n_it = int(teacher["iterations"])
     per = len(seeds) // n_it
     xs: list[np.ndarray] = []

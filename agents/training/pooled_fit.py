@@ -124,11 +124,12 @@ def fit_student(x: np.ndarray, y: np.ndarray, cand: dict[str, Any], policy_kwarg
     candidate's epochs and weight decay, its statistics those of ``x``, written to ``dest_zip`` (+ _obs_norm.npz);
     (the student, {epoch: held-out MSE on ``held`` = (x, y)} at every epoch count the grid declares)."""
     from ..evaluation.agent import AgentPolicy
+    from ..evaluation.normalizer import obs_norm_path
     from .distill import fit_actor, write_student
     from .oracle_distill import fresh_student, save_obs_norm
 
     init = dest_zip.with_name(dest_zip.stem + "_init.zip")
-    norm = dest_zip.with_name(dest_zip.stem + "_obs_norm.npz")
+    norm = obs_norm_path(dest_zip)
     fresh_student(x.shape[1], {**policy_kwargs, "net_arch": cand["net_arch"]}, seed, init)
     save_obs_norm(x, norm)
     student = AgentPolicy(str(init), str(norm))

@@ -99,6 +99,7 @@ from __future__ import annotations
 
 import functools
 from collections.abc import Callable
+from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -125,17 +126,19 @@ Classifier = Callable[[dict], np.ndarray]
 
 
 @functools.lru_cache(maxsize=1)
-def default_classifier() -> Classifier | None:
+def default_classifier(model: Path | None = None) -> Classifier | None:
     """The card classifier v2 was released with (:mod:`srenv.analysis.card_classifier`, run 2's model, pinned
     as ``srenv/models/classifier_run2.npz`` so v2 keeps its numbers when ``srenv classify`` ships a newer one;
     trained on simulated cards only) as a callable: the last stroke's trace -> 12 probabilities in :data:`LABELS` order;
-    a card it cannot read gives the uniform vector. ``None`` (the uniform vector) when no model is shipped."""
+    a card it cannot read gives the uniform vector. ``None`` (the uniform vector) when no model is shipped.
+    ``model``: another surface model file (no config) read the same way (scripts/episode_card_confusion.py)."""
     from ..analysis.card_classifier import V2_MODEL, CardClassifier
     from ..analysis.card_shape import BadCard, features
 
-    if not V2_MODEL.is_file():
+    model = model or V2_MODEL
+    if not model.is_file():
         return None
-    clf = CardClassifier.load(V2_MODEL)
+    clf = CardClassifier.load(model)
     order = [clf.labels.index(k) for k in LABELS]
 
     def classify(trace: dict) -> np.ndarray:
