@@ -48,9 +48,17 @@ from agents.policies.guarded import check_guard, guarded_spec
 CONFIG = ROOT / "configs/benchmark/v2_oracle_distilled_agreement.yaml"
 SELECT_SEEDS = list(range(59500, 59550))  # THE SELECTION's: training wells 100..149 once each (seed mod 200)
 STAGES = ("select", "gate", "test", "read")
-# the words a history line must hold to register a stage (written, committed, before the stage is played)
+# the words a history line must hold to register a stage (written, committed, before the stage is played): the
+# design's first line holds the selection's; a later stage's line starts with its words ("<date> <time> UTC, REGISTERS
+# THE GATE ...": the first line only names them)
 REGISTERS = {"select": "BEFORE any selection or gate episode", "gate": "REGISTERS THE GATE",
              "test": "REGISTERS THE TEST LOOK"}
+
+
+def registers(line: str, stage: str) -> bool:
+    """Whether a history line registers ``stage`` (:data:`REGISTERS`)."""
+    words = REGISTERS[stage]
+    return words in line if stage == "select" else line.partition(" UTC, ")[2].startswith(words)
 assert FRESH_SEED == 20261206 and GATE_SEEDS == list(range(21750, 21800))  # b43's, registered and never played
 
 # THE FAMILY (the config's history), declared once: the disagreement gate's tau (a quantile of the reference's
@@ -79,10 +87,10 @@ for _v in VARIANTS.values():  # every guard bounded where the guarded policy bou
 def require_registered(stage: str, config: Path = CONFIG) -> None:
     """Stop (exit 2, one line) unless the config's history has the line registering ``stage`` and the config is
     committed as it is (no uncommitted change to it): a stage is played only after its registration."""
-    hist = " ".join(load_benchmark_config(str(config)).get("history") or [])
+    hist = load_benchmark_config(str(config)).get("history") or []
     r = subprocess.run(["git", "status", "--porcelain", "--", str(config)], cwd=ROOT, capture_output=True, text=True,
                        check=False)
-    why = (f"no history line with {REGISTERS[stage]!r}" if REGISTERS[stage] not in hist else
+    why = (f"no history line with {REGISTERS[stage]!r}" if not any(registers(h, stage) for h in hist) else
            "not committed as it is (git status shows a change)" if r.returncode or r.stdout.strip() else None)
     if why:
         print(f"agreement_guard: {config.name}: {why}: expected --stage {stage} registered before it is played",

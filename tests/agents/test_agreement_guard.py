@@ -135,7 +135,7 @@ def test_the_measured_reference_is_the_played_ensemble():
     assert len(rec["disagreement"]) == 144 and all(0.0 <= d <= 1.0 for d in rec["disagreement"])
 
 
-def test_a_stage_its_history_does_not_register_is_refused(tmp_path, capsys):
+def test_a_stage_its_history_does_not_register_is_refused(tmp_path, capsys, monkeypatch):
     ag.require_registered("select")  # registered, committed
     raw = CONFIG.read_text()
     bare = tmp_path / "c.yaml"
@@ -148,6 +148,8 @@ def test_a_stage_its_history_does_not_register_is_refused(tmp_path, capsys):
         with pytest.raises(SystemExit) as e:
             ag.require_registered(stage, cfg)
         assert e.value.code == 2 and why in capsys.readouterr().err
+    assert not ag.registers(_hist(monkeypatch, CONFIG), "gate")  # the first line only names the words
+    assert ag.registers("2026-12-08 02:40 UTC, REGISTERS THE GATE: the chosen variant ...", "gate")
 
 
 @pytest.mark.parametrize("stage", ["gate", "test"])
