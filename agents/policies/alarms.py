@@ -54,6 +54,10 @@ class AlarmPumpOffPolicy(PumpOffPolicy):
         i = self.i_prob.get(label)
         return obs[:, i] if i is not None else np.zeros(len(obs))
 
+    def gas_alarm(self, observation: Any) -> np.ndarray:
+        """Whether the gas alarm holds on each row's last card (the slow-down's condition)."""
+        return self._prob(np.atleast_2d(np.asarray(observation, np.float64)), "gas_interference") > self.alarm_prob
+
     def predict(self, observation: Any, state: Any = None, episode_start: Any = None,
                 deterministic: bool = True) -> tuple[np.ndarray, Any]:
         obs, n, batched = _batch(observation)
@@ -69,7 +73,7 @@ class AlarmPumpOffPolicy(PumpOffPolicy):
         signature = (st[:, 1] > 0.5) & (load_range < (1.0 - self.load_drop) * st[:, 3])
         shut = (st[:, 2] > 0.5) | signature | (self._prob(obs, "parted_rods") > self.alarm_prob) \
             | (self._prob(obs, "tubing_leak") > self.alarm_prob)
-        gas = self._prob(obs, "gas_interference") > self.alarm_prob
+        gas = self.gas_alarm(obs)
         action[:, 0] = np.where(gas & (action[:, 0] > IDLE), np.maximum(action[:, 0] - self.gas_slowdown, IDLE),
                                 action[:, 0])
         action[:, 0] = np.where(shut, IDLE, action[:, 0])

@@ -15,6 +15,16 @@ Parameters (the ``guard`` part of a ``{"kind": "guarded", ...}`` policy spec; :f
 - ``hold_intervals``: how many intervals (>= 1) the fallback acts once the guard fires (re-armed while it fires);
 - ``follow_shut_in``: also play the fallback whenever it idles on a shut-in alarm (``alarm_pump_off``'s parted-rod
   or tubing-leak signature; its state's third entry).
+- ``follow_alarms`` (issue 24, u44: alarms first; fallback ``alarm_pump_off``): play the fallback in every interval
+  where one of its alarms acts - the shut-in above, or its gas alarm (the slow-down's condition on the last card);
+- ``follow_idle`` ("respect pump-off's idle"): play the fallback whenever it idles (its rate entry at ``IDLE``);
+- ``disagreement_above`` (u44: trusted only where the members agree; the inner must hold a seed ensemble): play the
+  fallback in an interval where the ensemble's members disagree by more than the limit on the action they were asked
+  for (:func:`agents.policies.ensemble.disagreement`, the largest over the entries of their std): a hard gate, the
+  interval only, no hold;
+- ``fresh_card_only``: the ``above`` / ``below`` limits read only a card the well pumped for in the last interval
+  (``duty`` > 0), so a fallback that idles does not re-fire on the stale last card all day (b43's finding); off
+  unless set, as every archived guard played it.
 
 The spec's optional ``scale`` replaces the inner residual's scale at deployment (0 = the residual's base itself).
 It reads the field observation only (the names :func:`agents.policies.field.obs_names_of` gives), so a field
@@ -29,10 +39,13 @@ from typing import Any
 
 import numpy as np
 
-from .field import name_index
+from .ensemble import EnsemblePolicy
+from .field import IDLE, name_index
 from .residual import _Base
 
-GUARD_KEYS = ("above", "below", "hold_intervals", "follow_shut_in")
+GUARD_KEYS = ("above", "below", "hold_intervals", "follow_shut_in", "follow_alarms", "follow_idle",
+              "disagreement_above", "fresh_card_only")
+FLAGS = ("follow_shut_in", "follow_alarms", "follow_idle", "fresh_card_only")
 HOLD_MAX = 144  # one v2 episode of 10-min intervals
 
 
@@ -50,8 +63,22 @@ def check_guard(guard: Mapping[str, Any], obs_names: Sequence[str] | None = None
     hold = guard.get("hold_intervals", 1)
     if isinstance(hold, bool) or not isinstance(hold, int) or not 1 <= hold <= HOLD_MAX:
         raise ValueError(f"guard.hold_intervals = {hold!r}: expected an integer in [1, {HOLD_MAX}]")
-    if type(guard.get("follow_shut_in", False)) is not bool:
-        raise ValueError(f"guard.follow_shut_in = {guard['follow_shut_in']!r}: expected true or false")
+    for flag in FLAGS:
+        if type(guard.get(flag, False)) is not bool:
+            raise ValueError(f"guard.{flag} = {guard[flag]!r}: expected true or false")
+    lim = guard.get("disagreement_above")
+    if lim is not None and (isinstance(lim, bool) or not isinstance(lim, (int, float)) or not 0.0 <= lim <= 1.0):
+        raise ValueError(f"guard.disagreement_above = {lim!r}: expected a number in [0, 1] (the members' action std)")
+
+
+def ensemble_in(policy: Any) -> EnsemblePolicy:
+    """The seed ensemble a policy acts through (itself, or the model of a residual or described wrapper)."""
+    p = policy
+    while not isinstance(p, EnsemblePolicy) and hasattr(p, "model"):
+        p = p.model
+    if isinstance(p, EnsemblePolicy):
+        return p
+    raise ValueError("guard.disagreement_above: the inner policy is not a seed ensemble")
 
 
 class GuardedPolicy:
@@ -65,6 +92,13 @@ class GuardedPolicy:
         self.below = [(name_index(obs_names, n), float(v)) for n, v in (guard.get("below") or {}).items()]
         self.hold = int(guard.get("hold_intervals", 1))
         self.follow_shut_in = bool(guard.get("follow_shut_in", False))
+        self.follow_alarms, self.follow_idle = bool(guard.get("follow_alarms", False)), bool(guard.get("follow_idle",
+                                                                                                         False))
+        if self.follow_alarms and fallback != "alarm_pump_off":
+            raise ValueError(f"guard.follow_alarms: the fallback {fallback!r} has no alarms (expected alarm_pump_off)")
+        self.disagree = guard.get("disagreement_above")
+        self.ensemble = ensemble_in(inner) if self.disagree is not None else None
+        self.i_duty = name_index(obs_names, "duty") if guard.get("fresh_card_only", False) else None
         self.fallback: _Base | None = None
         self.left = 0
         self.fired = 0  # intervals the fallback acted this episode (a diagnostic)
@@ -79,8 +113,21 @@ class GuardedPolicy:
         self.left, self.fired = 0, 0
 
     def fires(self, obs: np.ndarray) -> bool:
-        """Whether the last card shows a cost signal (the guard's limits on the field observation)."""
+        """Whether the last card shows a cost signal (the guard's limits on the field observation); with
+        ``fresh_card_only``, never on a card the well did not pump for in the last interval."""
+        if self.i_duty is not None and not obs[self.i_duty] > 0.0:
+            return False
         return any(obs[i] > v for i, v in self.above) or any(obs[i] < v for i, v in self.below)
+
+    def follows(self, obs: np.ndarray, safe: np.ndarray) -> bool:
+        """Whether this interval is the fallback's whatever the limits say: its shut-in, its alarms, its idle, or the
+        inner ensemble's members disagreeing (on the action they were just asked for)."""
+        shut = (self.follow_shut_in or self.follow_alarms) and self.fallback is not None \
+            and self.fallback.state is not None and float(np.asarray(self.fallback.state).reshape(-1, 4)[0, 2]) > 0.5
+        gas = self.follow_alarms and bool(self.fallback.policy.gas_alarm(obs)[0])
+        idle = self.follow_idle and float(safe[0]) <= IDLE
+        split = self.ensemble is not None and float(np.max(self.ensemble.last_disagreement)) > float(self.disagree)
+        return shut or gas or idle or split
 
     def predict(self, observation: Any, state: Any = None, episode_start: Any = None,
                 deterministic: bool = True) -> tuple[np.ndarray, Any]:
@@ -92,9 +139,7 @@ class GuardedPolicy:
                                       deterministic=deterministic)
         if self.fires(obs):
             self.left = self.hold
-        shut = self.follow_shut_in and self.fallback.state is not None \
-            and float(np.asarray(self.fallback.state).reshape(-1, 4)[0, 2]) > 0.5
-        if self.left > 0 or shut:
+        if self.left > 0 or self.follows(obs, safe):
             self.left = max(self.left - 1, 0)
             self.fired += 1
             return safe.astype(np.float32), state

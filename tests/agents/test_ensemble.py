@@ -92,3 +92,15 @@ def test_benchmark_config_refuses_a_bad_ensemble_flag(tmp_path, ensemble, seeds)
     p.write_text(yaml.safe_dump(cfg))
     with pytest.raises(ValueError, match=r"agents\.runs\.ppo\.ensemble"):
         load_benchmark_config(p)
+
+
+def test_the_members_disagreement_is_the_largest_std_over_the_entries() -> None:
+    from agents.policies.ensemble import disagreement
+
+    obs = np.zeros(4, np.float32)
+    pol = EnsemblePolicy([Const([0.2, -1.0]), Const([0.6, 0.0]), Const([-0.2, 0.4])])
+    acts = pol.member_actions(obs)
+    assert acts.shape == (3, 2) and acts[1] == pytest.approx([0.6, 0.0])
+    pol.predict(obs)
+    assert pol.last_disagreement == pytest.approx(np.std([-1.0, 0.0, 0.4]))  # the rate entry's 0.327 < 0.589
+    assert disagreement(np.array([[[0.0, 1.0], [0.5, 0.5]], [[0.0, -1.0], [0.5, 0.5]]])) == pytest.approx([1.0, 0.0])

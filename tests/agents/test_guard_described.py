@@ -44,6 +44,14 @@ def _hist(monkeypatch, config: Path = CONFIG) -> str:
     return " ".join(load_benchmark_config(config)["history"])
 
 
+def same_but_history(monkeypatch, a: Path, b: Path) -> bool:
+    """Whether two design configs differ in their history only (the later designs' check against their parent)."""
+    monkeypatch.chdir(REPO)
+    x, y = load_benchmark_config(a), load_benchmark_config(b)
+    return {k: v for k, v in x.items() if k not in ("history", "source")} == {k: v for k, v in y.items()
+                                                                       if k not in ("history", "source")}
+
+
 def test_config_is_d42s_but_its_history(monkeypatch):
     monkeypatch.chdir(REPO)
     a, b = load_benchmark_config(CONFIG), load_benchmark_config(DESCRIBED)
@@ -74,7 +82,9 @@ def test_seeds_are_unused_and_play_the_wells_they_say(gd):
     assert not any(lo <= s < hi for s in sel + gate for lo, hi in used)
     mine = (CONFIG, SCRIPT, Path(__file__).resolve())
     b43 = (REPO / "configs/benchmark/v2_oracle_distilled_stroke_guarded.yaml", SCRIPT.with_name("guard_stroke.py"),
-           Path(__file__).with_name("test_guard_stroke.py"))  # b43's design: its own blocks, checked there
+           Path(__file__).with_name("test_guard_stroke.py"),  # b43's design: its own blocks, checked there
+           REPO / "configs/benchmark/v2_oracle_distilled_agreement.yaml", SCRIPT.with_name("agreement_guard.py"),
+           Path(__file__).with_name("test_agreement_guard.py"))  # u44's, which plays b43's unplayed gate block
     others = " ".join(f.read_text() for d in ("configs", "scripts", "tests") for f in (REPO / d).rglob("*.*")
                       if f.suffix in (".yaml", ".py") and f.resolve() not in mine + b43)
     assert not re.search(r"\b(594\d\d|217\d\d)\b", others.replace("range(21650, 21700)", ""))

@@ -19,10 +19,9 @@ from pathlib import Path
 import gymnasium as gym
 import pytest
 from test_guard_described import FAM as A43_FAM  # a43's design: THE RULE's cases, the history reader
-from test_guard_described import REPO, RULE_CASES, _hist, _summ
+from test_guard_described import REPO, RULE_CASES, _hist, _summ, same_but_history
 
 import srenv  # noqa: F401  (registers the envs)
-from agents.benchmark.config import load_benchmark_config
 from agents.inputs import ConfigError, baseline_params
 from agents.policies.field import IDLE, obs_names_of
 from agents.policies.guarded import check_guard
@@ -36,10 +35,7 @@ gd = importlib.import_module("guard_described")  # whose stages and RULE this de
 
 
 def test_config_is_a43s_but_its_history(monkeypatch):
-    monkeypatch.chdir(REPO)
-    a, b = load_benchmark_config(CONFIG), load_benchmark_config(A43)
-    assert {k: v for k, v in a.items() if k not in ("history", "source")} == {k: v for k, v in b.items()
-                                                                     if k not in ("history", "source")}
+    assert same_but_history(monkeypatch, CONFIG, A43)
 
 
 def test_the_history_registers_inner_mechanism_family_data_rule_gate_and_looks(monkeypatch):
@@ -64,7 +60,9 @@ def test_seeds_are_unused_and_play_the_wells_they_say():
     assert sel == list(range(59450, 59500)) and gate == list(range(21750, 21800)) and gs.FRESH_SEED == 20261206
     used = [(0, 10), (20000, 21750), (50000, 59450), (100000, 100100)]  # every earlier design's and split's seeds
     assert not any(lo <= s < hi for s in sel + gate for lo, hi in used)
-    mine = (CONFIG, SCRIPT, Path(__file__).resolve())
+    mine = (CONFIG, SCRIPT, Path(__file__).resolve(),  # and u44's, which registers b43's unplayed gate and fresh seeds
+            REPO / "configs/benchmark/v2_oracle_distilled_agreement.yaml", SCRIPT.with_name("agreement_guard.py"),
+            Path(__file__).with_name("test_agreement_guard.py"))
     others = " ".join(f.read_text() for d in ("configs", "scripts", "tests") for f in (REPO / d).rglob("*.*")
                       if f.suffix in (".yaml", ".py") and f.resolve() not in mine)
     assert not re.search(r"\b(594[5-9]\d|217[5-9]\d|20261206)\b", others.replace("range(59400, 59450)", "")

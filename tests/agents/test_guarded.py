@@ -186,3 +186,107 @@ def test_a_guarded_ensemble_is_named_as_guarded_in_the_report_header():
     text = _runs_text(tr, {"g": {"guarded": {"guard": {}}}, "e": {"kind": "agent"}})
     assert "g: the mean action of s's 2 seed models, under the constraint guard" in text
     assert text.endswith("e: the mean action of s's 1 seed models")
+
+
+# issue 24, u44: the members' agreement, alarms first, pump-off's idle, and the stale-card fix
+
+
+class _Member:
+    def __init__(self, a):
+        self.a = np.asarray(a, np.float32)
+
+    def predict(self, observation, state=None, episode_start=None, deterministic=True):
+        return self.a.copy(), None
+
+
+SPLIT = [[0.2, -1.0], [0.6, 0.0]]  # std per entry (0.2, 0.5): disagreement 0.5, mean (0.4, -0.5)
+POF = {"threshold": 0.9, "idle_time_s": 900, "a_spm": 0.3, "a_stroke": 1.0}
+
+
+def _quiet(env, names, **entries):
+    obs, _ = env.reset(seed=0)
+    x = np.array(obs, np.float32)
+    x[names.index("fillage_est")], x[names.index("duty")] = 0.99, 1.0
+    for k, v in entries.items():
+        x[names.index(k)] = v
+    return x
+
+
+@pytest.mark.parametrize("tau, inner", [(0.4, False), (0.5, True), (0.6, True)])
+def test_the_members_disagreement_gates_the_ensemble(env, tau, inner):
+    """Above tau the interval is the fallback's (no hold), at or below it the ensemble's mean action."""
+    from agents.policies.ensemble import EnsemblePolicy
+
+    names = obs_names_of(env)
+    pol = GuardedPolicy(EnsemblePolicy([_Member(a) for a in SPLIT]), "pump_off", POF, {"disagreement_above": tau},
+                        names)
+    quiet = _quiet(env, names)
+    pol.reset(env)
+    a = pol.predict(quiet)[0]
+    assert pol.ensemble.last_disagreement == pytest.approx(0.5)
+    if inner:
+        np.testing.assert_allclose(a, [0.4, -0.5])
+    else:
+        np.testing.assert_allclose(a, [POF["a_spm"], POF["a_stroke"]])
+    assert pol.fired == (0 if inner else 1)
+    agree = GuardedPolicy(EnsemblePolicy([_Member(SPLIT[0])] * 3), "pump_off", POF, {"disagreement_above": 0.0},
+                          names)
+    agree.reset(env)
+    np.testing.assert_allclose(agree.predict(quiet)[0], SPLIT[0])  # members that agree: never gated
+
+
+def test_the_gate_needs_an_ensemble_inside(env):
+    with pytest.raises(ValueError, match="guard.disagreement_above: the inner policy is not a seed ensemble"):
+        GuardedPolicy(_Const(), "pump_off", POF, {"disagreement_above": 0.3}, obs_names_of(env))
+
+
+def test_alarms_first_plays_alarm_pump_off_where_its_alarms_act(env):
+    names = obs_names_of(env)
+    pol = GuardedPolicy(_Const(), "alarm_pump_off", APO, {"follow_alarms": True}, names)
+    pol.reset(env)
+    np.testing.assert_array_equal(pol.predict(_quiet(env, names, prob_gas_interference=0.1))[0], INNER)
+    gas = pol.predict(_quiet(env, names, prob_gas_interference=0.9))[0]  # the gas alarm: the slow-down
+    np.testing.assert_allclose(gas, [APO["a_spm"] - APO["gas_slowdown"], APO["a_stroke"]], atol=1e-6)
+    shut = pol.predict(_quiet(env, names, prob_parted_rods=0.9))[0]  # the shut-in, and every interval after it
+    assert shut[0] == -1.0 and pol.predict(_quiet(env, names))[0][0] == -1.0
+    with pytest.raises(ValueError, match="guard.follow_alarms: the fallback 'pump_off' has no alarms"):
+        GuardedPolicy(_Const(), "pump_off", POF, {"follow_alarms": True}, names)
+
+
+def test_respecting_the_fallbacks_idle(env):
+    names = obs_names_of(env)
+    pol = GuardedPolicy(_Const(), "pump_off", POF, {"follow_idle": True}, names)
+    pol.reset(env)
+    np.testing.assert_array_equal(pol.predict(_quiet(env, names))[0], INNER)  # pump-off pumps: the inner's
+    low = _quiet(env, names, fillage_est=0.5)  # the pumped card shows pump-off: the fallback idles 3 intervals
+    acts = [pol.predict(low)[0] for _ in range(4)]
+    assert [a[0] for a in acts[:3]] == [-1.0] * 3 and pol.fired == 3
+
+
+@pytest.mark.parametrize("fresh", [False, True])
+def test_a_stale_card_refires_only_without_fresh_card_only(env, fresh):
+    """b43's finding: after the well idled (duty 0) the last card is the stale one that fired; with
+    ``fresh_card_only`` the limits do not fire on it again, without it (every archived guard) they do."""
+    names = obs_names_of(env)
+    guard = {"above": {"prob_tagging_down": 0.5}, "fresh_card_only": fresh}
+    pol = GuardedPolicy(_Const(), "pump_off", {**POF, "a_spm": -1.0}, guard, names)
+    pol.reset(env)
+    card = _quiet(env, names, prob_tagging_down=0.9)
+    stale = card.copy()
+    stale[names.index("duty")] = 0.0
+    assert not np.allclose(pol.predict(card)[0], INNER)  # a pumped tagging card fires
+    assert np.allclose(pol.predict(stale)[0], INNER) == fresh
+    assert not np.allclose(pol.predict(card)[0], INNER)  # a new pumped tagging card fires again
+
+
+@pytest.mark.parametrize("guard, match", [
+    ({"disagreement_above": -0.1}, r"guard.disagreement_above = -0.1: expected a number in \[0, 1\]"),
+    ({"disagreement_above": "half"}, r"guard.disagreement_above = 'half': expected a number in \[0, 1\]"),
+    ({"disagreement_above": True}, r"guard.disagreement_above = True: expected a number"),
+    ({"follow_alarms": "yes"}, r"guard.follow_alarms = 'yes': expected true or false"),
+    ({"follow_idle": 0}, r"guard.follow_idle = 0: expected true or false"),
+    ({"fresh_card_only": None}, r"guard.fresh_card_only = None: expected true or false"),
+])
+def test_bad_new_guard_keys_are_refused_in_one_line(guard, match):
+    with pytest.raises(ValueError, match=match):
+        check_guard(guard)

@@ -28,6 +28,7 @@ WELLS = REPO / "configs/benchmark/v2_oracle_distilled_wells.yaml"  # g40: f24's 
 DESCRIBED = REPO / "configs/benchmark/v2_oracle_distilled_described.yaml"  # d42: g40's config, copied
 DESCRIBED_GUARDED = REPO / "configs/benchmark/v2_oracle_distilled_described_guarded.yaml"  # a43: d42's, copied
 STROKE_GUARDED = REPO / "configs/benchmark/v2_oracle_distilled_stroke_guarded.yaml"  # b43: a43's, copied
+AGREEMENT = REPO / "configs/benchmark/v2_oracle_distilled_agreement.yaml"  # u44: b43's, copied
 
 
 @pytest.fixture(scope="module")
@@ -55,7 +56,7 @@ def test_seeds_are_unused_training_seeds(pooled, monkeypatch):
     assert not set(pooled.GATE_SEEDS) & (earlier | set(range(100000, 100100)))
     others = " ".join(f.read_text() for f in (REPO / "configs").rglob("*.yaml") if f not in (POOLED, CAPPED, WELLS, DESCRIBED,
                                                                                           DESCRIBED_GUARDED,
-                                                                                          STROKE_GUARDED))
+                                                                                          STROKE_GUARDED, AGREEMENT))
     assert not re.search(r"\b(560\d\d|570\d\d|210\d\d)\b", others)
     hist = " ".join(cfg["history"])
     assert all(s in hist for s in ("56000..56031", "57000..57015", "21000..21015", "0.6 x M_d24"))
