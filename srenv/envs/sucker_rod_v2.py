@@ -125,7 +125,7 @@ V2_COST_TERMS = ("cost_tagging", "cost_parted_rods")
 Classifier = Callable[[dict], np.ndarray]
 
 
-@functools.lru_cache(maxsize=1)
+@functools.lru_cache(maxsize=4)
 def default_classifier(model: Path | None = None) -> Classifier | None:
     """The card classifier v2 was released with (:mod:`srenv.analysis.card_classifier`, run 2's model, pinned
     as ``srenv/models/classifier_run2.npz`` so v2 keeps its numbers when ``srenv classify`` ships a newer one;
@@ -265,9 +265,9 @@ class SuckerRodV2Env(SuckerRodV1Env):
                                                             r.goodman_max_pct, self.event_rate_scale):
             label, sev = "parted_rods", 1.0  # they part at the end of this interval: its liquid was lifted
             self._condition = (label, sev)
-            b = ev.Booking()
+            b, tag_cost = ev.Booking(), 0.0
         else:
-            b = ev.bookkeeping(label, sev, r.lifted_m3, r.strokes)
+            b, tag_cost = self._booking(label, sev, r)
         if b.lost_m3 > 0:
             self.sim.return_liquid(b.lost_m3)  # the lost liquid falls back: it can be pumped again
         hours = r.duration_s / 3600.0
@@ -276,12 +276,17 @@ class SuckerRodV2Env(SuckerRodV1Env):
         terms["reward_lost_production"] = -self.econ.net_value_usd_m3 * b.lost_m3 / hours
         terms["reward_tagging"] = -workover * b.tag_damage / hours
         terms["reward_workover"] = -workover / hours if parted else 0.0
-        tagging = label in ("tagging_down", "tagging_up")
-        costs["cost_tagging"] = sev * r.pumping_fraction if tagging else 0.0
+        costs["cost_tagging"] = tag_cost
         costs["cost_parted_rods"] = 1.0 if parted else 0.0
         fill = r.fillage if r.displaced_m3 > 0 else self._last.fillage
         self._true = (ev.true_label(label, fill), sev)
         return parted
+
+    def _booking(self, label: str | None, sev: float, r: IntervalResult) -> tuple[ev.Booking, float]:
+        """What the env books for the interval's condition (:func:`srenv.task.events.bookkeeping`: v2's fixed
+        shares) and the interval's ``cost_tagging`` (severity x fraction pumped); v3 books from the physics."""
+        tagging = label in ("tagging_down", "tagging_up")
+        return ev.bookkeeping(label, sev, r.lifted_m3, r.strokes), (sev * r.pumping_fraction if tagging else 0.0)
 
     # ------------------------------------------------------------------------------------------ obs / info
     def _observe(self) -> np.ndarray:
