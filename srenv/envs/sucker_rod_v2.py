@@ -93,6 +93,8 @@ Version history
   action; Kelvin-Voigt damping with zeta_1 = 0.08 on every well's fundamental). Planned before release: the
   conditions branch's physics of every condition and its classifier.
 * v1 / v0: unchanged (see their modules).
+* v3 (:mod:`srenv.envs.sucker_rod_v3`): the leaks' volumes and the tagging damage from the physics, run 7's
+  classifier; v2 keeps every number.
 """
 
 from __future__ import annotations

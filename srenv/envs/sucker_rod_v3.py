@@ -95,7 +95,7 @@ class SuckerRodV3Env(v2.SuckerRodV2Env):
         return spec
 
     def _interval_runner(self) -> IntervalRunner:
-        self.sim.fixed_contact_ends = True  # a spacing drift is a fixed position (srenv.task.tag_contact)
+        self.sim.fix_contact_ends()  # a spacing drift is a fixed position (srenv.task.tag_contact)
         return super()._interval_runner()
 
     def _running_setpoints(self) -> tuple[float, float]:

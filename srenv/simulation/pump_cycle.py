@@ -148,6 +148,10 @@ class PumpCycle:
         if kept is not None:
             self._cond_state.update({name: kept[name] for name in pump_conditions.CONTACT_FIELDS})
 
+    def fix_contact_ends(self) -> None:
+        """From now on a stop at the bottom keeps the tagging contact's ends (:attr:`fixed_contact_ends`)."""
+        self.fixed_contact_ends = True
+
     def contact_ends(self) -> dict:
         """The tagging contact's ends (kernel sign, positive down) and whether each is placed (laws.pump_conditions)."""
         if not hasattr(self, "_cond_state"):
