@@ -147,7 +147,7 @@ def default_classifier(model: Path | None = None) -> Classifier | None:
         try:
             f = features(trace["polished_rod_position_m"], trace["polished_rod_load_n"])
         except BadCard:
-            return _uniform(trace)
+            return uniform_probabilities(trace)
         return np.asarray(clf.proba_features(f[None, :])[0], np.float64)[order]
 
     return classify
@@ -169,7 +169,8 @@ def physics_overrides(spec: wf.WellSpec) -> dict[str, Any]:
     return v2_physics.overrides(spec)
 
 
-def _uniform(_: dict) -> np.ndarray:
+def uniform_probabilities(_: dict) -> np.ndarray:
+    """The classifier of no model: 1/12 for every label."""
     return np.full(len(LABELS), 1.0 / len(LABELS))
 
 
@@ -196,7 +197,7 @@ class SuckerRodV2Env(SuckerRodV1Env):
         elif scenario == "validation":
             self.split = "validation"
         self.event_rate_scale = rate
-        self.classifier = classifier or default_classifier() or _uniform
+        self.classifier = classifier or default_classifier() or uniform_probabilities
         self._probs: tuple[Any, np.ndarray] = (None, np.zeros(0))  # (the stroke classified, its probabilities)
         self.obs_names = FIELD_OBS_NAMES if observation == "field" else PRIVILEGED_OBS_NAMES
         self.observation_space = spaces.Box(-OBS_BOUND, OBS_BOUND, (len(self.obs_names),), np.float32)

@@ -85,7 +85,7 @@ class SuckerRodV3Env(v2.SuckerRodV2Env):
                  event_rate_scale: float = 1.0, classifier: v2.Classifier | None = None, fast_stepping: bool = True,
                  **kwargs: Any) -> None:
         super().__init__(scenario, observation, render_mode, overrides, episode_hours, interval_s, event_rate_scale,
-                         classifier or default_classifier(), fast_stepping, **kwargs)
+                         classifier or default_classifier() or v2.uniform_probabilities, fast_stepping, **kwargs)
 
     def _episode_spec(self, seed, rng):
         spec = super()._episode_spec(seed, rng)
