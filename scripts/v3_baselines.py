@@ -27,6 +27,9 @@ from typing import Any
 import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from v3_mechanism import no_arguments
+
 from agents.envs import make_env
 from agents.evaluation.agent import build_policy
 from agents.evaluation.replay import load_report, policy_specs
@@ -95,11 +98,7 @@ def episodes(env: Any, policy: Any) -> dict[str, Any]:
 
 
 def main(argv: list[str] | None = None) -> None:
-    args = sys.argv[1:] if argv is None else argv
-    if args:
-        print(f"v3_baselines: {args[0]!r}: expected no arguments (the episodes are fixed; see the docstring)",
-              file=sys.stderr)
-        raise SystemExit(2)
+    no_arguments("v3_baselines", argv)
     out: dict[str, Any] = {"seeds": [SEEDS.start, SEEDS.stop - 1], "scenario": "train"}
     for env_id in VERSIONS:
         env = make_env(env_id, scenario="train", observation="field")

@@ -94,12 +94,17 @@ def leaks() -> dict:
     return out
 
 
-def main(argv: list[str] | None = None) -> None:
+def no_arguments(script: str, argv: list[str] | None) -> None:
+    """A script of fixed figures refuses any argument: one line naming it, exit 2 (before any work)."""
     args = sys.argv[1:] if argv is None else argv
     if args:
-        print(f"v3_mechanism: {args[0]!r}: expected no arguments (the figures are fixed; see the docstring)",
+        print(f"{script}: {args[0]!r}: expected no arguments (the figures are fixed; see the docstring)",
               file=sys.stderr)
         raise SystemExit(2)
+
+
+def main(argv: list[str] | None = None) -> None:
+    no_arguments("v3_mechanism", argv)
     print(json.dumps({"well_seed": SEED, "tag_reference": tag_reference(), "tagging": tagging(), "leaks": leaks()}))
 
 
