@@ -7,7 +7,7 @@ One JSON object on stdout, no flags and no files written:
 * ``tag_reference``: the plunger's impact speed at each of training wells 0..19 (``train`` seeds 0..19) at its
   installed point, tagging_down at severity 0.6 (the middle of the drawn range), and their median: the reference
   speed of srenv.task.tag_contact is that median / sqrt(0.6).
-* ``tagging``: on training well seed 3 (train-?), tagging_down at severity 0.6 (and 0), the interval after the
+* ``tagging``: on training well train-003 (seed 3), tagging_down at severity 0.6 (and 0), the interval after the
   onset one (the onset at the installed point): ``reward_tagging`` (USD/h) and ``cost_tagging`` in v2 and v3 at
   8 / 6 / 3 SPM on the full stroke and at 6 SPM on 2.0 and 1.6 m; and v3's SPM sweep 2..9 by 0.25.
 * ``leaks``: the same well, each leak at severity 0.2: the lost share of the lifted liquid
