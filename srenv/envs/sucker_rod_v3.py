@@ -6,9 +6,10 @@ What v3 changes (everything else, spaces included, is v2's)
 * **Tagging damage from the contact** (:mod:`srenv.task.tag_contact`). The pump's end is placed once, in the
   first stroke after the spacing drift, and stays there (``Simulator.fixed_contact_ends``; v2 places it again
   after every stop, relative to the stroke that follows). Each interval's damage is its strokes x the damage of
-  its last (or reused) stroke, ``1e-6 x (F_peak / F_fluid)^2`` workovers with ``F_peak`` the stroke's peak
-  contact force: 0 without contact, smaller at a slower or shorter stroke (v2: 1e-6 x severity per stroke,
-  whatever the stroke).
+  its last (or reused) stroke, ``1e-6 x (v_impact / 0.36 m/s)^2`` workovers with ``v_impact`` the plunger's speed
+  when it reaches the end: 0 without contact, continuous in the action, smaller from 8 to 3 SPM and with a
+  shorter stroke on the wells measured (not monotone in SPM: the rods' response; docs/task.md) (v2: 1e-6 x
+  severity per stroke, whatever the stroke).
 * **Leaks from the law's own model** (:mod:`srenv.task.leaks`). A leaking valve's speed ``v_leak = C dp / A_pl``
   is fixed in m/s at the onset; the config's ``v_leak / v_peak`` follows each interval's SPM and stroke; the
   liquid lost is the share of the displacement the leak passes while the valve is closed (pumping faster
@@ -43,10 +44,10 @@ USD per hour of well time, the sum of ``info["reward_*"]``: v1's terms and
 | term | USD/h | meaning |
 |---|---|---|
 | ``reward_lost_production`` | ``-v V_lost / h`` | a leaking valve's passed share of the lifted liquid; a hole's ``min(lifted, Q_hole h)``; parted rods as v2 |
-| ``reward_tagging`` | ``-workover_usd d_tag / h`` | ``d_tag`` = strokes x ``1e-6 (F_peak / F_fluid)^2`` workovers |
+| ``reward_tagging`` | ``-workover_usd d_tag / h`` | ``d_tag`` = strokes x ``1e-6 (v_impact / 0.36 m/s)^2`` workovers |
 | ``reward_workover`` | ``-workover_usd / h`` | the rod job after parted rods (as v2) |
 
-``info["cost"]`` >= 0 sums v1's parts, ``cost_tagging`` (fraction pumped x ``F_peak / F_fluid``, unitless) and
+``info["cost"]`` >= 0 sums v1's parts, ``cost_tagging`` (fraction pumped x ``v_impact / 0.36 m/s``, unitless) and
 ``cost_parted_rods`` (as v2).
 
 Version history
@@ -62,9 +63,12 @@ from __future__ import annotations
 
 from typing import Any
 
+import numpy as np
+
 from ..analysis.card_classifier import V3_MODEL
 from ..task import events as ev
 from ..task import leaks, tag_contact
+from ..task import well_family as wf
 from ..task.interval import IntervalResult, IntervalRunner
 from . import sucker_rod_v2 as v2
 from .vector import vector_entry
@@ -87,9 +91,9 @@ class SuckerRodV3Env(v2.SuckerRodV2Env):
         super().__init__(scenario, observation, render_mode, overrides, episode_hours, interval_s, event_rate_scale,
                          classifier or default_classifier() or v2.uniform_probabilities, fast_stepping, **kwargs)
 
-    def _episode_spec(self, seed, rng):
+    def _episode_spec(self, seed: int | None, rng: np.random.Generator) -> wf.WellSpec:
         spec = super()._episode_spec(seed, rng)
-        self._running_condition: tuple = (None, 0.0, ())  # the condition, severity and extra overrides the simulator runs
+        self._running_condition: tuple = (None, 0.0, ())  # the condition, severity and extra overrides running
         self._onset = (0.0, 0.0)  # the setpoints (SPM, stroke m) the current condition started at
         self._hole_m3_h = 0.0
         return spec
