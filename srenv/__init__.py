@@ -9,6 +9,7 @@ __version__ = "0.2.0"
 ENV_ID = "srenv/SuckerRod-v0"
 ENV_ID_V1 = "srenv/SuckerRod-v1"
 ENV_ID_V2 = "srenv/SuckerRod-v2"
+ENV_ID_V3 = "srenv/SuckerRod-v3"
 
 # Every env srenv registers: id -> (entry point, default kwargs shown by gymnasium.spec(id)). Adding an env
 # is one line here. No TimeLimit (max_episode_steps) and no reward_threshold are registered on purpose:
@@ -24,11 +25,14 @@ ENVS: dict[str, tuple[str, dict]] = {
                 {"scenario": "train", "observation": "field", "episode_hours": 12.0, "interval_s": 300.0}),
     ENV_ID_V2: ("srenv.envs.sucker_rod_v2:SuckerRodV2Env",
                 {"scenario": "train", "observation": "field", "episode_hours": 12.0, "interval_s": 300.0}),
+    ENV_ID_V3: ("srenv.envs.sucker_rod_v3:SuckerRodV3Env",
+                {"scenario": "train", "observation": "field", "episode_hours": 12.0, "interval_s": 300.0}),
 }
 # native vector envs (gymnasium.make_vec(..., vectorization_mode="vector_entry_point"), srenv/envs/vector.py);
 # v2's is a SyncVectorEnv of single envs until it gets a native one
 VECTOR_ENTRY_POINTS: dict[str, str] = {ENV_ID_V1: "srenv.envs.vector:make_v1",
-                                       ENV_ID_V2: "srenv.envs.vector:make_v2"}
+                                       ENV_ID_V2: "srenv.envs.vector:make_v2",
+                                       ENV_ID_V3: "srenv.envs.sucker_rod_v3:make_vec"}
 
 
 def register_envs() -> None:

@@ -33,6 +33,8 @@ DEFAULT_MODEL = Path(__file__).resolve().parents[1] / "models" / "classifier.npz
 # run 2's weights, pinned: srenv/SuckerRod-v2's observation carries its probabilities, so v2 keeps its numbers
 # whatever model ``srenv classify`` ships (docs/conditions.md, run 4)
 V2_MODEL = DEFAULT_MODEL.with_name("classifier_run2.npz")
+# run 7's weights (the shipped model when v3 was made), pinned the same way for srenv/SuckerRod-v3
+V3_MODEL = DEFAULT_MODEL.with_name("classifier_run7.npz")
 # the pump (downhole) card model of run P1 (`srenv classify --card pump`)
 PUMP_MODEL = DEFAULT_MODEL.with_name("classifier_pump.npz")
 # run P2's pump model with the load level (`srenv classify --config WELL --card pump`), if shipped

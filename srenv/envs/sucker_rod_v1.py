@@ -265,6 +265,7 @@ class SuckerRodV1Env(CardWindow, gym.Env):
             avg = float(np.clip(avg, self._avg_spm - ctl.spm_rate_limit, self._avg_spm + ctl.spm_rate_limit))
         d_avg = avg - self._avg_spm
         self.sim.set_inflow_multiplier(self.inflow_multiplier(self._elapsed()))
+        self._setpoints = (avg, stroke)  # the interval's requested setpoints (v3's conditions read them)
         self._before_interval()
         failure = None
         duration = min(self.cfg.task.interval_s, self.horizon_s - self._elapsed())

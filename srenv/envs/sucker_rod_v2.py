@@ -93,6 +93,8 @@ Version history
   action; Kelvin-Voigt damping with zeta_1 = 0.08 on every well's fundamental). Planned before release: the
   conditions branch's physics of every condition and its classifier.
 * v1 / v0: unchanged (see their modules).
+* v3 (:mod:`srenv.envs.sucker_rod_v3`): the leaks' volumes and the tagging damage from the physics, run 7's
+  classifier; v2 keeps every number.
 """
 
 from __future__ import annotations
@@ -125,7 +127,7 @@ V2_COST_TERMS = ("cost_tagging", "cost_parted_rods")
 Classifier = Callable[[dict], np.ndarray]
 
 
-@functools.lru_cache(maxsize=1)
+@functools.lru_cache(maxsize=4)
 def default_classifier(model: Path | None = None) -> Classifier | None:
     """The card classifier v2 was released with (:mod:`srenv.analysis.card_classifier`, run 2's model, pinned
     as ``srenv/models/classifier_run2.npz`` so v2 keeps its numbers when ``srenv classify`` ships a newer one;
@@ -145,7 +147,7 @@ def default_classifier(model: Path | None = None) -> Classifier | None:
         try:
             f = features(trace["polished_rod_position_m"], trace["polished_rod_load_n"])
         except BadCard:
-            return _uniform(trace)
+            return uniform_probabilities(trace)
         return np.asarray(clf.proba_features(f[None, :])[0], np.float64)[order]
 
     return classify
@@ -167,7 +169,8 @@ def physics_overrides(spec: wf.WellSpec) -> dict[str, Any]:
     return v2_physics.overrides(spec)
 
 
-def _uniform(_: dict) -> np.ndarray:
+def uniform_probabilities(_: dict) -> np.ndarray:
+    """The classifier of no model: 1/12 for every label."""
     return np.full(len(LABELS), 1.0 / len(LABELS))
 
 
@@ -194,7 +197,7 @@ class SuckerRodV2Env(SuckerRodV1Env):
         elif scenario == "validation":
             self.split = "validation"
         self.event_rate_scale = rate
-        self.classifier = classifier or default_classifier() or _uniform
+        self.classifier = classifier or default_classifier() or uniform_probabilities
         self._probs: tuple[Any, np.ndarray] = (None, np.zeros(0))  # (the stroke classified, its probabilities)
         self.obs_names = FIELD_OBS_NAMES if observation == "field" else PRIVILEGED_OBS_NAMES
         self.observation_space = spaces.Box(-OBS_BOUND, OBS_BOUND, (len(self.obs_names),), np.float32)
@@ -265,9 +268,9 @@ class SuckerRodV2Env(SuckerRodV1Env):
                                                             r.goodman_max_pct, self.event_rate_scale):
             label, sev = "parted_rods", 1.0  # they part at the end of this interval: its liquid was lifted
             self._condition = (label, sev)
-            b = ev.Booking()
+            b, tag_cost = ev.Booking(), 0.0
         else:
-            b = ev.bookkeeping(label, sev, r.lifted_m3, r.strokes)
+            b, tag_cost = self._booking(label, sev, r)
         if b.lost_m3 > 0:
             self.sim.return_liquid(b.lost_m3)  # the lost liquid falls back: it can be pumped again
         hours = r.duration_s / 3600.0
@@ -276,12 +279,17 @@ class SuckerRodV2Env(SuckerRodV1Env):
         terms["reward_lost_production"] = -self.econ.net_value_usd_m3 * b.lost_m3 / hours
         terms["reward_tagging"] = -workover * b.tag_damage / hours
         terms["reward_workover"] = -workover / hours if parted else 0.0
-        tagging = label in ("tagging_down", "tagging_up")
-        costs["cost_tagging"] = sev * r.pumping_fraction if tagging else 0.0
+        costs["cost_tagging"] = tag_cost
         costs["cost_parted_rods"] = 1.0 if parted else 0.0
         fill = r.fillage if r.displaced_m3 > 0 else self._last.fillage
         self._true = (ev.true_label(label, fill), sev)
         return parted
+
+    def _booking(self, label: str | None, sev: float, r: IntervalResult) -> tuple[ev.Booking, float]:
+        """What the env books for the interval's condition (:func:`srenv.task.events.bookkeeping`: v2's fixed
+        shares) and the interval's ``cost_tagging`` (severity x fraction pumped); v3 books from the physics."""
+        tagging = label in ("tagging_down", "tagging_up")
+        return ev.bookkeeping(label, sev, r.lifted_m3, r.strokes), (sev * r.pumping_fraction if tagging else 0.0)
 
     # ------------------------------------------------------------------------------------------ obs / info
     def _observe(self) -> np.ndarray:

@@ -22,6 +22,11 @@ GAS_MIN_DELAY_FRACTION = 0.01
 class PumpCycle:
     """Valve-cycle bookkeeping of :class:`srenv.simulation.simulator.Simulator` (uses its cfg, annulus, gas, law)."""
 
+    # a tagging condition's contact ends, once placed, stay where they are through a stop at the bottom (v3: a
+    # spacing drift is a fixed position); False (v2 and the cards): a stop's reset clears them and the first
+    # stroke after the restart places them again, relative to that stroke
+    fixed_contact_ends = False
+
     def _intake_pa(self) -> float:
         return self.annulus.intake_pressure_pa() if self.annulus is not None else self.cfg.pump.intake_pressure_pa
 
@@ -138,7 +143,20 @@ class PumpCycle:
     def _cond_reset(self) -> None:
         """The pump conditions' state at the bottom of the stroke after reset (laws.pump_conditions)."""
         stroke = self.surface.stroke_length_m(self.cfg.surface.stroke_length_m)
+        kept = getattr(self, "_cond_state", None) if self.fixed_contact_ends else None
         self._cond_state = pump_conditions.initial_state(float(self.u[-1]), stroke)
+        if kept is not None:
+            self._cond_state.update({name: kept[name] for name in pump_conditions.CONTACT_FIELDS})
+
+    def fix_contact_ends(self) -> None:
+        """From now on a stop at the bottom keeps the tagging contact's ends (:attr:`fixed_contact_ends`)."""
+        self.fixed_contact_ends = True
+
+    def contact_ends(self) -> dict:
+        """The tagging contact's ends (kernel sign, positive down) and whether each is placed (laws.pump_conditions)."""
+        if not hasattr(self, "_cond_state"):
+            self._cond_reset()
+        return {name: self._cond_state[name] for name in pump_conditions.CONTACT_FIELDS}
 
     def _cond_keep(self, valve: np.ndarray) -> None:
         """After a run: the plunger's travel, direction and the contact ends carry over to the next."""

@@ -169,15 +169,18 @@ def booked(label: str | None) -> bool:
     return label in BOOKED
 
 
-def apply_condition(sim: Any, base_cfg: Any, label: str | None, severity: float) -> None:
+def apply_condition(sim: Any, base_cfg: Any, label: str | None, severity: float,
+                    extra: dict[str, Any] | None = None) -> None:
     """Put the simulator on the config of a condition (or back on ``base_cfg``), keeping its state.
 
     The condition's card-set settings for the reservoir (``inflow.*``: a full column so an isolated card cannot
-    pump off) are left out: in an episode the well's own annulus and inflow carry on through a condition."""
+    pump off) are left out: in an episode the well's own annulus and inflow carry on through a condition.
+    ``extra``: overrides that win over the condition's (v3's leak fractions at the interval's setpoints)."""
     from ..config import load_config
 
     # parted rods end the episode in the interval they part in (the env books it): the base physics runs it
     over = condition_overrides(label, severity, base_cfg) if label not in (None, "parted_rods") else {}
+    over.update(extra or {})
     over = {k: v for k, v in over.items() if not k.startswith("inflow.")}
     cfg = load_config(base_cfg, over) if over else base_cfg
     if cfg is sim.cfg or cfg == sim.cfg:

@@ -50,6 +50,7 @@ HYSTERESIS = 0.02  # share of the plunger travel it must move back before the st
 # the fields a run hands to the next (the plunger's travel, direction and the contact ends)
 STATE_FIELDS = ("ref_top_m", "ref_bottom_m", "last_ub_m", "rising", "tag_top_m", "tag_bottom_m",
                 "tag_top_set", "tag_bottom_set")
+CONTACT_FIELDS = ("tag_top_m", "tag_bottom_m", "tag_top_set", "tag_bottom_set")  # the tagging contact's ends
 
 
 def configure(rec: np.ndarray, pump) -> None:

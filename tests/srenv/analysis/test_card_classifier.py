@@ -31,6 +31,8 @@ PINNED = {
     "classifier_pump_p3.npz": "a933644d7ed3503d663b3a12c21f72620a63f33ae145f9b8b9dd6dff198e5502",
     "classifier_run2.npz": "560fd6d97bc7d4f57f29f4511b1bbe447c4f7a4a4d24aa64d7d56d20488f3f0a",
     "classifier_run5.npz": "445891484d25c62a8c66a5116118bb9e43801199805c92995663ad96869b339a",
+    # v3's pinned copy of run 7 (the shipped classifier.npz when v3 was made): the same probabilities
+    "classifier_run7.npz": "0e60dba5f5c087643cce6a6b8aa73c6cb77e0a77eb365fd25ade07a040ce40ea",
 }
 DIGESTS = """
 import hashlib, json

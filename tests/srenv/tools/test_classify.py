@@ -191,6 +191,7 @@ def test_the_wheel_ships_the_model(wheel) -> None:
     names = zipfile.ZipFile(wheel).namelist()
     assert "srenv/models/classifier.npz" in names
     assert "srenv/models/classifier_run2.npz" in names  # v2's observation reads run 2's model, pinned
+    assert "srenv/models/classifier_run7.npz" in names  # v3's reads run 7's, pinned
     assert "srenv/models/classifier_pump.npz" in names  # srenv classify --card pump (run P1)
     assert "srenv/models/classifier_config.npz" in names  # srenv classify --config on surface cards (run 9)
 
