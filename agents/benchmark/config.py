@@ -48,7 +48,7 @@ def _seeds(value: Any, key: str) -> list[int]:
 # and the pipeline's settings. Each block's contents are checked below.
 _NULL = type(None)
 TOP_KEYS: Declared = {
-    "env_id": ((str,), "an srenv env id (srenv/SuckerRod-v1 or srenv/SuckerRod-v2)"),
+    "env_id": ((str,), "an srenv env id (srenv/SuckerRod-v1, -v2 or -v3)"),
     "env_kwargs": ((dict,), "a mapping of the env's keywords"),
     "workers": ((int, float), "a positive integer (worker processes; bounded in agents/inputs.py)"),
     "tuning": ((dict,), "a mapping with seeds"),
@@ -59,7 +59,7 @@ TOP_KEYS: Declared = {
     "baselines": ((dict,), "a mapping baseline -> its search"),
     "agents": ((dict,), "a mapping {selection, runs}"),
     "guarded": ((dict, _NULL), "a mapping {fallback, scale, guard}"),
-    "evaluate_only": ((dict, _NULL), "a mapping {agents, alarm_params, references}"),
+    "evaluate_only": ((dict, _NULL), "a mapping {agents, alarm_params, references, tuned}"),
     "quick": ((dict, _NULL), "a mapping of the top-level blocks --quick replaces"),
     "work_dir": ((str, _NULL), "a directory path (the runs' temporary files)"),
 }
@@ -69,6 +69,7 @@ EVALUATE_ONLY_KEYS: Declared = {
     "agents": ((list,), "a list of the shipped report's agent names"),
     "alarm_params": ((dict, _NULL), "a mapping of alarm_pump_off's parameters"),
     "references": ((dict, _NULL), "a mapping causal_oracle / oracle -> parameters or null"),
+    "tuned": ((str, _NULL), "a path to a tuned-baselines archive (its `tuned` replaces the report's baselines)"),
 }
 
 
