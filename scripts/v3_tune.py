@@ -33,8 +33,8 @@ OUT = ROOT / "docs" / "v3" / "tuned.json"
 V2_REPORT = ROOT / "docs" / "v2" / "benchmark.json"
 
 
-def main() -> None:
-    no_arguments("v3_tune.py", None)
+def main(argv: list[str] | None = None) -> None:
+    no_arguments("v3_tune.py", argv)
     check_output_dir(OUT.parent, (OUT.name,))
     cfg = load_benchmark_config(CONFIG)
     t0 = time.perf_counter()
