@@ -36,6 +36,8 @@ import numpy as np
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from v3_mechanism import no_arguments
+from v3_tune import CONFIG, ROOT, V2_REPORT
+from v3_tune import OUT as TUNED
 
 from agents.benchmark.config import load_benchmark_config
 from agents.benchmark.fresh import _policies, _renormalise, _specs, fresh_episode_job, load_tuned, with_tuned
@@ -44,11 +46,7 @@ from agents.evaluation.replay import load_report
 from agents.evaluation.rollout import Runner
 from agents.inputs import check_output_dir
 
-ROOT = Path(__file__).resolve().parents[1]
-CONFIG = ROOT / "configs" / "benchmark" / "v3.yaml"
-TUNED = ROOT / "docs" / "v3" / "tuned.json"
-V2_REPORT = ROOT / "docs" / "v2" / "benchmark.json"
-OUT = ROOT / "docs" / "v3" / "validation.json"
+OUT = TUNED.parent / "validation.json"
 SEEDS = list(range(21800, 21850))  # validation wells 0..49 once each (seed mod 50); registered here, unplayed
 TUNED_BASELINES = ("installed", "best_constant", "pump_off", "fillage_pi", "alarm_pump_off")
 # the true conditions the figures are read by (info["condition"]; None/"" is a normal interval)
