@@ -148,10 +148,15 @@ def evaluate_fresh(config: str, fresh_seed: int, episodes: int, out_dir: str | P
 
 def load_tuned(path: str | Path) -> dict[str, Any]:
     """The ``tuned`` record of a tuned-baselines archive (``docs/v3/tuned.json``, scripts/v3_tune.py): read as data,
-    each baseline's ``params`` a mapping (their values are checked where a policy is built from them)."""
+    each baseline's ``params`` a mapping (their values are checked where a policy is built from them). A relative
+    path is taken as given, else in the checkout (beside ``models/``, as the shipped reports)."""
     from srenv.input_files import read_json
 
+    from ..evaluation.manifest import MODELS_HOME
+
     p = Path(path)
+    if not (p.is_file() or p.is_absolute()):
+        p = MODELS_HOME.parent / p
     if not p.is_file():
         raise ReplayError(f"evaluate_only.tuned = {str(path)!r}: no such file (expected a tuned-baselines JSON)")
     rec = read_json(p, "evaluate_only.tuned", "tuned-baselines archive", 5_000_000)

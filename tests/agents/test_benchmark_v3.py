@@ -91,7 +91,9 @@ def test_v3_tuned_baselines_replace_a_v2_reports_and_its_students_base():
     assert PLAYABLE_REPORTS[ENV_ID_V3][:2] == (ENV_ID_V3, ENV_ID_V2)
 
 
-def test_a_tuned_archive_that_is_not_one_is_refused_in_one_line(tmp_path):
+def test_a_tuned_archive_that_is_not_one_is_refused_in_one_line(tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)  # the config's relative path is found in the checkout from anywhere
+    assert load_tuned("docs/v3/tuned.json") == load_tuned(REPO / "docs/v3/tuned.json")
     with pytest.raises(ReplayError, match="evaluate_only.tuned = .*no such file"):
         load_tuned(tmp_path / "missing.json")
     bad = tmp_path / "bad.json"
