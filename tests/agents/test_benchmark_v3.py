@@ -127,3 +127,19 @@ def test_evaluate_only_plays_v3s_tuned_baselines_and_v2s_students_and_replay_rep
     bad = tmp_path / "bad"
     assert main(["benchmark", str(v2), "--evaluate-only", "--fresh-seed", "5", "--episodes", "1",
                  "--out-dir", str(bad), "--report", str(out / "benchmark.json")]) == 2 and not bad.exists()
+
+
+def test_v3_trains_on_its_native_vector_env_and_takes_a_residual():
+    from agents.training.native_vec import native_plan
+    from agents.training.residual_env import RESIDUAL_ENV_ID, make_residual_env
+
+    kwargs = {"inner_env_id": ENV_ID_V3, "base": "pump_off", "scale": 0.5, "scenario": "train"}
+    inner, rest, shaped, residual = native_plan(RESIDUAL_ENV_ID, kwargs)
+    assert inner == ENV_ID_V3 and rest == {"scenario": "train"} and not shaped and residual["base"] == "pump_off"
+    env = make_residual_env(ENV_ID_V3, "pump_off", scale=0.5, scenario="train", episode_hours=0.25)
+    try:
+        assert env.unwrapped.spec.id == ENV_ID_V3  # the residual drives v3 itself, not v2
+        obs, _ = env.reset(seed=0)
+        assert obs.shape == (env.observation_space.shape[0],)
+    finally:
+        env.close()
