@@ -35,6 +35,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from agreement_guard import require_registered
 from estimated_mpc_pilot import arguments
+from oracle_distill_more import dagger
 from v2_test_look import test_look
 from v3_tune import OUT as TUNED
 from v3_tune import ROOT
@@ -44,8 +45,7 @@ from agents.benchmark.assemble import _ensemble_record
 from agents.benchmark.config import load_benchmark_config
 from agents.benchmark.fresh import _policies, load_tuned
 from agents.benchmark.report import _atomic_write, _json_clean, build_report
-from agents.benchmark.runs import oracle_student, residual_spec
-from agents.evaluation.rollout import Runner
+from agents.benchmark.runs import residual_spec
 from agents.policies.ensemble import ensemble_spec
 
 CONFIG = ROOT / "configs/benchmark/v3_oracle_distilled.yaml"
@@ -67,18 +67,6 @@ def setup() -> tuple[dict[str, Any], str, dict[str, Any], dict[str, Any], dict[s
 
 def write(path: Path, obj: Any) -> None:
     _atomic_write(path, json.dumps(_json_clean(obj), indent=1))
-
-
-def dagger(out: Path, workers: int) -> dict[str, Any]:
-    cfg, name, run, tuned, res = setup()
-    rec_path = out / "dagger.json"
-    done = json.loads(rec_path.read_text()) if rec_path.is_file() else {}
-    with Runner(workers) as runner:
-        for seed in run["seeds"]:
-            if str(seed) not in done:
-                done[str(seed)] = oracle_student(cfg, runner, name, seed, tuned, res, out / "models")
-                write(rec_path, done)
-    return done
 
 
 def ensemble(out: Path) -> tuple[str, dict[str, Any], dict[str, Any]]:
@@ -160,7 +148,7 @@ def main() -> None:
     require_registered(a.stage, CONFIG, REGISTERS, "v3_oracle_distilled")
     a.out.mkdir(parents=True, exist_ok=True)
     if a.stage == "dagger":
-        print(json.dumps({k: v["distill"] for k, v in dagger(a.out, a.workers).items()}, default=float))
+        print(json.dumps({k: v["distill"] for k, v in dagger(a.out, a.workers, setup).items()}, default=float))
     elif a.stage == "gate":
         rep = play_gate(a.out, a.workers)
         print(json.dumps({"gate": rep["gate"], "figures": {n: {k: f[k] for k in ("usd_h", "cost", "vs_best_tuned_usd_h")}
