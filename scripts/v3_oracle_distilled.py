@@ -16,6 +16,12 @@ episodes of :data:`GATE_SEEDS`, played and reported as scripts/v3_validation.py 
 re-tuned by the benchmark's code and checked equal to docs/v3/tuned.json; the tuned baselines and the ensemble on
 v3's 100 test episodes) -> OUT/benchmark.json (beside OUT/models, where ``--evaluate-only --report`` finds the
 students); :func:`judge` is the rule -> OUT/test_judge.json.
+``--stage fresh_judge`` (plays nothing): THE FRESH LOOK is the benchmark's own command (the config's history)
+
+    python -m agents benchmark configs/benchmark/v3_oracle_distilled.yaml --evaluate-only --fresh-seed 20261207 \
+        --episodes 40 --report runs/q44/benchmark.json --out-dir runs/q44/fresh
+
+and this stage judges its report (OUT/fresh/benchmark.json) by :func:`judge` -> OUT/fresh_judge.json.
 Each stage refuses to play (exit 2, one line) unless the config's history registers it in a committed file
 (scripts/agreement_guard.py's ``require_registered`` with :data:`REGISTERS`).
 """
@@ -50,10 +56,10 @@ from agents.policies.ensemble import ensemble_spec
 
 CONFIG = ROOT / "configs/benchmark/v3_oracle_distilled.yaml"
 GATE_SEEDS = list(range(21850, 21900))  # THE GATE's: v3 validation wells 0..49 once each (seed mod 50), unplayed
-STAGES = ("dagger", "gate", "test")
+STAGES = ("dagger", "gate", "test", "fresh_judge")
 # the words that start a history line (after "<date> <time> UTC, ") registering a stage, committed before it is played
 REGISTERS = {"dagger": "REGISTERS THE DAGGER AND THE GATE", "gate": "REGISTERS THE DAGGER AND THE GATE",
-             "test": "REGISTERS THE TEST LOOK"}
+             "test": "REGISTERS THE TEST LOOK", "fresh_judge": "REGISTERS THE FRESH LOOK"}
 MARGIN = 0.10  # the test look's: >= +10 % of the best tuned baseline's reward rate
 
 
@@ -153,8 +159,12 @@ def main() -> None:
         rep = play_gate(a.out, a.workers)
         print(json.dumps({"gate": rep["gate"], "figures": {n: {k: f[k] for k in ("usd_h", "cost", "vs_best_tuned_usd_h")}
                                                             for n, f in rep["figures"].items()}}, default=float))
-    else:
+    elif a.stage == "test":
         print(json.dumps(play_test(a.out, a.workers), default=float))
+    else:  # plays nothing: the fresh look's report (the benchmark's --evaluate-only, --out-dir OUT/fresh) judged
+        verdict = judge(json.loads((a.out / "fresh" / "benchmark.json").read_text()), "oracle_distilled_ensemble")
+        write(a.out / "fresh_judge.json", verdict)
+        print(json.dumps(verdict, default=float))
 
 
 if __name__ == "__main__":

@@ -81,8 +81,8 @@ def test_stages_refuse_an_unregistered_or_uncommitted_config(tmp_path, capsys):
     cfg = tmp_path / "v3_oracle_distilled.yaml"
     shutil.copyfile(CONFIG, cfg)
     text = cfg.read_text()
-    cfg.write_text(text.replace("REGISTERS THE DAGGER AND THE GATE", "registers nothing"))
     for stage in vod.STAGES:
+        cfg.write_text(text.replace(vod.REGISTERS[stage], "registers nothing"))
         with pytest.raises(SystemExit) as e:
             vod.require_registered(stage, cfg, vod.REGISTERS, "v3_oracle_distilled")
         assert e.value.code == 2
