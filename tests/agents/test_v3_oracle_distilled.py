@@ -130,3 +130,10 @@ def test_look_judge(diff, cost, passed):
     v = vod.judge(_report(diff, cost), "ens")
     assert v["baseline"] == "pump_off" and v["passed"] is passed
     assert v["diff_usd_h"] == pytest.approx(sum(diff) / 4 / 2) and v["relative"] == pytest.approx(sum(diff) / 400)
+
+
+def test_test_look_refuses_a_failed_gate(tmp_path, capsys):
+    (tmp_path / "gate.json").write_text('{"gate": {"design": "oracle_distilled_ensemble", "passed": false}}')
+    with pytest.raises(SystemExit) as e:
+        vod.play_test(tmp_path, 1)
+    assert e.value.code == 2 and "gate passed = False" in capsys.readouterr().err
