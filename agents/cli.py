@@ -115,7 +115,7 @@ def build_parser() -> argparse.ArgumentParser:
                    help="number of test episodes (default 3; --train: the config's)")
     q.add_argument("--seed", type=_flag("quickstart", "--seed"), help="--train: first test seed (S..S+N-1)")
 
-    b = sub.add_parser("benchmark", help="tune baselines, train PPO/SAC, test all on unseen wells (v1 or v2: "
+    b = sub.add_parser("benchmark", help="tune baselines, train PPO/SAC, test all on unseen wells (v1, v2 or v3: "
                        "the YAML's env)")
     b.add_argument("config", help="benchmark YAML, e.g. configs/benchmark/v1.yaml")
     b.add_argument("--quick", action="store_true", help="apply the config's quick: block (minutes, for CI)")
@@ -130,7 +130,7 @@ def build_parser() -> argparse.ArgumentParser:
     b.add_argument("--report", help="--evaluate-only: the benchmark report whose tuned baselines and agents are "
                    "evaluated, models read next to it (default: the shipped v1 report, models/MANIFEST.json)")
 
-    r = sub.add_parser("replay", help="re-run a benchmark report's test episodes from its own record (v1 or v2); "
+    r = sub.add_parser("replay", help="re-run a benchmark report's test episodes from its own record (v1, v2 or v3); "
                        "exit 1 if a return differs")
     r.add_argument("report", help="benchmark JSON, e.g. docs/benchmark.json (models are read next to it)")
     r.add_argument("--policy", action="append", help="a policy of the report; repeat (default: all but the oracle)")

@@ -9,9 +9,14 @@ from __future__ import annotations
 from typing import Any
 
 from srenv import ENV_ID as ENV_ID_V0
-from srenv import ENV_ID_V1, ENV_ID_V2
+from srenv import ENV_ID_V1, ENV_ID_V2, ENV_ID_V3
 
-__all__ = ["ENV_ID_V0", "ENV_ID_V1", "ENV_ID_V2", "env_tag", "make_env"]
+__all__ = ["ENV_ID_V0", "ENV_ID_V1", "ENV_ID_V2", "ENV_ID_V3", "PLAYABLE_REPORTS", "env_tag", "make_env"]
+
+# Whose benchmark reports' agents drive an env, its own first: v2 agents see v3's observation unchanged (v3 keeps
+# v2's spaces), v1 agents v1's part of it (agents/evaluation/v1_view.py).
+PLAYABLE_REPORTS: dict[str, tuple[str, ...]] = {ENV_ID_V1: (ENV_ID_V1,), ENV_ID_V2: (ENV_ID_V2, ENV_ID_V1),
+                                                ENV_ID_V3: (ENV_ID_V3, ENV_ID_V2, ENV_ID_V1)}
 
 
 def make_env(env_id: str = ENV_ID_V1, **kwargs: Any) -> Any:

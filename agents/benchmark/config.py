@@ -48,7 +48,7 @@ def _seeds(value: Any, key: str) -> list[int]:
 # and the pipeline's settings. Each block's contents are checked below.
 _NULL = type(None)
 TOP_KEYS: Declared = {
-    "env_id": ((str,), "an srenv env id (srenv/SuckerRod-v1 or srenv/SuckerRod-v2)"),
+    "env_id": ((str,), "an srenv env id (srenv/SuckerRod-v1, -v2 or -v3)"),
     "env_kwargs": ((dict,), "a mapping of the env's keywords"),
     "workers": ((int, float), "a positive integer (worker processes; bounded in agents/inputs.py)"),
     "tuning": ((dict,), "a mapping with seeds"),
@@ -59,7 +59,7 @@ TOP_KEYS: Declared = {
     "baselines": ((dict,), "a mapping baseline -> its search"),
     "agents": ((dict,), "a mapping {selection, runs}"),
     "guarded": ((dict, _NULL), "a mapping {fallback, scale, guard}"),
-    "evaluate_only": ((dict, _NULL), "a mapping {agents, alarm_params, references}"),
+    "evaluate_only": ((dict, _NULL), "a mapping {agents, alarm_params, references, tuned}"),
     "quick": ((dict, _NULL), "a mapping of the top-level blocks --quick replaces"),
     "work_dir": ((str, _NULL), "a directory path (the runs' temporary files)"),
 }
@@ -69,6 +69,7 @@ EVALUATE_ONLY_KEYS: Declared = {
     "agents": ((list,), "a list of the shipped report's agent names"),
     "alarm_params": ((dict, _NULL), "a mapping of alarm_pump_off's parameters"),
     "references": ((dict, _NULL), "a mapping causal_oracle / oracle -> parameters or null"),
+    "tuned": ((str, _NULL), "a path to a tuned-baselines archive (its `tuned` replaces the report's baselines)"),
 }
 
 
@@ -135,7 +136,7 @@ def load_benchmark_config(path: str | Path, quick: bool = False) -> dict[str, An
     if not isinstance(runs, dict):
         raise BenchmarkConfigError(f"benchmark config: agents.runs = {runs!r}: expected a mapping algo -> run")
     for algo, run in runs.items():
-        _check_run(algo, run)
+        _check_run(algo, run, cfg["env_id"])
     for algo, run in runs.items():
         if run.get("teacher") is not None:
             _check_teacher(algo, run, runs, sets["tuning"] | sets["validation"])
@@ -184,8 +185,9 @@ def _check_inits(bl: dict[str, Any]) -> None:
         done.append(name)
 
 
-def _check_run(algo: str, run: Any) -> None:
-    """One ``agents.runs`` entry: its training YAML (read now, not after the tuning), seeds and residual."""
+def _check_run(algo: str, run: Any, env_id: str) -> None:
+    """One ``agents.runs`` entry: its training YAML (read now, not after the tuning) on the benchmark's env
+    ``env_id`` (a v3 benchmark never trains on v2), seeds and residual."""
     from ..training.config import load_train_config
 
     if not isinstance(run, dict) or "config" not in run:
@@ -200,6 +202,9 @@ def _check_run(algo: str, run: Any) -> None:
         raise BenchmarkConfigError(f"benchmark config: agents.runs.{algo}.overrides = {str(over)[:80]!r}: "
                                    "expected a mapping of training-YAML keys")
     tc = load_train_config(run["config"], over)  # checks the YAML and its overrides now, not after tuning
+    if tc.env_id != env_id:
+        raise BenchmarkConfigError(f"benchmark config: agents.runs.{algo}.config = {run['config']}: env_id = "
+                                   f"{tc.env_id!r}: expected the benchmark's env_id {env_id!r}")
     refuse_test_split(tc.env_kwargs.get("scenario", "train"), "train")
     res = run.get("residual")
     if res is not None and (not isinstance(res, dict) or res.get("base", "best_tuned") not in

@@ -34,7 +34,7 @@ from typing import Any
 
 import numpy as np
 
-from ..envs import ENV_ID_V1, env_tag
+from ..envs import PLAYABLE_REPORTS, env_tag
 from ..evaluation.model_pins import PINS, member_pins, spec_members
 from ..evaluation.replay import ReplayError, load_report, policy_specs
 from ..evaluation.rollout import Runner, _cached_env, run_episode
@@ -64,16 +64,17 @@ def fresh_episode_job(job: dict[str, Any]) -> dict[str, Any]:
 
     torch.set_num_threads(1)
     env = _cached_env(job["env_id"], job["env_kwargs"])
-    return run_episode(env, build_policy_any(job["policy"], env), job["seed"])
+    return run_episode(env, build_policy_any(job["policy"], env), job["seed"], trace=job.get("trace", False))
 
 
 def default_report(cfg: dict[str, Any]) -> Path:
     """The shipped report that holds the config's ``evaluate_only.agents``: the config's own env version's first
-    (v2_oracle_distilled.yaml: the shipped v2 agent), else v1's (v2.yaml names v1's agents, played on v2)."""
+    (v2_oracle_distilled.yaml: the shipped v2 agent), else an earlier version's whose agents drive the config's env
+    (``agents.envs.PLAYABLE_REPORTS``: v2.yaml names v1's agents, played on v2; v3.yaml the shipped v2 students)."""
     from ..evaluation.shipped import shipped_report
 
     wanted = (cfg.get("evaluate_only") or {}).get("agents", DEFAULT_AGENTS)
-    for version in dict.fromkeys((env_tag(cfg["env_id"]), "v1")):
+    for version in dict.fromkeys(env_tag(e) for e in PLAYABLE_REPORTS.get(cfg["env_id"], (cfg["env_id"],))):
         try:
             path = shipped_report(version)
         except ValueError:  # no agent of that version is shipped
@@ -114,9 +115,13 @@ def evaluate_fresh(config: str, fresh_seed: int, episodes: int, out_dir: str | P
     cfg = load_benchmark_config(config)
     path = Path(report) if report is not None else default_report(cfg)
     rep = load_report(path)  # data only (JSON, schema and fields checked)
-    if rep["env_id"] not in (cfg["env_id"], ENV_ID_V1):
+    playable = PLAYABLE_REPORTS.get(cfg["env_id"], (cfg["env_id"],))
+    if rep["env_id"] not in playable:
         raise ReplayError(f"--report {path}: env_id = {rep['env_id']!r}, expected {cfg['env_id']!r} (the config's) "
-                          f"or {ENV_ID_V1!r} (v1 agents on v1's part of the observation)")
+                          f"or an earlier version whose agents drive it ({', '.join(playable[1:]) or 'none'})")
+    tuned_from = (cfg.get("evaluate_only") or {}).get("tuned")
+    if tuned_from:
+        rep = with_tuned(rep, load_tuned(tuned_from))
     specs = _specs(cfg, rep, path.resolve().parent)
     wells = fresh_wells(fresh_seed, episodes)
     jobs, owner = [], []
@@ -136,9 +141,50 @@ def evaluate_fresh(config: str, fresh_seed: int, episodes: int, out_dir: str | P
               "fresh": {"seed": int(fresh_seed), "family_seeds": wells, "drawn_by": "agents.benchmark.fresh.fresh_wells"}}
     report = build_report(cfg, policies, splits, rep.get("tuned", {}), {"shipped_report": str(path)},
                           {"total": time.perf_counter() - t0})
-    report.update(mode="evaluate_only", shipped_report=str(path))
+    report.update(mode="evaluate_only", shipped_report=str(path), **({"tuned_from": tuned_from} if tuned_from else {}))
     _renormalise(report)
     return _write(report, Path(out_dir))
+
+
+def load_tuned(path: str | Path) -> dict[str, Any]:
+    """The ``tuned`` record of a tuned-baselines archive (``docs/v3/tuned.json``, scripts/v3_tune.py): read as data,
+    each baseline's ``params`` a mapping (their values are checked where a policy is built from them). A relative
+    path is taken as given, else in the checkout (beside ``models/``, as the shipped reports)."""
+    from srenv.input_files import read_json
+
+    from ..evaluation.manifest import MODELS_HOME
+
+    p = Path(path)
+    if not (p.is_file() or p.is_absolute()):
+        p = MODELS_HOME.parent / p
+    if not p.is_file():
+        raise ReplayError(f"evaluate_only.tuned = {str(path)!r}: no such file (expected a tuned-baselines JSON)")
+    rec = read_json(p, "evaluate_only.tuned", "tuned-baselines archive", 5_000_000)
+    tuned = rec.get("tuned") if isinstance(rec, dict) else None
+    if not (isinstance(tuned, dict) and tuned and all(isinstance(t, dict) and isinstance(t.get("params"), dict)
+                                                      for t in tuned.values())):
+        raise ReplayError(f"evaluate_only.tuned = {str(path)!r}: tuned = {str(tuned)[:80]}: expected a mapping "
+                          "baseline -> {params: {...}}")
+    return tuned
+
+
+def with_tuned(rep: dict[str, Any], tuned: dict[str, Any]) -> dict[str, Any]:
+    """A copy of report ``rep`` on other tuned baselines (another env version's tuning: v3's on v2's report): each
+    tuned field baseline's ``params`` (added when the report lacks it), every agent's residual base on the tuned
+    parameters of its base, and ``tuned``; the agents' models and pins as they were."""
+    import copy
+
+    out = copy.deepcopy(rep)
+    pol = out["policies"]
+    for name in (*SHIPPED_BASELINES, "alarm_pump_off"):
+        if name in tuned:
+            pol[name] = {**pol.get(name, {"kind": "baseline", "episodes": []}), "params": tuned[name]["params"]}
+    for entry in pol.values():
+        res = entry.get("residual_on") if entry.get("kind") == "agent" else None
+        if isinstance(res, dict) and res.get("base") in tuned:
+            entry["residual_on"] = {**res, "params": tuned[res["base"]]["params"]}
+    out["tuned"] = tuned
+    return out
 
 
 def _policies(rep: dict[str, Any], specs: dict[str, list[dict[str, Any]]], owner: list[str],

@@ -32,7 +32,7 @@ import numpy as np
 
 from srenv.input_files import read_json
 
-from ..envs import ENV_ID_V1, ENV_ID_V2, make_env
+from ..envs import ENV_ID_V1, ENV_ID_V2, ENV_ID_V3, make_env
 from ..inputs import baseline_params, report_env_kwargs, report_episodes
 from ..policies.ensemble import ensemble_spec
 from ..policies.guarded import guarded_spec
@@ -42,7 +42,7 @@ from .model_pins import PINS, check_pins, check_record, obs_norm_path
 from .rollout import run_episode
 from .v1_view import build_policy_any
 
-REPLAYABLE = (ENV_ID_V1, ENV_ID_V2)
+REPLAYABLE = (ENV_ID_V1, ENV_ID_V2, ENV_ID_V3)
 
 MAX_REPORT_BYTES = 50_000_000
 

@@ -14,12 +14,12 @@ from __future__ import annotations
 
 from typing import Any
 
-from srenv import ENV_ID_V1, ENV_ID_V2
+from srenv import ENV_ID_V1, ENV_ID_V2, ENV_ID_V3
 
 from .residual_env import RESIDUAL_ENV_ID
 from .shaping import SHAPED_ENV_ID
 
-NATIVE_IDS = (ENV_ID_V1, ENV_ID_V2)  # the ids with a vector entry point (srenv/__init__.py)
+NATIVE_IDS = (ENV_ID_V1, ENV_ID_V2, ENV_ID_V3)  # the ids with a vector entry point (srenv/__init__.py)
 
 
 def wrap_slot(env: Any, shaped: bool, residual: dict[str, Any] | None) -> Any:

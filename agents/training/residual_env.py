@@ -14,7 +14,7 @@ from typing import Any
 import gymnasium as gym
 import numpy as np
 
-from ..envs import ENV_ID_V1, ENV_ID_V2, make_env
+from ..envs import ENV_ID_V1, ENV_ID_V2, ENV_ID_V3, make_env
 from ..policies.residual import _Base, augment, check_scales, compose
 from .shaping import SHAPED_ENV_ID
 
@@ -55,7 +55,7 @@ def make_residual_env(inner_env_id: str = ENV_ID_V1, base: str = "fillage_pi",
                       base_params: dict[str, Any] | None = None, scale: float = 0.3,
                       idle_scale: float | None = None, **env_kwargs: Any) -> ResidualEnv:
     # a fixed set: the id is a module path for gymnasium, and a training YAML must not choose what is imported
-    allowed = (ENV_ID_V1, SHAPED_ENV_ID, ENV_ID_V2)  # v2 (configs/benchmark/v2.yaml): unshaped
+    allowed = (ENV_ID_V1, SHAPED_ENV_ID, ENV_ID_V2, ENV_ID_V3)  # v2, v3 (configs/benchmark/v2.yaml, v3.yaml): unshaped
     if inner_env_id not in allowed:
         raise ValueError(f"residual inner_env_id = {inner_env_id!r}: expected one of {', '.join(allowed)}")
     return ResidualEnv(make_env(inner_env_id, **env_kwargs), base, base_params or {}, scale, idle_scale)

@@ -99,7 +99,8 @@ def test_train_one_iteration_native(tmp_path: Path) -> None:
     ({"vec_env": "native", "env_id": "srenv/SuckerRod-v0", "env_kwargs": {}},
      "vec_env = 'native' with env_id 'srenv/SuckerRod-v0': expected an env with a native vector env"),
     ({"vec_env": "native", "env_id": RESIDUAL_ENV_ID, "env_kwargs": {}},
-     f"env_id = '{RESIDUAL_ENV_ID}': expected srenv/SuckerRod-v1 or srenv/SuckerRod-v2 with vec_env: native"),
+     (f"env_id = '{RESIDUAL_ENV_ID}': expected srenv/SuckerRod-v1 or srenv/SuckerRod-v2 or srenv/SuckerRod-v3 "
+      "with vec_env: native")),
     ({"vec_env": "subproc"}, "vec_env = 'subproc': expected sync or native"),
     ({"vec_env": "sync", "vec_processes": 2}, "vec_processes = 2: expected no value unless vec_env: native"),
     ({"vec_env": "native", "vec_processes": 10**6}, "vec_processes = 1000000: expected an integer within"),
@@ -116,7 +117,8 @@ def test_cli_refuses_native_without_a_vector_env(tmp_path: Path) -> None:
     assert p.returncode == 2
     assert p.stderr.strip().splitlines() == [
         ("agents: error: train config: vec_env = 'native' with env_id 'srenv/SuckerRod-v0': expected an env with a "
-         "native vector env (srenv/SuckerRod-v1, srenv/SuckerRod-v2, or the residual / shaped env on one)")]
+         "native vector env (srenv/SuckerRod-v1, srenv/SuckerRod-v2, srenv/SuckerRod-v3, or the residual / shaped env "
+         "on one)")]
     assert not (tmp_path / "o").exists()
 
 

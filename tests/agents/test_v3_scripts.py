@@ -1,7 +1,8 @@
-"""scripts/v3_mechanism.py and scripts/v3_baselines.py (issue 24; docs/task.md, "v3"): no arguments (one line,
-exit 2); the mechanism figures show v3's mechanisms against v2's; the slow-down rule slows alarm_pump_off by its
-gas_slowdown on a tagging or leak alarm and leaves it alone otherwise; an episode books every interval under its
-true condition."""
+"""scripts/v3_mechanism.py, v3_baselines.py, v3_tune.py and v3_validation.py (issue 24; docs/task.md, "v3";
+docs/v3/benchmark.md): no arguments (one line, exit 2); the mechanism figures show v3's mechanisms against v2's;
+the slow-down rule slows alarm_pump_off by its gas_slowdown on a tagging or leak alarm and leaves it alone
+otherwise; an episode books every interval under its true condition; the validation figures' booking by condition
+group, their best tuned baseline (by the training score) and paired differences over the wells."""
 
 from __future__ import annotations
 
@@ -31,7 +32,7 @@ def base():
     return _script("v3_baselines")
 
 
-@pytest.mark.parametrize("name", ["v3_mechanism", "v3_baselines"])
+@pytest.mark.parametrize("name", ["v3_mechanism", "v3_baselines", "v3_tune", "v3_validation"])
 def test_an_argument_is_refused_in_one_line(name, capsys) -> None:
     with pytest.raises(SystemExit) as ex:
         _script(name).main(["--out", "x"])
@@ -79,3 +80,26 @@ def test_an_episode_is_booked_by_condition(base, monkeypatch) -> None:
     rows = got["per_condition"].values()
     assert sum(r["intervals"] for r in rows) == 12
     assert sum(r["reward"] for r in rows) / 12 == pytest.approx(got["mean_reward_rate_usd_h"], rel=1e-12)
+
+
+def test_validation_figures_book_by_condition_and_pair_by_well() -> None:
+    val = _script("v3_validation")
+    tr = {"condition": ["None", "tagging_down", "tagging_down", "gas_interference", "mystery"],
+          "reward": [10.0, 4.0, 2.0, 6.0, 1.0], "cost": [0.0, 1.0, 0.5, float("nan"), 0.0]}
+    pc = val.per_condition(tr)
+    assert pc["normal"] == {"intervals": 1, "reward": 10.0, "cost": 0.0}
+    assert pc["tagging"] == {"intervals": 2, "reward": 6.0, "cost": 1.5} and pc["gas"]["cost"] == 0.0
+    assert pc["other:mystery"]["intervals"] == 1  # an unknown label is shown, never dropped
+    table = val.condition_table([{"per_condition": pc}, {"per_condition": {"tagging": pc["tagging"]}}])
+    assert table["tagging"] == {"intervals": 4, "episodes": 2, "reward_usd_h": 3.0, "cost_per_interval": 0.75}
+    tuned = {"installed": {"params": {}}, "pump_off": {"params": {}, "score": 5.0},
+             "alarm_pump_off": {"params": {}, "score": 6.0}, "oracle": {"params": {}}}
+    assert val.best_tuned(tuned) == "alarm_pump_off"
+    eps = [{"well_id": f"w{k}", "seed": k, "reward": 100.0 + k, "cost": 0.0, "reward_rate_usd_h": (100.0 + k) / 4,
+            "per_condition": {}} for k in range(3)]
+    rep = {"policies": {"a": {"kind": "baseline", "episodes": eps},
+                        "b": {"kind": "agent", "episodes": [{**e, "reward": e["reward"] + 8.0} for e in eps]}},
+           "summary": {"a": {"normalised_score": 0.0, "failures": 0}, "b": {"normalised_score": 1.0, "failures": 0}}}
+    fig = val.figures(rep, "a", 4)
+    assert fig["b"]["vs_best_tuned_usd_h"]["mean"] == pytest.approx(2.0)  # 8 return units over 4 intervals
+    assert fig["b"]["vs_best_tuned_usd_h"]["n_wells"] == 3 and fig["a"]["vs_best_tuned_usd_h"]["mean"] == 0.0
