@@ -55,10 +55,11 @@ REGISTERS = {"select": "BEFORE any selection or gate episode", "gate": "REGISTER
              "test": "REGISTERS THE TEST LOOK"}
 
 
-def registers(line: str, stage: str) -> bool:
-    """Whether a history line registers ``stage`` (:data:`REGISTERS`)."""
-    words = REGISTERS[stage]
-    return words in line if stage == "select" else line.partition(" UTC, ")[2].startswith(words)
+def registers(line: str, stage: str, words: dict[str, str] | None = None) -> bool:
+    """Whether a history line registers ``stage`` (``words``: a design's {stage: words}, :data:`REGISTERS` by
+    default; a stage's words start a line after its "<date> <time> UTC, ", except the selection's)."""
+    w = (words or REGISTERS)[stage]
+    return w in line if stage == "select" else line.partition(" UTC, ")[2].startswith(w)
 assert FRESH_SEED == 20261206 and GATE_SEEDS == list(range(21750, 21800))  # b43's, registered and never played
 
 # THE FAMILY (the config's history), declared once: the disagreement gate's tau (a quantile of the reference's
@@ -84,16 +85,18 @@ for _v in VARIANTS.values():  # every guard bounded where the guarded policy bou
         check_guard({**_v["guard"], "disagreement_above": 0.0})
 
 
-def require_registered(stage: str, config: Path = CONFIG) -> None:
+def require_registered(stage: str, config: Path = CONFIG, words: dict[str, str] | None = None,
+                       who: str = "agreement_guard") -> None:
     """Stop (exit 2, one line) unless the config's history has the line registering ``stage`` and the config is
-    committed as it is (no uncommitted change to it): a stage is played only after its registration."""
+    committed as it is (no uncommitted change to it): a stage is played only after its registration. ``words``
+    and ``who``: another design's registration words and script name (scripts/v3_oracle_distilled.py)."""
     hist = load_benchmark_config(str(config)).get("history") or []
     r = subprocess.run(["git", "status", "--porcelain", "--", str(config)], cwd=ROOT, capture_output=True, text=True,
                        check=False)
-    why = (f"no history line with {REGISTERS[stage]!r}" if not any(registers(h, stage) for h in hist) else
-           "not committed as it is (git status shows a change)" if r.returncode or r.stdout.strip() else None)
+    why = (f"no history line with {(words or REGISTERS)[stage]!r}" if not any(registers(h, stage, words) for h in hist)
+           else "not committed as it is (git status shows a change)" if r.returncode or r.stdout.strip() else None)
     if why:
-        print(f"agreement_guard: {config.name}: {why}: expected --stage {stage} registered before it is played",
+        print(f"{who}: {config.name}: {why}: expected --stage {stage} registered before it is played",
               file=sys.stderr)
         sys.exit(2)
 

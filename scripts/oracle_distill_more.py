@@ -27,6 +27,7 @@ import argparse
 import copy
 import json
 import sys
+from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
@@ -66,9 +67,10 @@ def write_json(path: Path, obj: Any) -> None:
     tmp.replace(path)
 
 
-def dagger(out: Path, workers: int) -> dict[str, Any]:
-    """Each seed's student continued (the config's teacher block), recorded in OUT/dagger.json as it ends."""
-    cfg, name, run, tuned, res = setup()
+def dagger(out: Path, workers: int, design: Callable[[], tuple] = setup) -> dict[str, Any]:
+    """Each seed's student continued (the config's teacher block), recorded in OUT/dagger.json as it ends
+    (``design``: another design's ``setup``, scripts/v3_oracle_distilled.py's)."""
+    cfg, name, run, tuned, res = design()
     rec_path = out / "dagger.json"
     done = json.loads(rec_path.read_text()) if rec_path.exists() else {}
     with Runner(workers) as runner:

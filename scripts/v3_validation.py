@@ -111,18 +111,20 @@ def figures(report: dict[str, Any], best: str, intervals: int) -> dict[str, Any]
     return out
 
 
-def play(cfg: dict[str, Any], specs: dict[str, list[dict[str, Any]]]) -> tuple[list[str], list[dict[str, Any]]]:
-    """Every policy's spec on the 50 validation episodes, traced for the per-condition booking."""
+def play(cfg: dict[str, Any], specs: dict[str, list[dict[str, Any]]],
+         seeds: list[int] = SEEDS) -> tuple[list[str], list[dict[str, Any]]]:
+    """Every policy's spec on the validation episodes ``seeds`` (this script's 50; scripts/v3_oracle_distilled.py's
+    gate its own), traced for the per-condition booking."""
     jobs, owner = [], []
     for n, sps in specs.items():
         for sp in sps:
-            for s in SEEDS:
+            for s in seeds:
                 jobs.append({"env_id": cfg["env_id"], "env_kwargs": {**cfg["env_kwargs"], "scenario": "validation"},
                              "policy": sp, "seed": s, "trace": True})
                 owner.append(n)
     # the causal oracle is the slow one: first, so the two workers finish together
     order = sorted(range(len(jobs)), key=lambda i: owner[i] != "causal_oracle")
-    print(f"v3 validation: {len(specs)} policies x {len(SEEDS)} episodes", file=sys.stderr, flush=True)
+    print(f"v3 validation: {len(specs)} policies x {len(seeds)} episodes", file=sys.stderr, flush=True)
     with Runner(cfg["workers"]) as runner:
         done = runner.map([jobs[i] for i in order], fn=fresh_episode_job)
     recs: list[Any] = [None] * len(jobs)
