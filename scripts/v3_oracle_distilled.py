@@ -24,6 +24,14 @@ students); :func:`judge` is the rule -> OUT/test_judge.json.
 and this stage judges its report (OUT/fresh/benchmark.json) by :func:`judge` -> OUT/fresh_judge.json.
 Each stage refuses to play (exit 2, one line) unless the config's history registers it in a committed file
 (scripts/agreement_guard.py's ``require_registered`` with :data:`REGISTERS`).
+
+``--design continued`` (helper w44; default ``trained``, q44's above): the same stages on
+configs/benchmark/v3_oracle_distilled_continued.yaml - v2's SHIPPED students (models/oracle_distilled_v2_seed{k},
+sha256 pinned: :data:`SHIPPED_SHA256`, checked before the DAgger and the gate) continued by DAgger from v3's causal
+oracle; its gate on its own seeds (:data:`DESIGNS`) beside the unchanged shipped students (a reference):
+
+    PYTHONPATH=. nice -n 5 python scripts/v3_oracle_distilled.py --design continued --stage dagger --out runs/w44
+    PYTHONPATH=. nice -n 5 python scripts/v3_oracle_distilled.py --design continued --stage gate --out runs/w44
 """
 
 from __future__ import annotations
