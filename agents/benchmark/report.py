@@ -170,7 +170,8 @@ def verdict(report: dict[str, Any]) -> str:
     by_well = (f" over the episodes; over the {d['n_wells']} wells' means, each well once, "
                f"[{lo / steps:+.2f}, {hi / steps:+.2f}] USD/h") if "ci95_by_well" in d else ""
     beaten = [b for b in bases if report["paired"][best_a][b]["significant_positive"]]
-    call = ("significant (95 % CI above zero)" if lo > 0 else "agent significantly WORSE (95 % CI below zero)"
+    call = ("no 95 % CI: one episode (or one well) cannot tell a lead from noise" if not np.isfinite([lo, hi]).all()
+            else "significant (95 % CI above zero)" if lo > 0 else "agent significantly WORSE (95 % CI below zero)"
             if hi < 0 else "within noise (95 % CI spans zero)")
     return (f"{scale}. Best agent {best_a} vs best tuned baseline {best_b}: {d['mean_diff_reward']:+.1f} "
             f"[{d['ci95'][0]:+.1f}, {d['ci95'][1]:+.1f}] per episode = {d['mean_diff_reward'] / steps:+.2f} USD/h"

@@ -471,3 +471,16 @@ def test_a_lead_only_the_repeated_episodes_make_significant_is_called_within_noi
     p = rep["paired"]["ppo"]["installed"]
     assert p["ci95"][0] > 0 > p["ci95_by_well"][0] and not p["significant_positive"]
     assert "within noise" in verdict(rep)
+
+
+def test_one_episode_gives_no_ci_and_the_verdict_says_so() -> None:
+    from agents.benchmark.report import build_report, verdict
+
+    def eps(r):
+        return [{"well_id": "test-000", "seed": 100, "reward": r, "cost": 0.0, "reward_rate_usd_h": 0.0, "steps": 1}]
+
+    pols = {"installed": {"kind": "baseline", "episodes": eps(0.0)}, "oracle": {"kind": "baseline", "episodes": eps(9.0)},
+            "ppo": {"kind": "agent", "episodes": eps(3.0)}}
+    rep = build_report({"source": "x", "env_id": "e", "env_kwargs": {}}, pols, {}, {}, {}, {})
+    line = verdict(rep)
+    assert "no 95 % CI" in line and "within noise" not in line and "significant (95" not in line
