@@ -34,8 +34,7 @@ from agents.envs import make_env
 from agents.evaluation.agent import build_policy
 from agents.evaluation.replay import load_report, policy_specs
 from agents.evaluation.rollout import play
-from agents.policies.alarms import AlarmPumpOffPolicy
-from agents.policies.field import IDLE
+from agents.policies.alarms import AlarmPumpOffPolicy, slowed
 
 ROOT = Path(__file__).resolve().parents[1]
 REPORT = ROOT / "docs" / "v2" / "benchmark.json"
@@ -62,7 +61,7 @@ class SlowOnAlarm(AlarmPumpOffPolicy):
         obs = np.asarray(observation, np.float64).reshape(-1, self.width)
         a = np.array(action, np.float64).reshape(-1, 2)
         alarm = obs[:, self.i_slow].max(axis=1) > self.alarm_prob
-        a[:, 0] = np.where(alarm & (a[:, 0] > IDLE), np.maximum(a[:, 0] - self.gas_slowdown, IDLE), a[:, 0])
+        a[:, 0] = slowed(a[:, 0], alarm, self.gas_slowdown)
         return a.reshape(np.shape(action)).astype(np.asarray(action).dtype), st
 
 

@@ -56,9 +56,7 @@ def tag_reference() -> dict:
     for seed in range(20):
         env = forced(VERSIONS[1], "tagging_down", 0.6, seed)
         env.step(act(env, env.cfg.surface.spm))
-        tr = env._last.trace
-        speeds.append(tag_contact.impact_speed_m_s(tr["pump_position_m"], tr["pump_velocity_m_s"],
-                                                   env.sim.contact_ends()))
+        speeds.append(tag_contact.stroke_impact_m_s(env._last.trace, env.sim.contact_ends()))
     median = float(np.median(speeds))
     return {"impact_m_s": [round(s, 4) for s in speeds], "median_m_s": median,
             "reference_m_s": median / math.sqrt(0.6), "shipped_reference_m_s": tag_contact.TAG_REFERENCE_SPEED_M_S}

@@ -31,6 +31,12 @@ import numpy as np
 from .field import IDLE, PumpOffPolicy, _batch, _out, _starts, make_field_baseline, name_index
 
 
+def slowed(rate: np.ndarray, alarm: np.ndarray, slowdown: float) -> np.ndarray:
+    """The rate entries of a batch slowed by ``slowdown`` where ``alarm`` holds, never below idle (an idle
+    interval stays idle): the alarm controller's slow-down, for any alarm that slows it."""
+    return np.where(alarm & (rate > IDLE), np.maximum(rate - slowdown, IDLE), rate)
+
+
 class AlarmPumpOffPolicy(PumpOffPolicy):
     name = "alarm_pump_off"
 
@@ -74,8 +80,7 @@ class AlarmPumpOffPolicy(PumpOffPolicy):
         shut = (st[:, 2] > 0.5) | signature | (self._prob(obs, "parted_rods") > self.alarm_prob) \
             | (self._prob(obs, "tubing_leak") > self.alarm_prob)
         gas = self.gas_alarm(obs)
-        action[:, 0] = np.where(gas & (action[:, 0] > IDLE), np.maximum(action[:, 0] - self.gas_slowdown, IDLE),
-                                action[:, 0])
+        action[:, 0] = slowed(action[:, 0], gas, self.gas_slowdown)
         action[:, 0] = np.where(shut, IDLE, action[:, 0])
         st[:, 2] = shut.astype(np.float64)
         return _out(action, batched), st

@@ -131,8 +131,7 @@ class SuckerRodV3Env(v2.SuckerRodV2Env):
         if label in TAGGING:
             if r.strokes <= 0 or r.last is None:
                 return ev.Booking(), 0.0
-            tr = r.last.trace
-            speed = tag_contact.impact_speed_m_s(tr["pump_position_m"], tr["pump_velocity_m_s"], self.sim.contact_ends())
+            speed = tag_contact.stroke_impact_m_s(r.last.trace, self.sim.contact_ends())
             damage = tag_contact.damage_per_stroke(speed) * r.strokes
             cost = r.pumping_fraction * speed / tag_contact.TAG_REFERENCE_SPEED_M_S
             return ev.Booking(tag_damage=damage, tag_strokes=r.strokes), cost

@@ -60,6 +60,11 @@ def impact_speed_m_s(pump_position_m: np.ndarray, pump_velocity_m_s: np.ndarray,
     return float(max(speeds))
 
 
+def stroke_impact_m_s(trace: Mapping[str, np.ndarray], ends: Mapping[str, float]) -> float:
+    """:func:`impact_speed_m_s` of a stroke's trace (a simulator's ``pump_position_m`` / ``pump_velocity_m_s``)."""
+    return impact_speed_m_s(trace["pump_position_m"], trace["pump_velocity_m_s"], ends)
+
+
 def damage_per_stroke(impact_m_s: float) -> float:
     """Workovers' worth of damage of one stroke with that impact speed (module docstring)."""
     if impact_m_s <= 0.0:
